@@ -1,0 +1,77 @@
+"""Exception hierarchy (after python-control's ``exception.py``).
+
+Every error a user can cause by bad input is an :class:`NfsError` whose ``str`` is one line
+that locates the fault (file, key, column, row).  The CLI turns it into that line on stderr
+and exit code 2, never a traceback.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+__all__ = [
+    "NfsError",
+    "InputError",
+    "MeasurementError",
+    "ScenarioError",
+    "EffectError",
+    "ThermalError",
+]
+
+
+class NfsError(Exception):
+    """Base class of every error the package raises on purpose."""
+
+
+class InputError(NfsError):
+    """Bad input, located by file, key, column and row where they are known.
+
+    Parameters
+    ----------
+    message : str
+        What is wrong, in one line.
+    file : str or Path, optional
+        The file that holds the fault.
+    key : str, optional
+        A TOML key (dotted) that holds the fault.
+    column : str, optional
+        A CSV column that holds the fault.
+    row : int, optional
+        The 1-based line number in the file (the header is line 1).
+    """
+
+    def __init__(self, message: str, *, file: str | Path | None = None,
+                 key: str | None = None, column: str | None = None,
+                 row: int | None = None) -> None:
+        self.message = message
+        self.file = None if file is None else str(file)
+        self.key = key
+        self.column = column
+        self.row = row
+        where = []
+        if self.file is not None:
+            where.append(self.file)
+        if key is not None:
+            where.append(f"key '{key}'")
+        if column is not None:
+            where.append(f"column '{column}'")
+        if row is not None:
+            where.append(f"row {row}")
+        prefix = ", ".join(where)
+        super().__init__(f"{prefix}: {message}" if prefix else message)
+
+
+class MeasurementError(InputError):
+    """A measurement file (``nfs-measurement/1``) that cannot be used."""
+
+
+class ScenarioError(InputError):
+    """A scenario or instrument TOML file that cannot be used."""
+
+
+class EffectError(NfsError):
+    """An unknown effect name, a missing or unknown effect parameter, a bad target."""
+
+
+class ThermalError(NfsError):
+    """A thermal network that is not physical (negative capacity, unknown node, ...)."""

@@ -1,0 +1,1 @@
+"""Measurement files (``nfs-measurement/1``) and scenario files."""
