@@ -1,0 +1,11 @@
+"""Named physical effects: the registry and the built-in library (effects.md)."""
+
+from .context import EffectContext
+from .registry import (KINDS, EffectInstance, EffectSpec, Parameter, available_effects,
+                       get_effect, load_effects_file, make_effect, register_effect)
+from . import accelerometer, gyro, thermal, thermometer  # noqa: F401  (registers built-ins)
+
+__all__ = [
+    "KINDS", "EffectContext", "EffectInstance", "EffectSpec", "Parameter",
+    "available_effects", "get_effect", "load_effects_file", "make_effect", "register_effect",
+]

@@ -1,0 +1,168 @@
+"""FOG rate effects [deg/h] (effects.md, "Gyro rate effects"; physics.md section 3).
+
+Each function returns the equivalent rate error it adds to the FOG output, one value per
+sample, from an :class:`~nfs.effects.context.EffectContext`.  Temperature rates enter the
+Shupe family per minute, as the literature quotes k_r and k_s in deg/h per K/min.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .context import EffectContext
+from .registry import Parameter, register_effect
+
+__all__ = [
+    "bias_temperature", "shupe_gradient", "shupe_rate", "shupe_product",
+    "turn_on_transient", "aux_linear", "scale_factor_temperature", "magnetic",
+    "polarization_ripple",
+]
+
+_S_PER_MIN = 60.0
+
+_NODE = Parameter("node", "", "thermal node whose temperature drives the effect "
+                  "(default: the coil, T_coil = (T_outer + T_inner)/2)", type=str, optional=True)
+
+
+@register_effect("bias_temperature", kind="gyro", target="node", parameters=[
+    Parameter("b1", "deg/h/K", "linear temperature coefficient of the bias"),
+    Parameter("b2", "deg/h/K^2", "quadratic temperature coefficient of the bias", default=0.0),
+    _NODE])
+def bias_temperature(ctx: EffectContext, *, b1: float, b2: float = 0.0,
+                     node: str | None = None) -> np.ndarray:
+    """Static bias vs temperature: b1 (T_coil - T_ref) + b2 (T_coil - T_ref)^2 [deg/h].
+
+    Parameters: b1 [deg/h/K], b2 [deg/h/K^2], node (default the coil mean).
+    Reference: physics.md section 3 (static bias, b1 0.0005-0.003 deg/h/K); the polynomial
+    temperature model of IEEE Std 952-2020 Annex B (temperature sensitivity of bias).
+    """
+    dT = ctx.temperature(node) - ctx.t_ref_c
+    return b1 * dT + b2 * dT * dT
+
+
+@register_effect("shupe_gradient", kind="gyro", parameters=[
+    Parameter("k_r", "deg/h per K/min", "Shupe coefficient of the radial gradient rate")])
+def shupe_gradient(ctx: EffectContext, *, k_r: float) -> np.ndarray:
+    """Shupe radial term: k_r d(T_coil_outer - T_coil_inner)/dt [deg/h], rate in K/min.
+
+    The Shupe phase is proportional to the integral over the fibre of dT/dt(z, t) (2z - L)
+    (Shupe 1980, Appl. Opt. 19(5) 654, eq. (5)); a quadrupole coil cancels a uniform heating
+    rate, and the lumped remainder is the rate of the radial gradient between the outer and
+    inner layers.  k_r [deg/h per K/min], 0.1-1 (physics.md section 3, est.).
+    """
+    d_grad = ctx.rate(ctx.coil_outer) - ctx.rate(ctx.coil_inner)
+    return k_r * _S_PER_MIN * d_grad
+
+
+@register_effect("shupe_rate", kind="gyro", target="node", parameters=[
+    Parameter("k_s", "deg/h per K/min", "effective Shupe coefficient of winding imperfection"),
+    _NODE])
+def shupe_rate(ctx: EffectContext, *, k_s: float, node: str | None = None) -> np.ndarray:
+    """Shupe winding-imperfection term: k_s dT_coil/dt [deg/h], rate in K/min.
+
+    An imperfect (asymmetric) winding leaves a residue of the Shupe integral proportional to
+    the mean heating rate (Shupe 1980, eq. (5); Mohr 1996, J. Lightwave Technol. 14(1) 27).
+    k_s [deg/h per K/min]; node defaults to the coil mean.
+    """
+    return k_s * _S_PER_MIN * ctx.temperature_rate(node)
+
+
+@register_effect("shupe_product", kind="gyro", target="node", parameters=[
+    Parameter("k_p", "deg/h per K*K/min", "temperature dependence of the Shupe coefficient"),
+    _NODE])
+def shupe_product(ctx: EffectContext, *, k_p: float, node: str | None = None) -> np.ndarray:
+    """Shupe-Mohr thermal stress: k_p (T_coil - T_ref) dT_coil/dt [deg/h], rate in K/min.
+
+    The thermal-stress (elasto-optic) Shupe term scales with the potting modulus, which
+    changes with temperature; to first order this gives the T x dT/dt interaction that seed
+    001 (Sensors 2015, 15, 11189, eq. (6)-(8), "temperature product term") uses as an input.
+    Mohr 1996 (J. Lightwave Technol. 14(1) 27) for the stress-induced term.
+    k_p [deg/h per K*K/min]; node defaults to the coil mean.
+    """
+    return k_p * (ctx.temperature(node) - ctx.t_ref_c) * _S_PER_MIN * ctx.temperature_rate(node)
+
+
+@register_effect("turn_on_transient", kind="gyro", parameters=[
+    Parameter("a", "deg/h", "amplitude at power-on"),
+    Parameter("tau", "s", "time constant")])
+def turn_on_transient(ctx: EffectContext, *, a: float, tau: float) -> np.ndarray:
+    """Electronics turn-on transient: a exp(-t / tau) [deg/h] from power-on.
+
+    a [deg/h] 0.005-0.05, tau [s] 60-300 (physics.md section 3, est.); IEEE Std 952-2020
+    defines turn-on behaviour as warm-up time (clause 9 in its test procedure list).
+    """
+    if tau <= 0:
+        from ..errors import EffectError
+        raise EffectError(f"turn_on_transient: tau must be > 0 s, got {tau}")
+    return a * np.exp(-ctx.time_s / tau)
+
+
+@register_effect("aux_linear", kind="gyro", target="channel", parameters=[
+    Parameter("channel", "", "the aux_* column that drives the bias", type=str),
+    Parameter("k", "deg/h per channel unit", "sensitivity"),
+    Parameter("aux_ref", "channel unit", "reference value of the channel", default=0.0)])
+def aux_linear(ctx: EffectContext, *, channel: str, k: float, aux_ref: float = 0.0) -> np.ndarray:
+    """Auxiliary electrical driver of the bias: k (aux - aux_ref) [deg/h].
+
+    Seed 000 (Sensors 2019, 19, 2986, section 2 and Table 5) shows the high-frequency
+    oscillator voltage U_HFO tracks a laser gyro's bias better than temperature.
+    channel: an ``aux_*`` column; k [deg/h per channel unit]; aux_ref [channel unit].
+    """
+    try:
+        x = ctx.aux[channel]
+    except KeyError:
+        from ..errors import EffectError
+        raise EffectError(f"aux_linear: no channel '{channel}'; aux channels: "
+                          + (", ".join(sorted(ctx.aux)) or "(none)")) from None
+    return k * (x - aux_ref)
+
+
+@register_effect("scale_factor_temperature", kind="gyro", target="node", parameters=[
+    Parameter("s1", "1/K", "scale-factor temperature coefficient"),
+    Parameter("node", "", "node of the light source (default: the instrument's source node)",
+              type=str, optional=True)])
+def scale_factor_temperature(ctx: EffectContext, *, s1: float,
+                             node: str | None = None) -> np.ndarray:
+    """Scale factor vs source temperature: Omega_true s1 (T_source - T_ref) [deg/h].
+
+    K(T) = K0 (1 + s1 (T - 25)): the source's mean wavelength moves with temperature and the
+    Sagnac scale factor with it.  s1 [1/K], 17-800 ppm/K (physics.md section 3, est.;
+    IEEE Std 952-2020 scale-factor temperature sensitivity).
+    """
+    t_src = ctx.node(ctx.source if node is None else node)
+    return ctx.earth_rate_dph * s1 * (t_src - ctx.t_ref_c)
+
+
+@register_effect("magnetic", kind="gyro", parameters=[
+    Parameter("m", "deg/h", "amplitude of the magnetic (Faraday) bias"),
+    Parameter("D_mag", "deg", "azimuth of the axis that gives the largest positive bias")])
+def magnetic(ctx: EffectContext, *, m: float, D_mag: float) -> np.ndarray:
+    """Position-dependent bias from the Earth's magnetic field: m cos(A - D_mag) [deg/h].
+
+    Faraday non-reciprocity in a coil with residual twist and birefringence makes the bias
+    depend on the field along the axis (Hotate & Tabe 1986, Appl. Opt. 25(7) 1086); on a
+    turntable it follows the position.  m [deg/h], D_mag [deg]; A the axis azimuth.
+    """
+    return m * np.cos(np.radians(ctx.axis_azimuth_deg - D_mag))
+
+
+@register_effect("polarization_ripple", kind="gyro", target="node", parameters=[
+    Parameter("A_p", "deg/h", "ripple amplitude"),
+    Parameter("T_p", "K", "temperature period of the ripple"),
+    Parameter("phi", "rad", "phase", default=0.0),
+    _NODE])
+def polarization_ripple(ctx: EffectContext, *, A_p: float, T_p: float, phi: float = 0.0,
+                        node: str | None = None) -> np.ndarray:
+    """Polarization non-reciprocity ripple: A_p sin(2 pi T_coil / T_p + phi) [deg/h].
+
+    Polarization cross-coupling gives a bias that oscillates with temperature as the
+    birefringent phase of the coil changes (Kintner 1981, Opt. Lett. 6(3) 154).
+    A_p [deg/h], T_p [K], phi [rad].  Not checked against a measured period.
+    """
+    return A_p * np.sin(2.0 * np.pi * ctx.temperature(node) / T_p + phi)
+
+
+@register_effect("null", kind="null")
+def null(ctx: EffectContext | None = None, **_: object) -> float:
+    """The explicit null effect: contributes nothing (for ablation and as a placeholder)."""
+    return 0.0

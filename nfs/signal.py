@@ -1,0 +1,43 @@
+"""Small signal-processing pieces shared by the sensors and the effects."""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.signal import lfilter, lfilter_zi
+
+__all__ = ["first_order_lag"]
+
+
+def first_order_lag(x: np.ndarray, time_s: np.ndarray, tau_s: float) -> np.ndarray:
+    """First-order lag tau dy/dt = x - y, exact for an input held between samples.
+
+    y[k+1] = a y[k] + (1 - a) x[k],  a = exp(-(t[k+1] - t[k]) / tau)  (zero-order hold),
+    starting in equilibrium y[0] = x[0] (the instrument was soaked before power-on).
+
+    Parameters
+    ----------
+    x : ndarray
+        Input samples (e.g. a node temperature [degC]).
+    time_s : ndarray
+        Sample times [s], strictly increasing.
+    tau_s : float
+        Time constant tau [s]; 0 returns ``x`` unchanged.
+    """
+    x = np.asarray(x, dtype=float)
+    if tau_s < 0:
+        raise ValueError(f"lag time constant must be >= 0, got {tau_s}")
+    if tau_s == 0 or x.size < 2:
+        return x.copy()
+    dt = np.diff(np.asarray(time_s, dtype=float))
+    if np.allclose(dt, dt[0], rtol=1e-9, atol=0.0):
+        a = np.exp(-dt[0] / tau_s)
+        b_coef, a_coef = [0.0, 1.0 - a], [1.0, -a]
+        y, _ = lfilter(b_coef, a_coef, x, zi=lfilter_zi(b_coef, a_coef) * x[0])
+        return y
+    # Non-uniform sampling: lfilter has no time-varying coefficients, so step by hand.
+    a = np.exp(-dt / tau_s)
+    y = np.empty_like(x)
+    y[0] = x[0]
+    for k in range(len(dt)):
+        y[k + 1] = a[k] * y[k] + (1.0 - a[k]) * x[k]
+    return y
