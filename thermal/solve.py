@@ -1,0 +1,343 @@
+"""Exact piecewise solution of the thermal network with inputs held over each sample interval.
+
+Over an interval [t_k, t_k + h) with the input u_k = [T_amb, P_1, ..., P_n] held constant
+(zero-order hold), dT/dt = A T + B u_k (network.py, equation (2)) has the exact solution
+
+    T(t_k + s) = Phi(s) T_k + Gamma(s) u_k,
+    Phi(s) = expm(A s),   Gamma(s) = int_0^s expm(A r) dr B,                          (3)
+
+and its time integral over the interval, needed for the heat lost to the chamber, is
+
+    int_0^h T(t_k + s) ds = Psi(h) T_k + Upsilon(h) u_k,
+    Psi(h) = int_0^h expm(A s) ds,   Upsilon(h) = int_0^h Gamma(s) ds.                (4)
+
+All four come from one matrix exponential of the augmented (Van Loan) block matrix
+
+         [0  I  0]                    [I  Psi  Upsilon]
+    F =  [0  A  B],    expm(F h)  =   [0  Phi  Gamma  ]                                (5)
+         [0  0  0]                    [0  0    I      ]
+
+(Van Loan, "Computing integrals involving the matrix exponential", IEEE TAC 23(3), 1978,
+theorem 1), computed once per distinct step h.  No ODE stepper is involved: the only
+approximation is the hold of the inputs, which is exact for inputs that are constant over
+each interval.
+
+Energy bookkeeping.  Summing equation (1) over the nodes, the internal conductances cancel:
+
+    d/dt sum_j C_j T_j = sum_j P_j - sum_j G_j,amb (T_j - T_amb),                      (6)
+
+so heat_in = stored + lost, with heat_in = sum_k h_k sum_j P_j,k, lost = sum_k sum_j G_j,amb
+(int T_j ds - h_k T_amb,k) from (4), and stored = sum_j C_j (T_j(t) - T_j(t_0)).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.linalg import expm, eigh
+from scipy.signal import lfilter
+
+from nfs.errors import ThermalError
+from thermal.network import Network, index_of
+
+__all__ = ["ThermalResult", "simulate", "step_matrices"]
+
+#: A heat source P(t_s, temperature_c) -> extra power per node [W], shape (n_nodes,).
+PowerLaw = Callable[[float, np.ndarray], np.ndarray]
+
+
+@dataclass(frozen=True)
+class ThermalResult:
+    """Node temperatures and energy bookkeeping of one :func:`simulate` run.
+
+    Every array is read-only; rows are samples (the times ``time_s``), columns are nodes in
+    the order ``node_names``.
+    """
+
+    time_s: np.ndarray
+    """Sample times t_k [s], shape (n_t,)."""
+
+    node_names: tuple[str, ...]
+    """Node names, the column order of the node arrays."""
+
+    capacity_j_per_k: np.ndarray
+    """Node heat capacities C_j [J/K], shape (n_nodes,)."""
+
+    temperature_c: np.ndarray
+    """Node temperatures T_j(t_k) [degC], shape (n_t, n_nodes)."""
+
+    rate_c_per_s: np.ndarray
+    """dT_j/dt at t_k [K/s] = A T_k + B u_k, exact for the input held from t_k on."""
+
+    power_w: np.ndarray
+    """Total node power P_j,k [W] held over [t_k, t_k+1) (constants plus extra sources)."""
+
+    ambient_c: np.ndarray
+    """Chamber temperature T_amb,k [degC] held over [t_k, t_k+1), shape (n_t,)."""
+
+    heat_in_j: np.ndarray
+    """Cumulative energy injected by all node powers from t_0 to t_k [J], shape (n_t,)."""
+
+    heat_lost_j: np.ndarray
+    """Cumulative energy lost to the chamber from t_0 to t_k [J], shape (n_t,), exact (4)."""
+
+    @property
+    def stored_j(self) -> np.ndarray:
+        """Energy stored since t_0 [J]: sum_j C_j (T_j(t_k) - T_j(t_0)), shape (n_t,)."""
+        return (self.temperature_c - self.temperature_c[0]) @ self.capacity_j_per_k
+
+    def node(self, name: str) -> np.ndarray:
+        """Temperature of node ``name`` [degC], shape (n_t,)."""
+        return self.temperature_c[:, index_of(self.node_names, name)]
+
+    def rate(self, name: str) -> np.ndarray:
+        """Temperature rate of node ``name`` [K/s], shape (n_t,)."""
+        return self.rate_c_per_s[:, index_of(self.node_names, name)]
+
+
+@dataclass(frozen=True)
+class _StepMatrices:
+    """The blocks of expm(F h), equation (5), for one step h [s]."""
+
+    phi: np.ndarray       # Phi(h), (n, n)
+    gamma: np.ndarray     # Gamma(h), (n, 1 + n)
+    psi: np.ndarray       # Psi(h) [s], (n, n)
+    upsilon: np.ndarray   # Upsilon(h) [s], (n, 1 + n)
+
+
+def step_matrices(a: np.ndarray, b: np.ndarray, h_s: float) -> _StepMatrices:
+    """Phi, Gamma, Psi and Upsilon of equations (3)-(4) for the step ``h_s`` [s], by (5)."""
+    n, m = b.shape
+    f = np.zeros((2 * n + m, 2 * n + m))
+    f[:n, n:2 * n] = np.eye(n)
+    f[n:2 * n, n:2 * n] = a
+    f[n:2 * n, 2 * n:] = b
+    e = expm(f * h_s)
+    return _StepMatrices(phi=e[n:2 * n, n:2 * n], gamma=e[n:2 * n, 2 * n:],
+                         psi=e[:n, n:2 * n], upsilon=e[:n, 2 * n:])
+
+
+def _step_classes(time_s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(h, cls): the distinct steps h [s] and, per interval k, the index cls[k] into h.
+
+    Steps that differ by less than the resolution of the time stamps themselves (16 ulp of
+    the largest |t|) are one step: a uniform grid from ``np.linspace`` has one class.
+    """
+    dt = np.diff(time_s)
+    if dt.size == 0:
+        return np.empty(0), np.empty(0, dtype=int)
+    tol = 16.0 * np.spacing(np.max(np.abs(time_s[[0, -1]])))
+    unique, inverse = np.unique(dt, return_inverse=True)
+    starts = np.concatenate([[True], np.diff(unique) > tol])
+    # a class starts where the gap to the previous distinct step exceeds tol
+    cluster = np.cumsum(starts) - 1
+    first = unique[starts]
+    return first, cluster[inverse]
+
+
+def _per_interval(mats: list[np.ndarray], cls: np.ndarray, x: np.ndarray,
+                  n_out: int) -> np.ndarray:
+    """Rows mats[cls[k]] @ x[k] (n_out,) for every interval k, vectorised per step class."""
+    out = np.empty((cls.size, n_out))
+    if len(mats) == 1:
+        return np.matmul(x, mats[0].T, out=out)
+    for c, mat in enumerate(mats):
+        rows = cls == c
+        out[rows] = x[rows] @ mat.T
+    return out
+
+
+def _modal_recursion(phi: np.ndarray, capacity: np.ndarray, t0: np.ndarray,
+                     drive: np.ndarray) -> np.ndarray:
+    """T_{k+1} = Phi T_k + drive_k for a fixed Phi, vectorised over k in modal coordinates.
+
+    D Phi D^-1 with D = diag(sqrt(C)) is symmetric (network.py), so D Phi D^-1 = Q diag(lam)
+    Q^T with orthogonal Q; each mode z = Q^T D T obeys the scalar recursion z_{k+1} =
+    lam z_k + w_k, run by :func:`scipy.signal.lfilter` with z_0 as the first input sample.
+    """
+    d = np.sqrt(capacity)
+    sym = d[:, None] * phi / d[None, :]
+    lam, q = eigh(0.5 * (sym + sym.T))
+    w = np.empty((drive.shape[0] + 1, t0.size))
+    w[0] = q.T @ (d * t0)
+    w[1:] = (drive * d) @ q
+    z = np.empty_like(w)
+    for i, lam_i in enumerate(lam):
+        z[:, i] = lfilter([1.0], [1.0, -lam_i], w[:, i])
+    return (z @ q.T) / d
+
+
+def _march(steps: list[_StepMatrices], cls: list[int], x: np.ndarray, time_s: np.ndarray,
+           node_power_w: np.ndarray, power: PowerLaw | None) -> None:
+    """Fill T_1, ..., T_{n_t-1} of ``x`` one interval at a time, calling the power law.
+
+    Row k of ``x`` is the augmented state [T_k, p_k, T_amb,k, 1] with p_k the extra power
+    (n columns each) and P_const the constant node powers, so that one product per step
+    gives (3):
+
+        T_{k+1} = [Phi | Gamma_P | Gamma_amb | Gamma_P P_const] x_k.
+
+    With a power law, p_{k+1} = power(t_{k+1}, T_{k+1}) is written into row k+1 as soon as
+    T_{k+1} is known; the law gets a read-only view of T_{k+1}, which is never changed after.
+    """
+    n = node_power_w.size
+    maps = [np.column_stack([m.phi, m.gamma[:, 1:], m.gamma[:, 0], m.gamma[:, 1:] @ node_power_w])
+            for m in steps]
+    frozen = x.view()
+    frozen.flags.writeable = False
+    times = time_s.tolist()
+    steps_dot = [m.dot for m in maps]
+    # row views made once: indexing x inside the loop would cost as much as the product
+    rows, new_temps = list(x), list(x[1:, :n])
+    if power is None:
+        for c, row, new_temp in zip(cls, rows, new_temps):
+            steps_dot[c](row, out=new_temp)
+        return
+    first = np.asarray(power(times[0], frozen[0, :n]), dtype=float)
+    if first.shape != (n,):
+        raise ThermalError(f"power_w(t_s, temperature_c) must return shape ({n},), got "
+                           f"shape {first.shape}")
+    x[0, n:2 * n] = first
+    for c, row, new_temp, new_power, seen, t_s in zip(cls, rows, new_temps, list(x[1:, n:2 * n]),
+                                                     list(frozen[1:, :n]), times[1:]):
+        steps_dot[c](row, out=new_temp)
+        new_power[...] = power(t_s, seen)
+
+
+def _as_time(time_s: object) -> np.ndarray:
+    """The sample times as a 1-D, finite, strictly increasing float array."""
+    t = np.asarray(time_s, dtype=float)
+    if t.ndim != 1 or t.size == 0:
+        raise ThermalError(f"time_s must be a non-empty 1-D array, got shape {t.shape}")
+    if not np.all(np.isfinite(t)):
+        raise ThermalError(f"time_s is not finite at sample {int(np.argmin(np.isfinite(t)))}")
+    bad = np.flatnonzero(np.diff(t) <= 0.0)
+    if bad.size:
+        k = int(bad[0])
+        raise ThermalError(f"time_s must be strictly increasing: time_s[{k + 1}] = "
+                           f"{t[k + 1]} after time_s[{k}] = {t[k]}")
+    return t
+
+
+def _as_ambient(ambient_c: object, time_s: np.ndarray) -> np.ndarray:
+    """T_amb at every sample [degC] from a scalar, an array (n_t,) or a callable(t_s)."""
+    if callable(ambient_c):
+        amb = np.array([float(ambient_c(t)) for t in time_s.tolist()])
+    else:
+        amb = np.asarray(ambient_c, dtype=float)
+        if amb.ndim == 0:
+            amb = np.full(time_s.shape, float(amb))
+        elif amb.shape != time_s.shape:
+            raise ThermalError(f"ambient_c must be a scalar, a callable or an array of "
+                               f"shape {time_s.shape}, got shape {amb.shape}")
+    if not np.all(np.isfinite(amb)):
+        k = int(np.argmin(np.isfinite(amb)))
+        raise ThermalError(f"ambient_c is not finite at t = {time_s[k]} s")
+    return amb
+
+
+def _check_power_array(power: np.ndarray, time_s: np.ndarray, names: tuple[str, ...],
+                       source: str) -> None:
+    """A :class:`ThermalError` locating the first non-finite power (time and node)."""
+    finite = np.isfinite(power)
+    if not np.all(finite):
+        k, j = (int(i) for i in np.argwhere(~finite)[0])
+        raise ThermalError(f"{source} is not finite at t = {time_s[k]} s, node {names[j]!r}")
+
+
+def simulate(network: Network, time_s: np.ndarray, *,
+             ambient_c: float | np.ndarray | Callable[[float], float],
+             initial_c: float | np.ndarray,
+             power_w: PowerLaw | np.ndarray | None = None) -> ThermalResult:
+    """Node temperatures of ``network`` at the sample times, exact for held inputs (3)-(5).
+
+    Parameters
+    ----------
+    network : Network
+        The thermal network.
+    time_s : array_like (n_t,)
+        Strictly increasing sample times [s]; any spacing (one matrix exponential per
+        distinct step, so a uniform grid costs one).
+    ambient_c : float, array_like (n_t,) or callable(t_s) -> float
+        Chamber temperature T_amb [degC].  Zero-order hold: the value at t_k is held over
+        [t_k, t_k+1); sample finely enough to resolve a chamber ramp.
+    initial_c : float or array_like (n_nodes,)
+        Node temperatures at time_s[0] [degC].
+    power_w : callable(t_s, temperature_c) -> array (n_nodes,), array (n_t, n_nodes), optional
+        Extra power per node [W] on top of the constant ``Node.power_w``.  A callable is
+        evaluated at each sample t_k from the node temperatures T_k (a read-only array) and
+        held over [t_k, t_k+1): this is how temperature-dependent sources (a TEC law) and
+        pulses enter.  An array gives the held value per sample.
+
+    Returns
+    -------
+    ThermalResult
+        Temperatures, exact rates, the powers and ambient used, and the energy bookkeeping
+        heat_in_j = stored_j + heat_lost_j (equation (6)).
+    """
+    t = _as_time(time_s)
+    n_t = t.size
+    names = network.node_names
+    n = len(names)
+    amb = _as_ambient(ambient_c, t)
+    try:
+        t0 = np.broadcast_to(np.asarray(initial_c, dtype=float), (n,)).copy()
+    except ValueError:
+        raise ThermalError(f"initial_c must be a scalar or have shape ({n},), got shape "
+                           f"{np.shape(initial_c)}") from None
+    if not np.all(np.isfinite(t0)):
+        raise ThermalError(f"initial_c is not finite for node {names[int(np.argmin(np.isfinite(t0)))]!r}")
+
+    a, b = network.matrices()
+    steps, cls = _step_classes(t)
+    mats = [step_matrices(a, b, h) for h in steps]
+
+    law = power_w if callable(power_w) else None
+    x = np.zeros((n_t, 2 * n + 2))      # rows [T_k, p_k, T_amb,k, 1], see _march
+    x[0, :n] = t0
+    x[:, 2 * n] = amb
+    x[:, 2 * n + 1] = 1.0
+    if law is None and power_w is not None:
+        extra = np.asarray(power_w, dtype=float)
+        if extra.shape != (n_t, n):
+            raise ThermalError(f"power_w must be a callable or an array of shape ({n_t}, {n}), "
+                               f"got shape {extra.shape}")
+        _check_power_array(extra, t, names, "power_w")
+        x[:, n:2 * n] = extra
+
+    a, b = network.matrices()
+    steps, cls = _step_classes(t)
+    mats = [step_matrices(a, b, h) for h in steps]
+    inputs = np.empty((n_t, 1 + n))     # u_k = [T_amb,k, P_1,k, ..., P_n,k], equation (2)
+    inputs[:, 0] = amb
+    if law is None and len(mats) == 1:
+        inputs[:, 1:] = network.node_power_w + x[:, n:2 * n]
+        drive = _per_interval([mats[0].gamma], cls, inputs[:-1], n)
+        temp = _modal_recursion(mats[0].phi, network.capacity_j_per_k, t0, drive)
+    else:
+        _march(mats, cls.tolist(), x, t, network.node_power_w, law)
+        if law is not None:
+            _check_power_array(x[:, n:2 * n], t, names, "power_w(t_s, temperature_c)")
+        inputs[:, 1:] = network.node_power_w + x[:, n:2 * n]
+        temp = x[:, :n]
+
+    rate = temp @ a.T + inputs @ b.T
+    _, to_chamber = network.conductances()
+    integral = (_per_interval([m.psi for m in mats], cls, temp[:-1], n)
+                + _per_interval([m.upsilon for m in mats], cls, inputs[:-1], n))
+    h = steps[cls]
+    lost = (integral - h[:, None] * amb[:-1, None]) @ to_chamber
+    gained = h * inputs[:-1, 1:].sum(axis=1)
+    heat_in = np.concatenate([[0.0], np.cumsum(gained)])
+    heat_lost = np.concatenate([[0.0], np.cumsum(lost)])
+
+    arrays = dict(time_s=t, capacity_j_per_k=network.capacity_j_per_k,
+                  temperature_c=np.ascontiguousarray(temp), rate_c_per_s=rate,
+                  power_w=inputs[:, 1:].copy(), ambient_c=amb, heat_in_j=heat_in,
+                  heat_lost_j=heat_lost)
+    for value in arrays.values():
+        value.flags.writeable = False
+    return ThermalResult(node_names=names, **arrays)
