@@ -1,0 +1,240 @@
+"""North-find a whole run, cycle by cycle, and score its heading by stage.
+
+The chain (physics.md section 5): dwells and cycles (:mod:`nfs.northfind.segment`) -> mean
+gyro rate and mean x specific force of every dwell -> tilt correction -> least squares per
+cycle (:mod:`nfs.northfind.solve`) -> heading psi and its error against the true heading.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from nfs.constants import earth_rate_components_dph
+from nfs.errors import MeasurementError, NfsError
+from nfs.io.measurement import Run
+from nfs.northfind.segment import Cycle, dwell_samples, find_dwells, segment_cycles
+from nfs.northfind.solve import (_distinct_angles, _elevation, _solve_stack,
+                                 solve_heading, wrap_deg_180, wrap_deg_360)
+
+__all__ = ["NorthFindResult", "north_find", "StageRMSE", "heading_rmse"]
+
+
+def _frozen(a) -> np.ndarray:
+    a = np.array(a, dtype=float)
+    a.flags.writeable = False
+    return a
+
+
+@dataclass(frozen=True)
+class NorthFindResult:
+    """North-finding result of one run: one entry per cycle (arrays are read-only)."""
+
+    run_name: str
+    """Name of the run."""
+    cycles: tuple[Cycle, ...]
+    """The cycles, with their dwells and sample ranges."""
+    t_start_s: np.ndarray
+    """Time of the first sample used in each cycle [s]."""
+    t_end_s: np.ndarray
+    """Time of the last sample used in each cycle [s]."""
+    heading_deg: np.ndarray
+    """Heading psi of each cycle: azimuth of the x axis at theta = 0, in [0, 360) [deg]."""
+    error_deg: np.ndarray
+    """heading_deg - true_heading_deg wrapped to [-180, 180) [deg]; NaN when the true
+    heading is unknown."""
+    bias_dph: np.ndarray
+    """Gyro bias b fitted in each cycle [deg/h]."""
+    horizontal_rate_dph: np.ndarray
+    """Horizontal Earth rate sqrt(X^2 + Y^2) fitted in each cycle [deg/h]."""
+    residual_dph: np.ndarray
+    """RMS of the fit residuals over the positions of each cycle [deg/h]."""
+    theta_deg: np.ndarray
+    """Turntable angle theta_k of each dwell, shape (n_cycles, n_positions) [deg]."""
+    rate_dph: np.ndarray
+    """Mean gyro rate w_k of each dwell before tilt correction, (n_cycles, n_positions) [deg/h]."""
+    acc_x_g: np.ndarray
+    """Mean x specific force f_x = sin e_k of each dwell, (n_cycles, n_positions) [g]
+    (NaN when tilt correction is off and the run has no acc_x_g)."""
+    true_heading_deg: float | None
+    """The run's true heading [deg], if known."""
+    latitude_deg: float
+    """Latitude L used for tilt correction [deg]."""
+    tilt_correction: bool
+    """Whether the rates were tilt-corrected."""
+    ambiguous: bool = False
+    """True when two-position cycles left the sign of psi unresolved (see solve_heading)."""
+
+    @property
+    def n_cycles(self) -> int:
+        """Number of cycles."""
+        return len(self.cycles)
+
+
+def _column(run: Run, name: str) -> np.ndarray:
+    try:
+        return np.asarray(run.columns[name], dtype=float)
+    except KeyError:
+        raise MeasurementError(f"run '{run.name}' has no column '{name}' (columns: "
+                               f"{', '.join(run.columns)})", file=run.path,
+                               column=name) from None
+
+
+def _dwell_means(values: np.ndarray, idx: np.ndarray, owner: np.ndarray, n: int) -> np.ndarray:
+    """Mean of the finite values over each dwell (NaN for a dwell without one)."""
+    v = values[idx]
+    ok = np.isfinite(v)
+    count = np.bincount(owner, ok, minlength=n)
+    total = np.bincount(owner, np.where(ok, v, 0.0), minlength=n)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.where(count > 0, total / np.maximum(count, 1), np.nan)
+
+
+def north_find(run: Run, *, tilt_correction: bool = True, settle_s: float = 0.0,
+               gyro_column: str = "gyro_dph", heading_hint_deg: float | None = None,
+               position_tol_deg: float = 0.5) -> NorthFindResult:
+    """North-find every complete cycle of a run (physics.md section 5).
+
+    Per dwell: w_k = mean gyro rate, sin e_k = mean acc_x_g. Per cycle: least squares of
+
+        w_k - Omega_ie sin L sin e_k = cos e_k (X cos theta_k - Y sin theta_k) + b
+
+    (the tilt correction w_k' = (w_k - Omega_ie sin L sin e_k) / cos e_k of
+    :func:`tilt_correct`, written so that the bias b is not rescaled by 1 / cos e_k; exact
+    for the model of physics.md section 5), psi = atan2(Y, X). Without tilt correction:
+    w_k = X cos theta_k - Y sin theta_k + b.
+
+    Parameters
+    ----------
+    run : Run
+        The run; uses ``time_s``, ``position_deg``, ``moving``, the gyro column and
+        ``acc_x_g``, and from the metadata ``latitude_deg``, ``positions_deg``, ``dwell_s``
+        and ``true_heading_deg``.
+    tilt_correction : bool
+        Correct each position with the x accelerometer.
+    settle_s : float
+        Time dropped at the start of every dwell [s].
+    gyro_column : str
+        Column holding the rate about x [deg/h] (e.g. a compensated output).
+    heading_hint_deg : float, optional
+        Approximate heading that resolves the sign of a two-position schedule.
+    position_tol_deg : float
+        Angle tolerance of :func:`segment_cycles` [deg].
+
+    Returns
+    -------
+    NorthFindResult
+
+    Raises
+    ------
+    MeasurementError
+        A column is missing, or the run holds no complete cycle.
+    NfsError
+        The schedule cannot determine psi.
+    """
+    meta = run.meta
+    time_s = _column(run, "time_s")
+    gyro = _column(run, gyro_column)
+    cycles = segment_cycles(time_s, _column(run, "position_deg"), _column(run, "moving"),
+                            meta.positions_deg, dwell_s=meta.dwell_s, settle_s=settle_s,
+                            position_tol_deg=position_tol_deg)
+    if not cycles:
+        n_dwells = len(find_dwells(time_s, run.columns["position_deg"], run.columns["moving"],
+                                   dwell_s=meta.dwell_s, settle_s=settle_s,
+                                   position_tol_deg=position_tol_deg))
+        sched = "recovered" if meta.positions_deg is None else list(meta.positions_deg)
+        raise MeasurementError(f"run '{run.name}': no complete north-finding cycle "
+                               f"({n_dwells} dwells found, schedule {sched})", file=run.path)
+    n_cyc, n_pos = len(cycles), len(cycles[0].dwells)
+    dwells = [d for c in cycles for d in c.dwells]
+    idx, owner = dwell_samples([d.start for d in dwells], [d.stop for d in dwells])
+    shape = (n_cyc, n_pos)
+    theta = np.array([d.theta_deg for d in dwells]).reshape(shape)
+    rate = _dwell_means(gyro, idx, owner, len(dwells)).reshape(shape)
+    if tilt_correction or "acc_x_g" in run.columns:
+        acc_x = _dwell_means(_column(run, "acc_x_g"), idx, owner, len(dwells)).reshape(shape)
+    else:
+        acc_x = np.full(shape, np.nan)
+
+    if tilt_correction:
+        _, omega_v = earth_rate_components_dph(meta.latitude_deg)
+        sin_e, cos_e = _elevation(np.nan_to_num(acc_x, nan=0.0))
+        y = rate - omega_v * np.where(np.isfinite(acc_x), sin_e, np.nan)
+    else:
+        cos_e, y = np.ones(shape), rate
+
+    x_dph = np.full(n_cyc, np.nan)
+    y_dph, b_dph, omh, rms = (np.full(n_cyc, np.nan) for _ in range(4))
+    ok = np.all(np.isfinite(y), axis=1)
+    ambiguous = False
+    if len(_distinct_angles(np.radians(theta[0]), math.radians(position_tol_deg))) >= 3:
+        if np.any(ok):
+            sol = _solve_stack(np.radians(theta[ok]), y[ok], cos_e[ok])
+            x_dph[ok], y_dph[ok], b_dph[ok], rms[ok] = sol
+            omh[ok] = np.hypot(x_dph[ok], y_dph[ok])
+        psi = np.degrees(np.arctan2(y_dph, x_dph))
+    else:  # two positions (or an error message from solve_heading)
+        psi = np.full(n_cyc, np.nan)
+        for k in np.flatnonzero(ok):
+            s = solve_heading(theta[k], y[k], cos_elevation=cos_e[k],
+                              latitude_deg=meta.latitude_deg, heading_hint_deg=heading_hint_deg)
+            psi[k], x_dph[k], y_dph[k], b_dph[k] = s.psi_deg, s.X_dph, s.Y_dph, s.bias_dph
+            omh[k], rms[k] = s.horizontal_rate_dph, s.residual_dph
+            ambiguous |= s.ambiguous
+    heading = wrap_deg_360(psi)
+    true = meta.true_heading_deg
+    error = (np.full(n_cyc, np.nan) if true is None
+             else wrap_deg_180(np.asarray(heading) - true))
+    return NorthFindResult(
+        run_name=run.name, cycles=tuple(cycles),
+        t_start_s=_frozen([c.t_start_s for c in cycles]),
+        t_end_s=_frozen([c.t_end_s for c in cycles]),
+        heading_deg=_frozen(heading), error_deg=_frozen(error), bias_dph=_frozen(b_dph),
+        horizontal_rate_dph=_frozen(omh), residual_dph=_frozen(rms),
+        theta_deg=_frozen(theta), rate_dph=_frozen(rate), acc_x_g=_frozen(acc_x),
+        true_heading_deg=true, latitude_deg=float(meta.latitude_deg),
+        tilt_correction=bool(tilt_correction), ambiguous=bool(ambiguous))
+
+
+@dataclass(frozen=True)
+class StageRMSE:
+    """Heading RMSE of the start-up and the stable stage of a run (seed 004, Table 3)."""
+
+    startup_deg: float
+    """RMS heading error of the cycles ending within the start-up stage [deg] (NaN if none)."""
+    stable_deg: float
+    """RMS heading error of the cycles starting in the stable stage [deg] (NaN if none)."""
+    n_startup: int
+    """Number of start-up cycles with a finite error."""
+    n_stable: int
+    """Number of stable cycles with a finite error."""
+
+
+def heading_rmse(result: NorthFindResult, *, startup_end_s: float = 3600.0,
+                 stable_start_s: float = 5400.0) -> StageRMSE:
+    """RMS heading error by stage.
+
+    Start-up: cycles with ``t_end_s <= startup_end_s`` (ending within the first
+    ``startup_end_s`` after power-on). Stable: cycles with ``t_start_s >= stable_start_s``.
+    Cycles in between belong to neither; cycles with a NaN error (no data) are left out.
+
+    Raises
+    ------
+    NfsError
+        When the run's true heading is unknown (no error to score).
+    """
+    if result.true_heading_deg is None:
+        raise NfsError(f"run '{result.run_name}' has no true_heading_deg: its heading error "
+                       "cannot be scored")
+    err = np.asarray(result.error_deg)
+    fin = np.isfinite(err)
+    up = fin & (np.asarray(result.t_end_s) <= startup_end_s)
+    st = fin & (np.asarray(result.t_start_s) >= stable_start_s)
+
+    def rms(mask):
+        return float(np.sqrt(np.mean(err[mask] ** 2))) if np.any(mask) else math.nan
+
+    return StageRMSE(rms(up), rms(st), int(up.sum()), int(st.sum()))
+
