@@ -1,20 +1,63 @@
 """The measurement format ``nfs-measurement/1`` (../shared/spec/measurement-format.md).
 
 A run is two files with one stem: ``NAME.csv`` (samples) and ``NAME.toml`` (metadata).
+
+Reading
+    :func:`read_run` reads one run, :func:`read_runs` any number of files and folders,
+    :func:`find_runs` only lists the runs a set of paths names. Every fault in the input
+    raises :class:`~nfs.errors.MeasurementError` whose message names the file and, where they
+    apply, the column, the 1-based line (the header is line 1) or the TOML key.
+
+Missing values
+    An empty field or ``nan`` is a missing sample (NaN). It is allowed in every column except
+    ``time_s``, ``position_deg`` and ``moving``: without those a sample cannot be placed in
+    the schedule, so their absence is an error. A missing gyro, accelerometer or temperature
+    sample (a logger drop-out inside a dwell) is read as NaN and left to the consumers, which
+    must skip or interpolate it. Rows whose fields are all empty (a spreadsheet's trailing
+    ``,,,,``) are skipped like blank lines. Infinite values are errors in every column.
+
+Values
+    Every column is numeric: a value is what Python's ``float`` reads (after stripping
+    blanks), so ``1``, ``1.0``, ``1e3`` and `` 2.5 `` all load. A non-numeric value in any
+    column, known or not, is an error naming the column and line.
+
+Writing
+    :func:`write_run` writes both files atomically (:mod:`nfs.io.atomic`), required columns
+    first, each float in its shortest exact form (``repr``), so reading a written run gives
+    back bitwise the same arrays, and the same run always gives the same bytes.
 """
 
 from __future__ import annotations
 
+import csv
+import datetime as _dt
+import io
+import math
+import os
+import re
+import tomllib
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
+from nfs.constants import ABSOLUTE_ZERO_C
+from nfs.errors import MeasurementError
+from nfs.io.atomic import atomic_write_files
+
 __all__ = [
     "FORMAT",
     "REQUIRED_COLUMNS",
+    "NO_MISSING_COLUMNS",
+    "MAX_ABS_ACC_G",
     "RunMeta",
     "Run",
+    "read_run",
+    "read_runs",
+    "find_runs",
+    "write_run",
+    "check_columns",
 ]
 
 #: The format tag written to and required in ``NAME.toml``.
@@ -25,6 +68,19 @@ REQUIRED_COLUMNS: tuple[str, ...] = (
     "time_s", "position_deg", "moving", "gyro_dph", "acc_x_g", "acc_y_g",
     "temp_fog_c", "temp_acc_x_c", "temp_acc_y_c",
 )
+
+#: Required columns that may not hold a missing value (NaN): they place a sample in time
+#: and in the turntable schedule.
+NO_MISSING_COLUMNS: tuple[str, ...] = ("time_s", "position_deg", "moving")
+
+#: Largest physically possible |specific force| of an ``acc_*_g`` column [g] (the spec).
+MAX_ABS_ACC_G = 2.0
+
+#: Relative tolerance between ``sample_rate_hz`` and the median step of ``time_s``.
+SAMPLE_RATE_RTOL = 0.01
+
+_TEMPERATURE_COLUMN = re.compile(r"temp_.*_c")
+_ACCELERATION_COLUMN = re.compile(r"acc_.*_g")
 
 
 @dataclass(frozen=True)
@@ -75,3 +131,642 @@ class Run:
     def n_samples(self) -> int:
         """Number of samples."""
         return len(self.columns["time_s"])
+
+
+# ---------------------------------------------------------------------------------------------
+# Paths
+
+
+def _run_files(path: str | os.PathLike) -> tuple[Path, Path]:
+    """``(NAME.csv, NAME.toml)`` for a path given as ``NAME.csv``, ``NAME.toml`` or ``NAME``."""
+    path = Path(path)
+    if path.suffix.lower() in (".csv", ".toml"):
+        stem = path.with_suffix("")
+    else:
+        stem = path
+    return stem.with_name(stem.name + ".csv"), stem.with_name(stem.name + ".toml")
+
+
+def find_runs(paths: str | os.PathLike | Iterable[str | os.PathLike]) -> list[Path]:
+    """The ``NAME.csv`` of every run that *paths* name, in the order given.
+
+    Each path is a run (``NAME.csv``, ``NAME.toml`` or the stem ``NAME``) or a folder, which
+    stands for every ``*.csv`` directly inside it, sorted by name. A run named twice is
+    listed once.
+
+    Raises
+    ------
+    MeasurementError
+        A path that does not exist, a file that is not ``.csv``/``.toml``, a folder without
+        any ``*.csv``, or no paths at all.
+    """
+    if isinstance(paths, (str, os.PathLike)):
+        paths = [paths]
+    found: list[Path] = []
+    for given in paths:
+        path = Path(given)
+        if path.is_dir():
+            csvs = sorted(p for p in path.glob("*.csv") if p.is_file())
+            if not csvs:
+                raise MeasurementError("folder holds no runs (no *.csv files)", file=path)
+            found.extend(csvs)
+        elif path.is_file():
+            if path.suffix.lower() not in (".csv", ".toml"):
+                raise MeasurementError(
+                    "not a measurement file: expected NAME.csv or NAME.toml", file=path)
+            found.append(_run_files(path)[0])
+        elif path.suffix.lower() not in (".csv", ".toml") and _run_files(path)[0].is_file():
+            found.append(_run_files(path)[0])  # the stem of a run
+        else:
+            raise MeasurementError("no such file or folder", file=path)
+    if not found:
+        raise MeasurementError("no measurement files or folders given")
+    unique: dict[Path, Path] = {}
+    for csv_path in found:
+        unique.setdefault(csv_path.resolve(), csv_path)
+    return list(unique.values())
+
+
+# ---------------------------------------------------------------------------------------------
+# NAME.toml
+
+
+def _is_number(value: object) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool)
+
+
+def _number(doc: Mapping, key: str, file: Path, *, required: bool = False,
+            low: float | None = None, high: float | None = None,
+            low_open: bool = False) -> float | None:
+    """A finite number from *doc* as float, within [low, high] (or (low, high])."""
+    if key not in doc:
+        if required:
+            raise MeasurementError("required key is missing", file=file, key=key)
+        return None
+    value = doc[key]
+    if not _is_number(value):
+        raise MeasurementError(f"must be a number, not {type(value).__name__} {value!r}",
+                               file=file, key=key)
+    value = float(value)
+    if not math.isfinite(value):
+        raise MeasurementError(f"must be finite, not {value!r}", file=file, key=key)
+    if low is not None and (value <= low if low_open else value < low):
+        bound = ">" if low_open else ">="
+        raise MeasurementError(f"must be {bound} {low!r}, not {value!r}", file=file, key=key)
+    if high is not None and value > high:
+        raise MeasurementError(f"must be <= {high!r}, not {value!r}", file=file, key=key)
+    return value
+
+
+def _meta_from_toml(doc: Mapping, file: Path) -> RunMeta:
+    """Check the parsed ``NAME.toml`` and turn it into a :class:`RunMeta`."""
+    if "format" not in doc:
+        raise MeasurementError(f'required key is missing; must be "{FORMAT}"',
+                               file=file, key="format")
+    if doc["format"] != FORMAT:
+        raise MeasurementError(f'must be "{FORMAT}", not {doc["format"]!r}',
+                               file=file, key="format")
+    positions = doc.get("positions_deg")
+    if positions is not None:
+        if not isinstance(positions, list) or not positions:
+            raise MeasurementError(
+                f"must be a non-empty list of numbers, not {positions!r}",
+                file=file, key="positions_deg")
+        for k, value in enumerate(positions):
+            if not _is_number(value) or not math.isfinite(value):
+                raise MeasurementError(f"must be a finite number, not {value!r}",
+                                       file=file, key=f"positions_deg[{k}]")
+        positions = tuple(float(v) for v in positions)
+    instrument = doc.get("instrument")
+    if instrument is not None and not isinstance(instrument, str):
+        raise MeasurementError(
+            f"must be a string, not {type(instrument).__name__} {instrument!r}",
+            file=file, key="instrument")
+    return RunMeta(
+        latitude_deg=_number(doc, "latitude_deg", file, required=True, low=-90.0, high=90.0),
+        start_temperature_c=_number(doc, "start_temperature_c", file, required=True,
+                                    low=ABSOLUTE_ZERO_C),
+        true_heading_deg=_number(doc, "true_heading_deg", file),
+        sample_rate_hz=_number(doc, "sample_rate_hz", file, low=0.0, low_open=True),
+        positions_deg=positions,
+        dwell_s=_number(doc, "dwell_s", file, low=0.0, low_open=True),
+        move_s=_number(doc, "move_s", file, low=0.0),
+        instrument=instrument,
+        extra={k: v for k, v in doc.items() if k not in _META_KEYS},
+    )
+
+
+#: Keys of NAME.toml that RunMeta holds in its own fields, in the order they are written.
+_META_KEYS = ("format", "latitude_deg", "start_temperature_c", "true_heading_deg",
+              "sample_rate_hz", "positions_deg", "dwell_s", "move_s", "instrument")
+
+
+def _read_meta(path: Path) -> RunMeta:
+    try:
+        with open(path, "rb") as f:
+            doc = tomllib.load(f)
+    except tomllib.TOMLDecodeError as exc:
+        raise MeasurementError(f"TOML syntax error: {exc}", file=path) from None
+    except UnicodeDecodeError as exc:
+        raise MeasurementError(f"not UTF-8 text: {exc.reason}", file=path) from None
+    except OSError as exc:
+        raise MeasurementError(f"cannot read: {exc.strerror}", file=path) from None
+    return _meta_from_toml(doc, path)
+
+
+# A tiny TOML writer: tomllib (standard library) only reads TOML, and the metadata are a flat
+# table of scalars and lists, so a few lines do instead of a dependency.
+
+_BARE_KEY = re.compile(r"[A-Za-z0-9_-]+")
+_TOML_ESCAPES = {'"': '\\"', "\\": "\\\\", "\b": "\\b", "\t": "\\t", "\n": "\\n",
+                 "\f": "\\f", "\r": "\\r"}
+
+
+def _toml_string(text: str) -> str:
+    out = []
+    for char in text:
+        if char in _TOML_ESCAPES:
+            out.append(_TOML_ESCAPES[char])
+        elif ord(char) < 0x20 or ord(char) == 0x7F:
+            out.append(f"\\u{ord(char):04X}")
+        else:
+            out.append(char)
+    return '"' + "".join(out) + '"'
+
+
+def _toml_key(key: str) -> str:
+    return key if _BARE_KEY.fullmatch(key) else _toml_string(key)
+
+
+def _toml_value(value: object, key: str, file: Path) -> str:
+    """One TOML value (inline: arrays and tables on one line)."""
+    if isinstance(value, np.generic):
+        value = value.item()
+    elif isinstance(value, np.ndarray):
+        value = value.tolist()
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, int):
+        return str(value)
+    if isinstance(value, float):
+        return repr(value)  # shortest exact form; inf/nan/1e-05 are valid TOML
+    if isinstance(value, str):
+        return _toml_string(value)
+    if isinstance(value, (_dt.datetime, _dt.date, _dt.time)):
+        return value.isoformat()
+    if isinstance(value, (list, tuple)):
+        return "[" + ", ".join(_toml_value(v, key, file) for v in value) + "]"
+    if isinstance(value, Mapping):
+        items = ", ".join(f"{_toml_key(str(k))} = {_toml_value(v, key, file)}"
+                          for k, v in value.items())
+        return "{" + (f" {items} " if items else "") + "}"
+    raise MeasurementError(f"cannot write a {type(value).__name__} to TOML", file=file,
+                           key=key)
+
+
+def _format_meta(meta: RunMeta, file: Path) -> str:
+    """``NAME.toml`` text of *meta*: format tag, required keys, given optional keys, extra."""
+    values: dict[str, object] = {
+        "format": FORMAT,
+        "latitude_deg": meta.latitude_deg,
+        "start_temperature_c": meta.start_temperature_c,
+        "true_heading_deg": meta.true_heading_deg,
+        "sample_rate_hz": meta.sample_rate_hz,
+        "positions_deg": meta.positions_deg,
+        "dwell_s": meta.dwell_s,
+        "move_s": meta.move_s,
+        "instrument": meta.instrument,
+    }
+    lines = []
+    for key, value in values.items():
+        if value is None:
+            continue
+        if _is_number(value) or isinstance(value, np.number):
+            value = float(value)
+        elif key == "positions_deg" and isinstance(value, (list, tuple, np.ndarray)):
+            value = [float(v) if _is_number(v) or isinstance(v, np.number) else v
+                     for v in value]
+        lines.append(f"{key} = {_toml_value(value, key, file)}")
+    for key, value in meta.extra.items():
+        if key in _META_KEYS:
+            raise MeasurementError("extra key clashes with a key of the format",
+                                   file=file, key=key)
+        if value is None:
+            raise MeasurementError("TOML has no null value", file=file, key=key)
+        lines.append(f"{_toml_key(str(key))} = {_toml_value(value, str(key), file)}")
+    return "\n".join(lines) + "\n"
+
+
+# ---------------------------------------------------------------------------------------------
+# NAME.csv: checks shared by the reader and the writer
+
+
+def _first(mask: np.ndarray) -> int | None:
+    hits = np.flatnonzero(mask)
+    return int(hits[0]) if hits.size else None
+
+
+def check_columns(columns: Mapping[str, np.ndarray], *, file: str | os.PathLike | None = None,
+                  line_of: Callable[[int], int] | None = None) -> None:
+    """Check sample columns against the format; raise on the first fault.
+
+    Checks, in this order: every value finite or NaN; no NaN in :data:`NO_MISSING_COLUMNS`;
+    ``time_s`` strictly increasing; ``moving`` 0 or 1; every ``temp_*_c`` >= -273.15;
+    every ``|acc_*_g|`` <= 2. Column presence and equal lengths are the caller's concern.
+
+    Parameters
+    ----------
+    columns : mapping
+        Column name -> float array.
+    file : path, optional
+        The file named in the error.
+    line_of : callable, optional
+        Sample index -> 1-based line number in *file*; default ``index + 2`` (header line 1).
+
+    Raises
+    ------
+    MeasurementError
+        Naming the file, the column and the line of the first offending sample.
+    """
+    if line_of is None:
+        def line_of(i: int) -> int:
+            return i + 2
+
+    def fail(message: str, name: str, index: int) -> MeasurementError:
+        return MeasurementError(message, file=file, column=name, row=line_of(index))
+
+    for name, values in columns.items():
+        i = _first(np.isinf(values))
+        if i is not None:
+            raise fail(f"value {float(values[i])!r} is not finite", name, i)
+    for name in NO_MISSING_COLUMNS:
+        i = _first(np.isnan(columns[name]))
+        if i is not None:
+            raise fail(f"missing value ({', '.join(NO_MISSING_COLUMNS)} "
+                       "must be given in every row)", name, i)
+    time = columns["time_s"]
+    i = _first(~(np.diff(time) > 0.0))
+    if i is not None:
+        raise fail(f"time does not increase: {float(time[i + 1])!r} after {float(time[i])!r}",
+                   "time_s", i + 1)
+    moving = columns["moving"]
+    i = _first((moving != 0.0) & (moving != 1.0))
+    if i is not None:
+        raise fail(f"must be 0 or 1, not {float(moving[i])!r}", "moving", i)
+    for name, values in columns.items():
+        if _TEMPERATURE_COLUMN.fullmatch(name):
+            i = _first(values < ABSOLUTE_ZERO_C)
+            if i is not None:
+                raise fail(f"temperature {float(values[i])!r} C is below absolute zero "
+                           f"({ABSOLUTE_ZERO_C} C)", name, i)
+        elif _ACCELERATION_COLUMN.fullmatch(name):
+            i = _first(np.abs(values) > MAX_ABS_ACC_G)
+            if i is not None:
+                raise fail(f"|{float(values[i])!r}| g exceeds the physical limit of "
+                           f"{MAX_ABS_ACC_G} g", name, i)
+
+
+def _check_sample_rate(meta: RunMeta, time: np.ndarray, toml_file: Path,
+                       csv_file: Path) -> None:
+    """``sample_rate_hz`` against the median step of ``time_s`` (within 1 %)."""
+    if meta.sample_rate_hz is None or len(time) < 2:
+        return
+    step = float(np.median(np.diff(time)))
+    if abs(step * meta.sample_rate_hz - 1.0) > SAMPLE_RATE_RTOL:
+        raise MeasurementError(
+            f"sample_rate_hz = {meta.sample_rate_hz!r} does not match the median step of "
+            f"time_s in {csv_file.name} ({step!r} s, i.e. {1.0 / step!r} Hz; tolerance "
+            f"{SAMPLE_RATE_RTOL:.0%})", file=toml_file, key="sample_rate_hz")
+
+
+def _check_header(names: list[str], file: Path, line: int) -> None:
+    seen: set[str] = set()
+    for k, name in enumerate(names):
+        if not name:
+            raise MeasurementError(f"header field {k + 1} is empty (every column needs a "
+                                   "name)", file=file, row=line)
+        if name in seen:
+            raise MeasurementError("column name appears twice in the header", file=file,
+                                   column=name, row=line)
+        seen.add(name)
+    missing = [name for name in REQUIRED_COLUMNS if name not in seen]
+    if missing:
+        raise MeasurementError(
+            f"required column{'s' if len(missing) > 1 else ''} missing: "
+            f"{', '.join(missing)} (the header has: {', '.join(names)})",
+            file=file, column=missing[0] if len(missing) == 1 else None, row=line)
+
+
+# ---------------------------------------------------------------------------------------------
+# NAME.csv: reading
+#
+# A fast path hands well-formed files (no quotes, no blank lines inside, no all-empty rows)
+# to numpy's C parser, where row k is line k + 2. Anything else, and any file the fast path
+# cannot read, goes through the careful path (csv module, per-row line numbers), which is the
+# authority: it either reads the file or locates the fault.
+
+
+class _UseCarefulPath(Exception):
+    """The fast CSV path does not apply to this text."""
+
+
+_ODD_LINE_BREAKS = ("\x0b", "\x0c", "\x1c", "\x1d", "\x1e", "\x85", "\u2028", "\u2029")
+
+
+def _parse_csv_fast(text: str) -> tuple[list[str], np.ndarray]:
+    """Names and a (columns, samples) array; sample k is on line k + 2."""
+    if '"' in text or any(mark in text for mark in _ODD_LINE_BREAKS):
+        raise _UseCarefulPath  # quoting or line breaks that str.splitlines and csv disagree on
+    lines = text.splitlines()
+    while lines and not lines[-1].strip():
+        lines.pop()
+    if len(lines) < 2 or not lines[0].strip():
+        raise _UseCarefulPath
+    names = [name.strip() for name in lines[0].split(",")]
+    body = "\n".join(lines[1:])
+    if "\n\n" in body:
+        raise _UseCarefulPath  # a blank line inside
+    if ",," in body or "\n," in body or ",\n" in body or body[0] == "," or body[-1] == ",":
+        # Empty fields -> "nan". Two passes of ",," catch runs of any length: the first
+        # leaves runs of at most two commas, the second splits those.
+        body = "\n" + body + "\n"
+        if ",," in body:
+            body = body.replace(",,", ",nan,").replace(",,", ",nan,")
+        if "\n," in body:
+            body = body.replace("\n,", "\nnan,")
+        if ",\n" in body:
+            body = body.replace(",\n", ",nan\n")
+        body = body[1:-1]
+    try:
+        data = np.loadtxt(io.StringIO(body), delimiter=",", comments=None,
+                          dtype=np.float64, ndmin=2)
+    except ValueError:
+        raise _UseCarefulPath from None
+    if data.shape != (len(lines) - 1, len(names)):
+        raise _UseCarefulPath
+    data = np.ascontiguousarray(data.T)
+    if "time_s" in names and np.isnan(data[names.index("time_s")]).any():
+        raise _UseCarefulPath  # maybe an all-empty row, which the careful path skips
+    return names, data
+
+
+def _is_blank(row: list[str]) -> bool:
+    return not any(f.strip() for f in row)
+
+
+def _parse_values(values: tuple[str, ...]) -> tuple[np.ndarray, int | None]:
+    """Floats of *values* (empty -> NaN) and the index of the first one that does not parse."""
+    try:
+        return np.array(list(map(float, values)), dtype=np.float64), None
+    except ValueError:
+        pass
+    out = np.empty(len(values))
+    for i, value in enumerate(values):
+        try:
+            out[i] = float(value)
+        except ValueError:
+            if value.strip():
+                return out, i
+            out[i] = math.nan
+    return out, None
+
+
+def _parse_csv_careful(text: str, file: Path) -> tuple[list[str], list[np.ndarray], list[int]]:
+    """Names, columns and the line of every sample; raises on the first fault."""
+    reader = csv.reader(io.StringIO(text, newline=""))
+    try:
+        header = None
+        for row in reader:
+            if not _is_blank(row):
+                header = row
+                break
+        if header is None:
+            raise MeasurementError("empty file: no header row", file=file)
+        header_line = reader.line_num
+        names = [name.strip() for name in header]
+        _check_header(names, file, header_line)
+        n = len(names)
+        t = names.index("time_s")
+        rows: list[list[str]] = []
+        lines: list[int] = []
+        for row in reader:
+            if len(row) != n:
+                if _is_blank(row):
+                    continue
+                raise MeasurementError(
+                    f"row has {len(row)} field{'s' if len(row) != 1 else ''}, the header "
+                    f"has {n}", file=file, row=reader.line_num)
+            if not row[t].strip() and _is_blank(row):
+                continue
+            rows.append(row)
+            lines.append(reader.line_num)
+    except csv.Error as exc:
+        raise MeasurementError(f"CSV syntax error: {exc}", file=file,
+                               row=reader.line_num) from None
+    if not rows:
+        raise MeasurementError("no data rows after the header", file=file, row=header_line)
+    columns = []
+    faults = []
+    for name, values in zip(names, zip(*rows)):
+        column, bad = _parse_values(values)
+        columns.append(column)
+        if bad is not None:
+            faults.append((bad, name, values[bad]))
+    if faults:
+        bad, name, value = min(faults, key=lambda fault: fault[0])  # first line, then column
+        shown = value if len(value) <= 40 else value[:37] + "..."
+        raise MeasurementError(f"cannot read {shown!r} as a number", file=file, column=name,
+                               row=lines[bad])
+    return names, columns, lines
+
+
+def _read_columns(path: Path) -> dict[str, np.ndarray]:
+    """The checked columns of ``NAME.csv``, in file order."""
+    try:
+        raw = path.read_bytes()
+    except OSError as exc:
+        raise MeasurementError(f"cannot read: {exc.strerror}", file=path) from None
+    try:
+        text = raw.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        line = raw[:exc.start].count(b"\n") + 1
+        raise MeasurementError(f"not UTF-8 text: {exc.reason} at byte {exc.start}",
+                               file=path, row=line) from None
+    if not text.strip():
+        raise MeasurementError("empty file: no header row", file=path)
+    try:
+        names, data = _parse_csv_fast(text)
+        _check_header(names, path, 1)
+        columns = dict(zip(names, data))
+        line_of = None
+    except (_UseCarefulPath, MeasurementError):
+        names, arrays, lines = _parse_csv_careful(text, path)
+        columns = dict(zip(names, arrays))
+        line_of = lines.__getitem__
+    check_columns(columns, file=path, line_of=line_of)
+    return columns
+
+
+# ---------------------------------------------------------------------------------------------
+# Public reading
+
+
+def read_run(path: str | os.PathLike) -> Run:
+    """Read one run from ``NAME.csv`` and ``NAME.toml``.
+
+    Parameters
+    ----------
+    path : str or path-like
+        ``NAME.csv``, ``NAME.toml`` or the stem ``NAME``.
+
+    Returns
+    -------
+    Run
+        Columns in file order as float64 arrays (missing samples NaN), the metadata, and
+        ``path`` set to ``NAME.csv``.
+
+    Raises
+    ------
+    MeasurementError
+        A missing file, a TOML syntax error or a wrong key, or a CSV fault (see the module
+        docstring); the message names the file and the key, column or line.
+    """
+    csv_path, toml_path = _run_files(path)
+    if not csv_path.is_file():
+        if toml_path.is_file():
+            raise MeasurementError(f"run has no sample file {csv_path.name} next to its "
+                                   f"{toml_path.name}", file=csv_path)
+        raise MeasurementError("no such file", file=csv_path)
+    if not toml_path.is_file():
+        raise MeasurementError(f"run has no metadata file {toml_path.name} "
+                               f"({FORMAT} needs NAME.csv and NAME.toml)", file=csv_path)
+    meta = _read_meta(toml_path)
+    columns = _read_columns(csv_path)
+    _check_sample_rate(meta, columns["time_s"], toml_path, csv_path)
+    return Run(name=csv_path.stem, columns=columns, meta=meta, path=csv_path)
+
+
+def read_runs(paths: str | os.PathLike | Iterable[str | os.PathLike]) -> list[Run]:
+    """Read every run that *paths* name (files, stems or folders; see :func:`find_runs`)."""
+    return [read_run(csv_path) for csv_path in find_runs(paths)]
+
+
+# ---------------------------------------------------------------------------------------------
+# Writing
+
+_UNSAFE_NAME = re.compile(r'[,"\r\n]')
+
+
+def _format_column(values: np.ndarray) -> list[str]:
+    """Shortest exact text of every value: integers as integers, NaN as an empty field.
+
+    A column whose values are all integral (``moving``, a whole-second ``time_s``) is written
+    as integers; otherwise every value as ``repr(float)``, the shortest string that reads
+    back to the same double. Columns with few distinct values format each value once.
+    """
+    nan = np.isnan(values)
+    has_nan = bool(nan.any())
+    given = values[~nan] if has_nan else values
+    negative_zero = bool(((given == 0.0) & np.signbit(given)).any())
+    if (not negative_zero and bool((given == np.trunc(given)).all())
+            and bool((np.abs(given) < 2.0 ** 53).all())):
+        texts = list(map(str, np.where(nan, 0.0, values).astype(np.int64).tolist()))
+    else:
+        unique, inverse = (np.unique(values, return_inverse=True) if not negative_zero
+                           else (values, None))
+        if inverse is not None and 2 * len(unique) <= len(values):
+            table = np.array([repr(v) for v in unique.tolist()], dtype=object)
+            texts = table[inverse.ravel()].tolist()
+        else:
+            texts = list(map(repr, values.tolist()))
+    if has_nan:
+        for i in np.flatnonzero(nan).tolist():
+            texts[i] = ""
+    return texts
+
+
+def _format_csv(columns: Mapping[str, np.ndarray]) -> str:
+    names = [name for name in REQUIRED_COLUMNS if name in columns]
+    names += [name for name in columns if name not in REQUIRED_COLUMNS]
+    texts = [_format_column(columns[name]) for name in names]
+    return ",".join(names) + "\n" + "\n".join(map(",".join, zip(*texts))) + "\n"
+
+
+def _columns_for_writing(run: Run, file: Path) -> dict[str, np.ndarray]:
+    """The run's columns as 1-D float64 arrays of one length, with valid names."""
+    columns: dict[str, np.ndarray] = {}
+    for name, values in run.columns.items():
+        if not isinstance(name, str) or not name or name != name.strip() \
+                or _UNSAFE_NAME.search(name):
+            raise MeasurementError("column name must be non-empty text without commas, "
+                                   "quotes, line breaks or surrounding blanks",
+                                   file=file, column=str(name))
+        try:
+            array = np.asarray(values, dtype=np.float64)
+        except (TypeError, ValueError) as exc:
+            raise MeasurementError(f"values are not numbers: {exc}", file=file,
+                                   column=name) from None
+        if array.ndim != 1:
+            raise MeasurementError(f"must be one-dimensional, not shape {array.shape}",
+                                   file=file, column=name)
+        columns[name] = array
+    _check_header(list(columns), file, 1)
+    n = len(columns["time_s"])
+    for name, array in columns.items():
+        if len(array) != n:
+            raise MeasurementError(f"has {len(array)} samples, time_s has {n}", file=file,
+                                   column=name)
+    if n == 0:
+        raise MeasurementError("run has no samples", file=file)
+    check_columns(columns, file=file)
+    return columns
+
+
+def write_run(run: Run, target: str | os.PathLike) -> Path:
+    """Write *run* as ``NAME.csv`` and ``NAME.toml``, atomically; return the ``.csv`` path.
+
+    Parameters
+    ----------
+    run : Run
+        The run. Its columns are checked as on reading (:func:`check_columns`), and the
+        metadata are read back from the TOML text before anything is written, so a written
+        run always reads back.
+    target : str or path-like
+        A folder (created if missing): the files are ``target/<run.name>.csv`` and
+        ``.toml``. Or a path ending in ``.csv`` or ``.toml``: its stem names both files.
+
+    Notes
+    -----
+    Required columns come first in :data:`REQUIRED_COLUMNS` order, then the others in the
+    run's order. Floats are written in their shortest exact form, all-integral columns as
+    integers, NaN as an empty field, lines end in ``"\\n"``: reading the files back gives
+    bitwise the same arrays (NaN at the same places), and the same run gives the same bytes.
+    Both files are written to temporary files first and renamed into place only when both
+    succeeded (:func:`nfs.io.atomic.atomic_write_files`).
+
+    Raises
+    ------
+    MeasurementError
+        A run that would not read back: missing or malformed column, a value out of range,
+        metadata of the wrong type.
+    """
+    target = Path(target)
+    if target.suffix.lower() in (".csv", ".toml"):
+        csv_path, toml_path = _run_files(target)
+    else:
+        name = run.name
+        if not name or name in (".", "..") or "/" in name or "\\" in name:
+            raise MeasurementError(f"run name {name!r} cannot be a file name",
+                                   file=target)
+        csv_path, toml_path = _run_files(target / name)
+    columns = _columns_for_writing(run, csv_path)
+    toml_text = _format_meta(run.meta, toml_path)
+    try:
+        meta = _meta_from_toml(tomllib.loads(toml_text), toml_path)
+    except tomllib.TOMLDecodeError as exc:  # a bug of _format_meta, not of the run
+        raise AssertionError(f"nfs wrote invalid TOML for {toml_path}: {exc}") from exc
+    _check_sample_rate(meta, columns["time_s"], toml_path, csv_path)
+    csv_text = _format_csv(columns)
+    csv_path.parent.mkdir(parents=True, exist_ok=True)
+    atomic_write_files({csv_path: csv_text, toml_path: toml_text})
+    return csv_path
