@@ -1,0 +1,252 @@
+"""The chain that runs a start-up experiment end to end (after pvlib's ModelChain).
+
+    thermal network -> node temperatures -> thermometers, aux channels
+                    -> turntable motion -> Earth-rate projection
+                    -> named gyro / accelerometer effects + noise -> measurement (Run)
+
+Every intermediate lands in a :class:`SimulationResult`: node temperatures, each effect's
+contribution separately, the noise, and the measurement as it would be written to file.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, Callable
+
+import numpy as np
+
+import thermal
+
+from .constants import T_REF_C
+from .effects import EffectContext, EffectInstance
+from .effects.thermometer import THERMOMETERS
+from .instrument import Instrument
+from .io.measurement import Run, RunMeta
+from .noise import gyro_noise_dph, white_noise
+from .sensors import (Schedule, axis_elevation_deg, earth_rate_along_axis_dph,
+                      thermometer_reading, turntable_motion)
+
+__all__ = ["RunConditions", "SimulationResult", "simulate_run", "effect_context"]
+
+_UG = 1e-6
+
+
+@dataclass(frozen=True)
+class RunConditions:
+    """The conditions of one start-up run."""
+
+    name: str
+    """Stem of the measurement files."""
+    start_temperature_c: float
+    """T0, chamber soak and hold temperature [degC]."""
+    latitude_deg: float
+    """L [deg]."""
+    true_heading_deg: float
+    """psi, azimuth of the FOG axis at turntable angle 0 [deg]."""
+    schedule: Schedule
+    """The north-finding schedule."""
+    duration_s: float = 9000.0
+    """Length of the run from power-on [s]."""
+    sample_rate_hz: float = 1.0
+    """Sample rate [Hz]."""
+    seed: int | tuple[int, ...] = 0
+    """Entropy of the run's random streams (noise of every sensor)."""
+    chamber_c: Callable[[np.ndarray], np.ndarray] | None = None
+    """Chamber temperature T_amb(t) [degC]; None holds T0."""
+
+    @property
+    def time_s(self) -> np.ndarray:
+        """Sample times t_k = k / fs from power-on [s]."""
+        n = int(round(self.duration_s * self.sample_rate_hz))
+        return np.arange(n) / self.sample_rate_hz
+
+
+@dataclass(frozen=True)
+class SimulationResult:
+    """Everything one simulated run computed, stage by stage."""
+
+    conditions: RunConditions
+    """The conditions the run was made under."""
+    thermal: thermal.ThermalResult
+    """Node temperatures, rates, powers and the energy bookkeeping."""
+    context: EffectContext
+    """The state the effects were evaluated on."""
+    thermal_terms_w: dict[str, np.ndarray]
+    """Extra power of each thermal effect, by label [W]."""
+    gyro_terms_dph: dict[str, np.ndarray]
+    """Rate error of each gyro effect, by label [deg/h]."""
+    acc_terms_g: dict[str, np.ndarray]
+    """Error of each accelerometer effect, by label [g]."""
+    gyro_noise_dph: np.ndarray
+    """ARW + bias instability + rate random walk [deg/h]."""
+    run: Run
+    """The measurement, as written to file."""
+
+    @property
+    def drift_dph(self) -> np.ndarray:
+        """The thermal drift: sum of the gyro effect terms [deg/h] (no noise, no bias)."""
+        total = np.zeros_like(self.context.time_s)
+        for v in self.gyro_terms_dph.values():
+            total = total + v
+        return total
+
+
+def _streams(seed) -> dict[str, np.random.Generator]:
+    """Independent random streams per sensor, so switching one effect or sensor off leaves
+    the others' draws unchanged."""
+    names = ("gyro", "acc_x", "acc_y", "fog_thermometer", "acc_x_thermometer",
+             "acc_y_thermometer", "aux")
+    seq = np.random.SeedSequence(seed)
+    return {n: np.random.default_rng(s) for n, s in zip(names, seq.spawn(len(names)))}
+
+
+def _thermal_power(inst: Instrument, time_s: np.ndarray, moving: np.ndarray):
+    """Split the thermal effects into a precomputed array part and a per-sample law."""
+    names = inst.network.node_names
+    n = len(names)
+    fixed = np.zeros((len(time_s), n))
+    stateful: list[tuple[EffectInstance, int, dict[str, Any]]] = []
+    terms: dict[str, np.ndarray] = {}
+    for e in inst.effects:
+        if e.spec.kind != "thermal":
+            continue
+        node = e.params.get("node") or inst.gyro.source
+        j = names.index(node)
+        params = dict(e.params)
+        if "node" in params:
+            params["node"] = node
+        if e.spec.state_dependent:
+            stateful.append((e, j, params))
+        else:
+            p = np.broadcast_to(np.asarray(e.spec.function(time_s, None, moving, **params),
+                                           dtype=float), time_s.shape)
+            fixed[:, j] += p
+            terms[e.label] = np.array(p)
+    if not stateful:
+        return fixed, terms, stateful
+    # The per-sample law: the state-dependent sources from the current node temperature,
+    # held over the sample interval by the exact solver.
+    index = {float(t): k for k, t in enumerate(time_s)}
+
+    def law(t_s: float, temperature_c: np.ndarray) -> np.ndarray:
+        k = index[float(t_s)]
+        p = fixed[k].copy()
+        for e, j, params in stateful:
+            p[j] += e.spec.function(t_s, float(temperature_c[j]), bool(moving[k]), **params)
+        return p
+
+    return law, terms, stateful
+
+
+def effect_context(inst: Instrument, th: thermal.ThermalResult, azimuth_deg: np.ndarray,
+                   earth_rate_dph: np.ndarray, moving: np.ndarray,
+                   aux: dict[str, np.ndarray]) -> EffectContext:
+    """The :class:`EffectContext` of a run from its thermal solution and turntable motion."""
+    return EffectContext(
+        time_s=th.time_s, node_names=tuple(th.node_names), temperature_c=th.temperature_c,
+        rate_c_per_s=th.rate_c_per_s, coil_outer=inst.gyro.coil_outer,
+        coil_inner=inst.gyro.coil_inner, source=inst.gyro.source,
+        axis_azimuth_deg=azimuth_deg, earth_rate_dph=earth_rate_dph, moving=moving,
+        acc_nodes=inst.accelerometers.nodes, aux=aux, t_ref_c=inst.t_ref_c)
+
+
+def _aux_channels(inst: Instrument, th: thermal.ThermalResult, fs: float,
+                  rng: np.random.Generator) -> dict[str, np.ndarray]:
+    out = {}
+    n = len(th.time_s)
+    for ch in inst.aux:
+        j = list(th.node_names).index(ch.node)
+        src = th.power_w[:, j] if ch.kind == "power" else th.temperature_c[:, j]
+        value = ch.offset + ch.gain * src
+        white = rng.standard_normal(n)
+        walk = np.cumsum(rng.standard_normal(n)) * np.sqrt(1.0 / fs)
+        value = value + ch.noise * white + ch.walk_per_rth_s * walk
+        out[ch.name] = value
+    return out
+
+
+def simulate_run(inst: Instrument, cond: RunConditions) -> SimulationResult:
+    """Simulate one start-up run of ``inst`` under ``cond``.
+
+    The unpowered instrument is soaked at T0 (every node at T0), powered on at t = 0 and held
+    in the chamber at T_amb(t) (T0 unless ``cond.chamber_c``).
+    """
+    t = cond.time_s
+    fs = cond.sample_rate_hz
+    rngs = _streams(cond.seed)
+    theta, moving = turntable_motion(cond.schedule, t)
+    azimuth = np.mod(cond.true_heading_deg + theta, 360.0)
+    tilt = inst.turntable
+    elev_x = axis_elevation_deg(azimuth, tilt.tilt_north_deg, tilt.tilt_east_deg)
+    elev_y = axis_elevation_deg(azimuth + 90.0, tilt.tilt_north_deg, tilt.tilt_east_deg)
+
+    # 1. thermal network
+    power, thermal_terms, stateful = _thermal_power(inst, t, moving)
+    ambient = cond.start_temperature_c if cond.chamber_c is None else cond.chamber_c(t)
+    th = thermal.simulate(inst.network, t, ambient_c=ambient,
+                          initial_c=cond.start_temperature_c, power_w=power)
+    for e, j, params in stateful:
+        thermal_terms[e.label] = np.asarray(
+            e.spec.function(t, th.temperature_c[:, j], moving, **params), dtype=float)
+
+    # 2. aux channels and the effect context
+    aux = _aux_channels(inst, th, fs, rngs["aux"])
+    earth = earth_rate_along_axis_dph(azimuth, elev_x, cond.latitude_deg)
+    ctx = effect_context(inst, th, azimuth, earth, moving, aux)
+
+    # 3. gyro: K0 * Earth rate + bias + effects + noise
+    gyro_terms: dict[str, np.ndarray] = {}
+    acc_terms: dict[str, np.ndarray] = {}
+    for e in inst.effects:
+        if e.spec.kind == "gyro":
+            gyro_terms[e.label] = np.broadcast_to(
+                np.asarray(e.spec.function(ctx, **e.params), dtype=float), t.shape).copy()
+        elif e.spec.kind == "accelerometer":
+            acc_terms[e.label] = np.broadcast_to(
+                np.asarray(e.spec.function(ctx, **e.params), dtype=float), t.shape).copy()
+    g = inst.gyro
+    noise = gyro_noise_dph(len(t), fs, arw_deg_per_rth_h=g.arw_deg_per_rth_h,
+                           bias_instability_dph=g.bias_instability_dph,
+                           rrw_deg_per_h_per_rth_h=g.rrw_deg_per_h_per_rth_h, rng=rngs["gyro"])
+    gyro = g.scale_factor * earth + g.bias_dph + noise
+    for v in gyro_terms.values():
+        gyro = gyro + v
+
+    # 4. accelerometers: sin(elevation) + bias + effects + noise
+    a = inst.accelerometers
+    acc = {}
+    for axis, elev, bias in (("x", elev_x, a.bias_x_g), ("y", elev_y, a.bias_y_g)):
+        f = np.sin(np.radians(elev)) + bias
+        for e in inst.effects:
+            if e.spec.kind == "accelerometer" and e.params.get("axis") == axis:
+                f = f + acc_terms[e.label]
+        f = f + white_noise(len(t), fs, a.noise_ug_per_rth_hz * _UG, rng=rngs[f"acc_{axis}"])
+        acc[axis] = f
+
+    # 5. thermometers (with any thermometer effects applied after the built-in lag)
+    temps = {}
+    for name, column in THERMOMETERS.items():
+        model = inst.thermometers[name]
+        transforms = [
+            (lambda y, e=e: e.spec.function(y, t, **e.params))
+            for e in inst.effects
+            if e.spec.kind == "thermometer" and e.params.get("thermometer") == name]
+        sensed = model.sensed(th.temperature_c, tuple(th.node_names))
+        temps[column] = thermometer_reading(sensed, t, model, rngs[f"{name}_thermometer"],
+                                            transforms)
+
+    columns = {
+        "time_s": t, "position_deg": theta, "moving": moving.astype(float),
+        "gyro_dph": gyro, "acc_x_g": acc["x"], "acc_y_g": acc["y"], **temps,
+        "temp_chamber_c": np.broadcast_to(np.asarray(ambient, dtype=float), t.shape).copy(),
+        **aux,
+    }
+    sched = cond.schedule
+    meta = RunMeta(latitude_deg=cond.latitude_deg, start_temperature_c=cond.start_temperature_c,
+                   true_heading_deg=cond.true_heading_deg, sample_rate_hz=fs,
+                   positions_deg=sched.cycle_positions_deg, dwell_s=sched.dwell_s,
+                   move_s=sched.move_s, instrument=inst.name)
+    run = Run(name=cond.name, columns=columns, meta=meta)
+    return SimulationResult(conditions=cond, thermal=th, context=ctx,
+                            thermal_terms_w=thermal_terms, gyro_terms_dph=gyro_terms,
+                            acc_terms_g=acc_terms, gyro_noise_dph=noise, run=run)

@@ -1,0 +1,389 @@
+"""The instrument: thermal network, sensors, turntable, thermometers and its effect list.
+
+An instrument is described by a TOML file (the built-in preset ``default`` lives in
+``nfs/presets/default_instrument.toml``; ``nfs preset default`` prints it for a user to copy
+and edit).  :func:`instrument_from_dict` turns the parsed TOML into frozen dataclasses and
+checks every key, naming the file and the dotted key of any fault.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+from thermal import Link, Network, Node
+
+from .constants import T_REF_C
+from .effects import EffectInstance, make_effect
+from .effects.thermometer import THERMOMETERS
+from .errors import EffectError, ScenarioError, ThermalError
+from .io.tomlio import (check_keys, dumps_toml, load_toml, number, string, table)
+from .sensors import ThermometerModel
+
+__all__ = [
+    "GyroModel", "AccelerometerModel", "TurntableModel", "AuxChannel", "Instrument",
+    "instrument_from_dict", "load_instrument", "preset_names", "preset_path",
+    "CHAMBER",
+]
+
+#: Name of the chamber boundary in thermal links.
+CHAMBER = "chamber"
+
+
+@dataclass(frozen=True)
+class GyroModel:
+    """The FOG: where its coil and source sit in the network, constant bias and noise."""
+
+    coil_outer: str
+    """Node of the coil's outer layers."""
+    coil_inner: str
+    """Node of the coil's inner layers and spool."""
+    source: str
+    """Node of the light source, TEC and FOG electronics."""
+    bias_dph: float = 0.0
+    """Constant bias b [deg/h] (cancels in multiposition north finding)."""
+    scale_factor: float = 1.0
+    """K0, scale factor of the output (1: the output is calibrated in deg/h)."""
+    arw_deg_per_rth_h: float = 0.0005
+    """N, angle random walk [deg/sqrt(h)] (0.0003-0.001)."""
+    bias_instability_dph: float = 0.003
+    """B, bias instability [deg/h] (0.002-0.005)."""
+    rrw_deg_per_h_per_rth_h: float = 0.0
+    """K, rate random walk [deg/h/sqrt(h)]."""
+
+
+@dataclass(frozen=True)
+class AccelerometerModel:
+    """The two quartz flexure accelerometers (physics.md section 4)."""
+
+    x_node: str
+    """Node of QFA x."""
+    y_node: str
+    """Node of QFA y."""
+    noise_ug_per_rth_hz: float = 20.0
+    """White noise density [ug/sqrt(Hz)]."""
+    bias_x_g: float = 0.0
+    """Constant bias of QFA x [g]."""
+    bias_y_g: float = 0.0
+    """Constant bias of QFA y [g]."""
+
+    @property
+    def nodes(self) -> dict[str, str]:
+        """Axis -> node."""
+        return {"x": self.x_node, "y": self.y_node}
+
+
+@dataclass(frozen=True)
+class TurntableModel:
+    """Tilt of the turntable axis (physics.md section 4)."""
+
+    tilt_north_deg: float = 0.0
+    """alpha_N, tilt toward north [deg]."""
+    tilt_east_deg: float = 0.0
+    """alpha_E, tilt toward east [deg]."""
+
+
+@dataclass(frozen=True)
+class AuxChannel:
+    """An auxiliary electrical channel ``aux_*`` (seed 000's oscillator voltage, a TEC drive).
+
+    value = offset + gain * source(t) + white noise + random walk, where source is the total
+    power of a node (``power:NODE`` [W]) or a node temperature (``temperature:NODE`` [degC]).
+    """
+
+    name: str
+    """Column name, ``aux_<what>_<unit>``."""
+    source: str
+    """``power:NODE`` or ``temperature:NODE``."""
+    gain: float = 1.0
+    """Channel units per source unit."""
+    offset: float = 0.0
+    """Channel units."""
+    noise: float = 0.0
+    """White noise standard deviation per sample [channel units]."""
+    walk_per_rth_s: float = 0.0
+    """Random-walk intensity [channel units / sqrt(s)] (an electrical drift that no
+    thermometer sees)."""
+
+    @property
+    def kind(self) -> str:
+        return self.source.split(":", 1)[0]
+
+    @property
+    def node(self) -> str:
+        return self.source.split(":", 1)[1]
+
+
+@dataclass(frozen=True)
+class Instrument:
+    """A north finding system: network, sensors, thermometers, aux channels and effects."""
+
+    name: str
+    """Name (free text)."""
+    network: Network
+    """The lumped thermal network (nodes, links; the chamber is ``chamber``)."""
+    gyro: GyroModel
+    """The FOG."""
+    accelerometers: AccelerometerModel
+    """The QFAs."""
+    turntable: TurntableModel
+    """The turntable."""
+    thermometers: dict[str, ThermometerModel]
+    """``fog``, ``acc_x``, ``acc_y`` -> thermometer."""
+    effects: tuple[EffectInstance, ...] = ()
+    """The effects this instrument has, in order."""
+    aux: tuple[AuxChannel, ...] = ()
+    """Auxiliary channels written to the measurement."""
+    t_ref_c: float = T_REF_C
+    """T_ref of the effect library [degC]."""
+    description: str = ""
+    """Free text, e.g. where the values come from."""
+
+    def with_effects(self, effects) -> "Instrument":
+        """A copy with another effect list (checked against this instrument)."""
+        out = replace(self, effects=tuple(effects))
+        _check_effect_targets(out, file=None)
+        return out
+
+    def effect(self, label: str) -> EffectInstance:
+        """The effect with this label (``name`` or ``name:target``)."""
+        for e in self.effects:
+            if label in (e.label, e.name):
+                return e
+        raise EffectError(f"instrument '{self.name}' has no effect '{label}'; it has: "
+                          + ", ".join(e.label for e in self.effects))
+
+    def to_dict(self) -> dict[str, Any]:
+        """The TOML form (inverse of :func:`instrument_from_dict`)."""
+        nodes = {n.name: {"capacity_j_per_k": n.capacity_j_per_k, "power_w": n.power_w}
+                 for n in self.network.nodes}
+        links = [{"between": [l.a, l.b], "conductance_w_per_k": l.conductance_w_per_k}
+                 for l in self.network.links]
+        out: dict[str, Any] = {"name": self.name}
+        if self.description:
+            out["description"] = self.description
+        out["t_ref_c"] = self.t_ref_c
+        out["thermal"] = {"nodes": nodes, "links": links}
+        out["gyro"] = dict(vars(self.gyro))
+        out["accelerometers"] = dict(vars(self.accelerometers))
+        out["turntable"] = dict(vars(self.turntable))
+        out["thermometers"] = {k: dict(vars(v)) for k, v in self.thermometers.items()}
+        if self.aux:
+            out["aux"] = [dict(vars(a)) for a in self.aux]
+        if self.effects:
+            out["effects"] = [e.to_dict() for e in self.effects]
+        return out
+
+    def to_toml(self) -> str:
+        """TOML text that :func:`load_instrument` reads back to an equal instrument."""
+        return dumps_toml(self.to_dict()) + "\n"
+
+
+_TOP_KEYS = ("name", "description", "t_ref_c", "thermal", "gyro", "accelerometers",
+             "turntable", "thermometers", "aux", "effects")
+_GYRO_KEYS = tuple(GyroModel.__dataclass_fields__)
+_ACC_KEYS = tuple(AccelerometerModel.__dataclass_fields__)
+_TT_KEYS = tuple(TurntableModel.__dataclass_fields__)
+_THERMO_KEYS = tuple(ThermometerModel.__dataclass_fields__)
+_AUX_KEYS = tuple(AuxChannel.__dataclass_fields__)
+
+
+def _network(tbl: dict, prefix: str, file: Any) -> Network:
+    check_keys(tbl, ("nodes", "links"), prefix, file, required=("nodes", "links"))
+    nodes_tbl = table(tbl, "nodes", prefix, file)
+    nodes = []
+    for name, spec in nodes_tbl.items():
+        p = f"{prefix}.nodes.{name}"
+        if not isinstance(spec, dict):
+            raise ScenarioError("must be a table", file=file, key=p)
+        check_keys(spec, ("capacity_j_per_k", "power_w"), p, file)
+        cap = number(spec, "capacity_j_per_k", p, file, positive=True)
+        nodes.append(Node(name=name, capacity_j_per_k=cap,
+                          power_w=number(spec, "power_w", p, file, 0.0)))
+    if not nodes:
+        raise ScenarioError("must name at least one node", file=file, key=f"{prefix}.nodes")
+    links_val = tbl["links"]
+    if not isinstance(links_val, list):
+        raise ScenarioError("must be an array of tables [[...links]]", file=file,
+                            key=f"{prefix}.links")
+    links = []
+    for i, spec in enumerate(links_val):
+        p = f"{prefix}.links[{i}]"
+        if not isinstance(spec, dict):
+            raise ScenarioError("must be a table", file=file, key=p)
+        check_keys(spec, ("between", "conductance_w_per_k"), p, file,
+                   required=("between", "conductance_w_per_k"))
+        between = spec["between"]
+        if (not isinstance(between, list) or len(between) != 2
+                or not all(isinstance(b, str) for b in between)):
+            raise ScenarioError(f"must be two node names, got {between!r}", file=file,
+                                key=f"{p}.between")
+        g = number(spec, "conductance_w_per_k", p, file, minimum=0.0)
+        links.append(Link(a=between[0], b=between[1], conductance_w_per_k=g))
+    try:
+        return Network(nodes=tuple(nodes), links=tuple(links))
+    except ThermalError as exc:
+        raise ScenarioError(str(exc), file=file, key=prefix) from None
+
+
+def _node_ref(network: Network, node: str, key: str, file: Any) -> str:
+    if node not in network.node_names:
+        raise ScenarioError(f"unknown node '{node}'; nodes: {', '.join(network.node_names)}",
+                            file=file, key=key)
+    return node
+
+
+def _dataclass_numbers(cls, tbl: dict, prefix: str, file: Any, names: dict[str, str],
+                       network: Network) -> Any:
+    """Build a dataclass from a table whose fields are numbers, except ``names`` (node refs)."""
+    check_keys(tbl, cls.__dataclass_fields__, prefix, file, required=tuple(names))
+    kwargs = {}
+    for fname, f in cls.__dataclass_fields__.items():
+        if fname in names:
+            kwargs[fname] = _node_ref(network, string(tbl, fname, prefix, file),
+                                      f"{prefix}.{fname}", file)
+        elif fname in tbl:
+            nonneg = fname.startswith(("arw", "bias_instability", "rrw", "noise"))
+            kwargs[fname] = number(tbl, fname, prefix, file, minimum=0.0 if nonneg else None)
+    return cls(**kwargs)
+
+
+def _thermometers(tbl: dict, network: Network, file: Any) -> dict[str, ThermometerModel]:
+    check_keys(tbl, THERMOMETERS, "thermometers", file, required=THERMOMETERS)
+    out = {}
+    for name in THERMOMETERS:
+        p = f"thermometers.{name}"
+        spec = table(tbl, name, "thermometers", file)
+        check_keys(spec, _THERMO_KEYS, p, file, required=("nodes",))
+        nodes = spec["nodes"]
+        if isinstance(nodes, str):
+            nodes = {nodes: 1.0}
+        if not isinstance(nodes, dict) or not nodes:
+            raise ScenarioError("must be a node name or a table node = weight", file=file,
+                                key=f"{p}.nodes")
+        weights = {}
+        for node, w in nodes.items():
+            _node_ref(network, node, f"{p}.nodes", file)
+            weights[node] = number(nodes, node, f"{p}.nodes", file, positive=True)
+        out[name] = ThermometerModel(
+            nodes=weights,
+            lag_s=number(spec, "lag_s", p, file, 20.0, minimum=0.0),
+            offset_c=number(spec, "offset_c", p, file, 0.0),
+            noise_c=number(spec, "noise_c", p, file, 0.01, minimum=0.0),
+            quantum_c=number(spec, "quantum_c", p, file, 0.0625, minimum=0.0))
+    return out
+
+
+def _aux(val: Any, network: Network, file: Any) -> tuple[AuxChannel, ...]:
+    if not isinstance(val, list):
+        raise ScenarioError("must be an array of tables [[aux]]", file=file, key="aux")
+    out = []
+    for i, spec in enumerate(val):
+        p = f"aux[{i}]"
+        if not isinstance(spec, dict):
+            raise ScenarioError("must be a table", file=file, key=p)
+        check_keys(spec, _AUX_KEYS, p, file, required=("name", "source"))
+        name = string(spec, "name", p, file)
+        if not name.startswith("aux_"):
+            raise ScenarioError(f"an aux channel's name must start with 'aux_', got '{name}'",
+                                file=file, key=f"{p}.name")
+        source = string(spec, "source", p, file)
+        kind, _, node = source.partition(":")
+        if kind not in ("power", "temperature"):
+            raise ScenarioError(f"must be 'power:NODE' or 'temperature:NODE', got '{source}'",
+                                file=file, key=f"{p}.source")
+        _node_ref(network, node, f"{p}.source", file)
+        out.append(AuxChannel(
+            name=name, source=source, gain=number(spec, "gain", p, file, 1.0),
+            offset=number(spec, "offset", p, file, 0.0),
+            noise=number(spec, "noise", p, file, 0.0, minimum=0.0),
+            walk_per_rth_s=number(spec, "walk_per_rth_s", p, file, 0.0, minimum=0.0)))
+    return tuple(out)
+
+
+def parse_effects(val: Any, file: Any, key: str = "effects") -> tuple[EffectInstance, ...]:
+    """An ``[[effects]]`` array: each table has ``name`` and the effect's parameters."""
+    if not isinstance(val, list):
+        raise ScenarioError("must be an array of tables [[effects]]", file=file, key=key)
+    out = []
+    for i, spec in enumerate(val):
+        p = f"{key}[{i}]"
+        if not isinstance(spec, dict):
+            raise ScenarioError("must be a table", file=file, key=p)
+        name = string(spec, "name", p, file)
+        params = {k: v for k, v in spec.items() if k != "name"}
+        try:
+            out.append(make_effect(name, params))
+        except EffectError as exc:
+            raise ScenarioError(str(exc), file=file, key=p) from None
+    return tuple(out)
+
+
+def _check_effect_targets(inst: Instrument, file: Any) -> None:
+    """Every node, axis, thermometer and channel an effect names must exist."""
+    aux_names = [a.name for a in inst.aux]
+    for i, e in enumerate(inst.effects):
+        where = f"effects[{i}] ({e.name})"
+        for p in e.spec.parameters:
+            v = e.params.get(p.name)
+            if v is None or p.type is not str:
+                continue
+            valid = {"node": inst.network.node_names, "axis": ("x", "y"),
+                     "thermometer": tuple(THERMOMETERS), "channel": aux_names}.get(p.name)
+            if valid is not None and v not in valid:
+                msg = (f"effect '{e.name}': unknown {p.name} '{v}'; valid: "
+                       + (", ".join(valid) or "(none)"))
+                if file is None:
+                    raise EffectError(msg)
+                raise ScenarioError(msg, file=file, key=where)
+
+
+def instrument_from_dict(d: dict[str, Any], file: Any = None) -> Instrument:
+    """Build an :class:`Instrument` from its TOML form, checking every key."""
+    check_keys(d, _TOP_KEYS, "", file, required=("thermal", "gyro", "accelerometers",
+                                                  "thermometers"))
+    network = _network(table(d, "thermal", "", file), "thermal", file)
+    gyro = _dataclass_numbers(GyroModel, table(d, "gyro", "", file), "gyro", file,
+                              {"coil_outer": "", "coil_inner": "", "source": ""}, network)
+    acc = _dataclass_numbers(AccelerometerModel, table(d, "accelerometers", "", file),
+                             "accelerometers", file, {"x_node": "", "y_node": ""}, network)
+    tt = _dataclass_numbers(TurntableModel, table(d, "turntable", "", file, {}), "turntable",
+                            file, {}, network)
+    thermo = _thermometers(table(d, "thermometers", "", file), network, file)
+    aux = _aux(d.get("aux", []), network, file)
+    effects = parse_effects(d.get("effects", []), file)
+    inst = Instrument(name=string(d, "name", "", file, "instrument"), network=network,
+                      gyro=gyro, accelerometers=acc, turntable=tt, thermometers=thermo,
+                      effects=effects, aux=aux, t_ref_c=number(d, "t_ref_c", "", file, T_REF_C),
+                      description=string(d, "description", "", file, ""))
+    _check_effect_targets(inst, file)
+    return inst
+
+
+def preset_names() -> list[str]:
+    """Names of the built-in instrument presets."""
+    root = resources.files("nfs") / "presets"
+    return sorted(p.name[: -len("_instrument.toml")] for p in root.iterdir()
+                  if p.name.endswith("_instrument.toml"))
+
+
+def preset_path(name: str) -> Path:
+    """Path of a built-in instrument preset."""
+    if name not in preset_names():
+        raise ScenarioError(f"unknown instrument preset '{name}'; presets: "
+                            + ", ".join(preset_names()))
+    return Path(str(resources.files("nfs") / "presets" / f"{name}_instrument.toml"))
+
+
+def load_instrument(name_or_path: str | Path, base: Path | None = None) -> Instrument:
+    """A built-in preset by name, or an instrument TOML file (relative to ``base``)."""
+    s = str(name_or_path)
+    if not s.endswith(".toml") and "/" not in s and "\\" not in s:
+        path = preset_path(s)
+    else:
+        path = Path(s)
+        if base is not None and not path.is_absolute():
+            path = base / path
+    return instrument_from_dict(load_toml(path), file=path)

@@ -1,0 +1,174 @@
+"""Reading TOML configuration with errors that name the file and the dotted key."""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from pathlib import Path
+from typing import Any, Iterable
+
+from ..errors import ScenarioError
+
+__all__ = ["load_toml", "check_keys", "number", "string", "number_list", "table", "dumps_toml"]
+
+
+def load_toml(path: str | Path) -> dict[str, Any]:
+    """Parse a TOML file; ScenarioError naming the file on a missing file or a syntax error."""
+    path = Path(path)
+    try:
+        with open(path, "rb") as fh:
+            return tomllib.load(fh)
+    except FileNotFoundError:
+        raise ScenarioError("file not found", file=path) from None
+    except IsADirectoryError:
+        raise ScenarioError("is a folder, expected a TOML file", file=path) from None
+    except tomllib.TOMLDecodeError as exc:
+        raise ScenarioError(f"TOML syntax error: {exc}", file=path) from None
+    except UnicodeDecodeError as exc:
+        raise ScenarioError(f"not UTF-8 text: {exc}", file=path) from None
+
+
+def _join(prefix: str, key: str) -> str:
+    return f"{prefix}.{key}" if prefix else key
+
+
+def check_keys(tbl: dict[str, Any], allowed: Iterable[str], prefix: str, file: Any,
+               required: Iterable[str] = ()) -> None:
+    """Reject unknown keys (naming the key and the allowed ones) and missing required keys."""
+    allowed = list(allowed)
+    for key in tbl:
+        if key not in allowed:
+            raise ScenarioError(f"unknown key; allowed keys here: {', '.join(allowed)}",
+                                file=file, key=_join(prefix, key))
+    for key in required:
+        if key not in tbl:
+            raise ScenarioError("required key is missing", file=file, key=_join(prefix, key))
+
+
+def table(tbl: dict[str, Any], key: str, prefix: str, file: Any,
+          default: dict | None = None) -> dict[str, Any]:
+    """A sub-table (ScenarioError if the value is not a table)."""
+    if key not in tbl:
+        if default is None:
+            raise ScenarioError("required table is missing", file=file, key=_join(prefix, key))
+        return default
+    value = tbl[key]
+    if not isinstance(value, dict):
+        raise ScenarioError(f"must be a table, got {value!r}", file=file, key=_join(prefix, key))
+    return value
+
+
+def number(tbl: dict[str, Any], key: str, prefix: str, file: Any, default: Any = ...,
+           *, minimum: float | None = None, positive: bool = False,
+           maximum: float | None = None) -> float:
+    """A finite number, optionally bounded; ScenarioError naming the dotted key otherwise."""
+    name = _join(prefix, key)
+    if key not in tbl:
+        if default is ...:
+            raise ScenarioError("required key is missing", file=file, key=name)
+        return default
+    value = tbl[key]
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        raise ScenarioError(f"must be a finite number, got {value!r}", file=file, key=name)
+    value = float(value)
+    if positive and not value > 0:
+        raise ScenarioError(f"must be > 0, got {value!r}", file=file, key=name)
+    if minimum is not None and value < minimum:
+        raise ScenarioError(f"must be >= {minimum}, got {value!r}", file=file, key=name)
+    if maximum is not None and value > maximum:
+        raise ScenarioError(f"must be <= {maximum}, got {value!r}", file=file, key=name)
+    return value
+
+
+def string(tbl: dict[str, Any], key: str, prefix: str, file: Any, default: Any = ...,
+           choices: Iterable[str] | None = None) -> str:
+    """A string, optionally one of ``choices``."""
+    name = _join(prefix, key)
+    if key not in tbl:
+        if default is ...:
+            raise ScenarioError("required key is missing", file=file, key=name)
+        return default
+    value = tbl[key]
+    if not isinstance(value, str):
+        raise ScenarioError(f"must be a string, got {value!r}", file=file, key=name)
+    if choices is not None and value not in list(choices):
+        raise ScenarioError(f"'{value}' is not one of {', '.join(choices)}", file=file, key=name)
+    return value
+
+
+def number_list(tbl: dict[str, Any], key: str, prefix: str, file: Any, default: Any = ...,
+                *, nonempty: bool = True) -> tuple[float, ...]:
+    """A list of finite numbers (non-empty unless told otherwise)."""
+    name = _join(prefix, key)
+    if key not in tbl:
+        if default is ...:
+            raise ScenarioError("required key is missing", file=file, key=name)
+        return default
+    value = tbl[key]
+    if not isinstance(value, list) or not all(
+            isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+            for v in value):
+        raise ScenarioError(f"must be a list of numbers, got {value!r}", file=file, key=name)
+    if nonempty and not value:
+        raise ScenarioError("must not be empty", file=file, key=name)
+    return tuple(float(v) for v in value)
+
+
+def _value(v: Any) -> str:
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, int):
+        return str(v)
+    if isinstance(v, float):
+        if math.isnan(v):
+            return "nan"
+        if math.isinf(v):
+            return "inf" if v > 0 else "-inf"
+        return repr(v)
+    if isinstance(v, str):
+        return '"' + v.replace("\\", "\\\\").replace('"', '\\"').replace("\n", "\\n") + '"'
+    if isinstance(v, (list, tuple)):
+        return "[" + ", ".join(_value(x) for x in v) + "]"
+    if isinstance(v, dict):
+        return "{ " + ", ".join(f"{_key(k)} = {_value(x)}" for k, x in v.items()) + " }"
+    raise TypeError(f"cannot write {type(v).__name__} to TOML")
+
+
+def _key(k: str) -> str:
+    return k if k.replace("_", "").replace("-", "").isalnum() else _value(k)
+
+
+def dumps_toml(data: dict[str, Any], _prefix: str = "") -> str:
+    """Write nested dicts / lists of dicts as TOML.
+
+    Written here because the standard library's tomllib only reads; the package writes
+    scenario, instrument and measurement metadata files, whose values are numbers, strings,
+    booleans, lists of numbers, inline tables, tables and arrays of tables.
+    """
+    lines: list[str] = []
+    scalars = {k: v for k, v in data.items()
+               if not isinstance(v, dict) and not _is_table_array(v)}
+    for k, v in scalars.items():
+        lines.append(f"{_key(k)} = {_value(v)}")
+    for k, v in data.items():
+        name = _join(_prefix, _key(k))
+        if isinstance(v, dict):
+            if lines:
+                lines.append("")
+            lines.append(f"[{name}]")
+            body = dumps_toml(v, name)
+            if body:
+                lines.append(body)
+        elif _is_table_array(v):
+            for item in v:
+                if lines:
+                    lines.append("")
+                lines.append(f"[[{name}]]")
+                body = dumps_toml(item, name)
+                if body:
+                    lines.append(body)
+    return "\n".join(lines).replace("\n\n\n", "\n\n")
+
+
+def _is_table_array(v: Any) -> bool:
+    return isinstance(v, list) and len(v) > 0 and all(isinstance(x, dict) for x in v)
