@@ -167,8 +167,10 @@ class NoiseFit:
     arw_slope_tau_s: float
     """tau [s] of the point that line goes through."""
     bias_instability_floor_dph: float
-    """Classic BI reading [deg/h]: the minimum of the Allan deviation / 0.6643 (an upper
-    bound of B when ARW or RRW still contribute at the minimum)."""
+    """Classic BI reading [deg/h]: the minimum of the Allan deviation / 0.6643, over the
+    points whose relative error is at most ``SLOPE_MAX_REL_ERR`` when errors are given (an
+    upper bound of B when ARW or RRW still contribute at the minimum; too low when the curve
+    falls again beyond the bias instability's correlation times and no RRW lifts it)."""
     bias_instability_floor_tau_s: float
     """tau [s] of that minimum."""
     rrw_slope_deg_per_h_per_rth_h: float
@@ -189,7 +191,8 @@ class NoiseFit:
 #: distance of the target slope (-1/2 or +1/2), else it is NaN.
 SLOPE_TOLERANCE: float = 0.25
 
-#: ... and only points whose relative error is at most this (when errors are given).
+#: A classic reading (slopes and the floor's minimum) uses only points whose relative error
+#: is at most this, when the errors are given.
 SLOPE_MAX_REL_ERR: float = 0.25
 
 
@@ -280,7 +283,8 @@ def fit_noise_coefficients(taus_s: np.ndarray, adev: np.ndarray, *,
     usable = rel <= SLOPE_MAX_REL_ERR if adev_rel_err is not None else np.ones_like(tau, bool)
     arw_at_1s, arw_tau = _slope_reading(tau, sig, slopes, usable, -0.5)
     rrw_at_1s, rrw_tau = _slope_reading(tau, sig, slopes, usable, +0.5)
-    i_min = int(np.argmin(sig))
+    usable_idx = np.flatnonzero(usable)
+    i_min = int(usable_idx[np.argmin(sig[usable_idx])]) if usable_idx.size else int(np.argmin(sig))
     return NoiseFit(
         arw_deg_per_rth_h=math.sqrt(a) / 60.0,
         bias_instability_dph=math.sqrt(b) / BI_FLOOR_FACTOR,

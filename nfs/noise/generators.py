@@ -158,8 +158,9 @@ def white_noise(n_samples: int, sample_rate_hz: float, density_per_rth_hz: float
 # --------------------------------------------------------------------------------------------
 # gyro terms, one function per IEEE 952 term
 
-def angle_random_walk_noise_dph(n_samples: int, sample_rate_hz: float, arw_deg_per_rth_h: float, *,
-                          rng: np.random.Generator) -> np.ndarray:
+def angle_random_walk_noise_dph(n_samples: int, sample_rate_hz: float,
+                                arw_deg_per_rth_h: float, *,
+                                rng: np.random.Generator) -> np.ndarray:
     """Angle random walk: white rate noise of coefficient N (IEEE Std 952-2020 Annex C).
 
     Per-sample standard deviation (N * 60) * sqrt(fs) [deg/h] (physics.md section 3), so that
@@ -210,9 +211,10 @@ def _check_bi_times(sample_rate_hz: float, correlation_time_s: float) -> tuple[f
     return fs, t_c
 
 
-def bias_instability_noise_dph(n_samples: int, sample_rate_hz: float, bias_instability_dph: float, *,
-                         correlation_time_s: float = DEFAULT_CORRELATION_TIME_S,
-                         rng: np.random.Generator) -> np.ndarray:
+def bias_instability_noise_dph(n_samples: int, sample_rate_hz: float,
+                               bias_instability_dph: float, *,
+                               correlation_time_s: float = DEFAULT_CORRELATION_TIME_S,
+                               rng: np.random.Generator) -> np.ndarray:
     """Bias instability: approximate flicker (1/f) rate noise whose Allan deviation has the
     flat floor 0.6643 B (IEEE Std 952-2020 Annex C; El-Sheimy et al. 2008).
 
@@ -333,8 +335,8 @@ def bias_instability_band_s(sample_rate_hz: float,
 
 
 def rate_random_walk_noise_dph(n_samples: int, sample_rate_hz: float,
-                         rrw_deg_per_h_per_rth_h: float, *,
-                         rng: np.random.Generator) -> np.ndarray:
+                               rrw_deg_per_h_per_rth_h: float, *,
+                               rng: np.random.Generator) -> np.ndarray:
     """Rate random walk: integrated white noise (IEEE Std 952-2020 Annex C).
 
     The rate is a random walk r[n] = r[n-1] + w[n], r[-1] = 0, with increments of standard
@@ -378,8 +380,9 @@ def gyro_noise_dph(n_samples: int, sample_rate_hz: float, *, arw_deg_per_rth_h: 
     """Gyro rate noise [deg/h]: angle random walk + bias instability + rate random walk
     (IEEE Std 952-2020 Annex C; physics.md section 3).
 
-    The sum of :func:`angle_random_walk_noise_dph` (N), :func:`bias_instability_noise_dph` (B, T_c) and
-    :func:`rate_random_walk_noise_dph` (K); the three are independent, so their Allan variances add:
+    The sum of :func:`angle_random_walk_noise_dph` (N), :func:`bias_instability_noise_dph`
+    (B, T_c) and :func:`rate_random_walk_noise_dph` (K); the three are independent, so their
+    Allan variances add:
 
         sigma^2(tau) ~ (60 N)^2 / tau + (0.6643 B)^2 + (K/60)^2 tau / 3   [deg/h]^2, tau [s]
 
@@ -420,7 +423,8 @@ def gyro_noise_dph(n_samples: int, sample_rate_hz: float, *, arw_deg_per_rth_h: 
         out += bias_instability_noise_dph(n, sample_rate_hz, bias_instability_dph,
                                     correlation_time_s=correlation_time_s, rng=bi_rng)
     if _check_non_negative("rrw_deg_per_h_per_rth_h", rrw_deg_per_h_per_rth_h) > 0.0:
-        out += rate_random_walk_noise_dph(n, sample_rate_hz, rrw_deg_per_h_per_rth_h, rng=rrw_rng)
+        out += rate_random_walk_noise_dph(n, sample_rate_hz, rrw_deg_per_h_per_rth_h,
+                                          rng=rrw_rng)
     return out
 
 
