@@ -52,9 +52,11 @@ def allan_relative_error(n_samples: int, m: np.ndarray | int) -> np.ndarray:
     ``n_samples`` samples at m samples per cluster: 1 / sqrt(2 (N/m - 1)).
 
     The "percentage error" of IEEE Std 952-2020 Annex C and El-Sheimy, Hou & Niu 2008
-    (IEEE TIM 57(1)), written for non-overlapping clusters; for the overlapping estimator it
-    is conservative (the overlapping estimator has more degrees of freedom, Riley 2008
-    section 5.3).  Equation numbers not checked against the texts.
+    (IEEE TIM 57(1)), written for non-overlapping clusters of white noise.  For white rate
+    noise the overlapping estimator does better than this; for flicker and random-walk
+    noise its true error depends on the noise type (equivalent degrees of freedom, Riley
+    2008) and can be larger, so treat it as a weight, not a confidence interval.  Not yet
+    checked against the texts down to equation number.
     """
     m_arr = np.asarray(m, dtype=float)
     ratio = n_samples / m_arr - 1.0

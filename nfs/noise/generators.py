@@ -6,8 +6,8 @@ nothing else, so the same seed gives the same bytes.  Units live in the names: r
 [deg/h], time in [s], sample rates in [Hz].
 
 Allan-deviation signatures of the three gyro terms, rate data in [deg/h], tau in [s]
-(IEEE Std 952-2020 Annex C; El-Sheimy, Hou & Niu 2008, IEEE TIM 57(1) 140-149, section III;
-equation numbers not checked against the texts)::
+(IEEE Std 952-2020 Annex C; El-Sheimy, Hou & Niu 2008, IEEE TIM 57(1) 140-149; not yet
+checked against the texts down to equation number)::
 
     angle random walk N [deg/sqrt(h)]    sigma(tau) = 60 N / sqrt(tau)          slope -1/2
     bias instability  B [deg/h]          sigma(tau) = sqrt(2 ln2 / pi) B       slope  0
