@@ -26,7 +26,9 @@ from .noise import gyro_noise_dph, white_noise
 from .sensors import (Schedule, axis_elevation_deg, earth_rate_along_axis_dph,
                       thermometer_reading, turntable_motion)
 
-__all__ = ["RunConditions", "SimulationResult", "simulate_run", "effect_context"]
+__all__ = ["RunConditions", "SimulationResult", "simulate_run", "effect_context",
+           "ScenarioResult", "run_scenario", "northfind_runs", "stage_errors", "floor_deg",
+           "uncompensated_table"]
 
 _UG = 1e-6
 
@@ -250,3 +252,92 @@ def simulate_run(inst: Instrument, cond: RunConditions) -> SimulationResult:
     return SimulationResult(conditions=cond, thermal=th, context=ctx,
                             thermal_terms_w=thermal_terms, gyro_terms_dph=gyro_terms,
                             acc_terms_g=acc_terms, gyro_noise_dph=noise, run=run)
+
+
+# --------------------------------------------------------------------------------------------
+# A whole scenario: simulate every run, north-find, tabulate by start temperature
+
+@dataclass(frozen=True)
+class ScenarioResult:
+    """Every run of a scenario, simulated and north-found."""
+
+    scenario: Any
+    """The :class:`~nfs.io.scenario.Scenario`."""
+    simulations: tuple[SimulationResult, ...]
+    """One per run, temperature-major (all repeats of T0[0] first)."""
+    northfind: tuple[Any, ...]
+    """The :class:`~nfs.northfind.NorthFindResult` of each run."""
+
+    def runs_at(self, i_temp: int) -> list[int]:
+        """Indices of the runs at start temperature number ``i_temp``."""
+        r = self.scenario.repeats
+        return list(range(i_temp * r, (i_temp + 1) * r))
+
+
+def northfind_runs(runs, settings=None) -> list:
+    """North-find each run with the scenario's settings (tilt correction, settle time)."""
+    from .northfind import north_find
+    tilt = True if settings is None else settings.tilt_correction
+    settle = 0.0 if settings is None else settings.settle_s
+    return [north_find(run, tilt_correction=tilt, settle_s=settle) for run in runs]
+
+
+def run_scenario(scenario, *, progress: Callable[[int, int, str], None] | None = None
+                 ) -> ScenarioResult:
+    """Simulate and north-find every run of ``scenario``.
+
+    ``progress(i, n, name)`` is called before each run (for a progress line).
+    """
+    conds = scenario.conditions()
+    sims = []
+    for i, cond in enumerate(conds):
+        if progress is not None:
+            progress(i, len(conds), cond.name)
+        sims.append(simulate_run(scenario.instrument, cond))
+    if progress is not None:
+        progress(len(conds), len(conds), "north finding")
+    nf = northfind_runs([s.run for s in sims], scenario.northfind)
+    return ScenarioResult(scenario=scenario, simulations=tuple(sims), northfind=tuple(nf))
+
+
+def stage_errors(result, settings) -> tuple[np.ndarray, np.ndarray]:
+    """Heading errors of a NorthFindResult's start-up and stable cycles [deg]."""
+    err = np.asarray(result.error_deg)
+    up = np.asarray(result.t_end_s) <= settings.startup_end_s
+    st = np.asarray(result.t_start_s) >= settings.stable_start_s
+    return err[up], err[st]
+
+
+def floor_deg(scenario) -> float:
+    """White-noise floor of the scenario's schedule: sqrt(2/N) (ARW/sqrt(dwell)) / Omega_h."""
+    from .northfind import white_noise_floor_deg
+    return white_noise_floor_deg(scenario.instrument.gyro.arw_deg_per_rth_h,
+                                 scenario.schedule.dwell_s,
+                                 len(scenario.schedule.cycle_positions_deg),
+                                 scenario.latitude_deg)
+
+
+def uncompensated_table(res: ScenarioResult):
+    """Rows ``before`` (start-up, uncompensated), ``stable`` and ``floor`` by T0."""
+    from .report import HeadingTable, TableRow, pooled_rmse
+    sc = res.scenario
+    before, stable = [], []
+    for i in range(len(sc.start_temperatures_c)):
+        errs = [stage_errors(res.northfind[k], sc.northfind) for k in res.runs_at(i)]
+        before.append(pooled_rmse(e[0] for e in errs))
+        stable.append(pooled_rmse(e[1] for e in errs))
+    n_t = len(sc.start_temperatures_c)
+    fl = floor_deg(sc)
+    nf = sc.northfind
+    notes = (
+        f"Heading RMSE [deg], {sc.repeats} run(s) per start temperature, seed {sc.seed}, "
+        f"latitude {sc.latitude_deg:g} deg, {len(sc.schedule.cycle_positions_deg)}-position "
+        f"{sc.schedule.order} schedule, dwell {sc.schedule.dwell_s:g} s, "
+        f"move {sc.schedule.move_s:g} s.",
+        f"before: start-up stage (cycles ending within {nf.startup_end_s:g} s), uncompensated; "
+        f"stable: cycles starting after {nf.stable_start_s:g} s; floor: white-noise limit "
+        f"sqrt(2/N) (ARW / sqrt(dwell)) / (Omega_ie cos L).",
+    )
+    rows = (TableRow("before", tuple(before)), TableRow("stable", tuple(stable)),
+            TableRow("floor", (fl,) * n_t))
+    return HeadingTable(tuple(sc.start_temperatures_c), rows, notes)

@@ -1,0 +1,239 @@
+"""The ``nfs`` command: thin; parse, call the library, turn NfsError into one line + exit 2.
+
+    nfs table [SCENARIO] [-o DIR] [--json FILE]      heading-RMSE table by start temperature
+    nfs simulate SCENARIO -o DIR                     measurement files, one run per T0
+    nfs northfind DATA... [--json FILE]              north-find measured or simulated runs
+    nfs preset [NAME]                                print a built-in instrument preset
+    nfs effects                                      list the registered physical effects
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+import time
+from pathlib import Path
+
+from .errors import NfsError
+
+__all__ = ["main"]
+
+EXIT_USAGE = 2
+
+
+class Progress:
+    """A progress line on stderr (rewritten in place on a terminal)."""
+
+    def __init__(self, what: str, quiet: bool = False) -> None:
+        self.what = what
+        self.quiet = quiet
+        self.tty = sys.stderr.isatty()
+        self.t0 = time.perf_counter()
+
+    def __call__(self, i: int, n: int, name: str) -> None:
+        if self.quiet:
+            return
+        msg = f"{self.what} {min(i + 1, n)}/{n}: {name} ({time.perf_counter() - self.t0:.1f} s)"
+        if self.tty:
+            sys.stderr.write("\r\033[K" + msg)
+            if i >= n:
+                sys.stderr.write("\n")
+        else:
+            sys.stderr.write(msg + "\n")
+        sys.stderr.flush()
+
+
+def _cmd_table(args) -> int:
+    from .experiment import run_scenario, uncompensated_table
+    from .io.scenario import load_scenario
+    from .report import write_table
+    scenario = _with_overrides(load_scenario(args.scenario), args)
+    res = run_scenario(scenario, progress=Progress("simulating", args.quiet))
+    table = uncompensated_table(res)
+    paths = write_table(table, args.output, json_path=args.json,
+                        title=f"{scenario.name}: heading RMSE by start temperature")
+    print(table.to_markdown(), end="")
+    if not args.quiet:
+        print("\nwrote " + ", ".join(str(p) for p in paths), file=sys.stderr)
+    return 0
+
+
+def _with_overrides(scenario, args):
+    import dataclasses
+    changes = {}
+    if getattr(args, "seed", None) is not None:
+        changes["seed"] = args.seed
+    if getattr(args, "repeats", None) is not None:
+        if args.repeats < 1:
+            raise NfsError(f"--repeats must be >= 1, got {args.repeats}")
+        changes["repeats"] = args.repeats
+    return dataclasses.replace(scenario, **changes) if changes else scenario
+
+
+def _cmd_simulate(args) -> int:
+    from .experiment import simulate_run
+    from .io.measurement import write_run
+    from .io.scenario import load_scenario
+    scenario = _with_overrides(load_scenario(args.scenario), args)
+    out = Path(args.output)
+    conds = scenario.conditions()
+    progress = Progress("simulating", args.quiet)
+    written = []
+    for i, cond in enumerate(conds):
+        progress(i, len(conds), cond.name)
+        written.append(write_run(simulate_run(scenario.instrument, cond).run, out))
+    progress(len(conds), len(conds), "done")
+    for p in written:
+        print(p)
+    return 0
+
+
+def _cmd_northfind(args) -> int:
+    from .io.atomic import atomic_write_text
+    from .io.measurement import read_runs
+    from .northfind import heading_rmse, north_find
+    runs = read_runs(args.data)
+    rows = []
+    out = {"runs": []}
+    for run in runs:
+        res = north_find(run, tilt_correction=not args.no_tilt, settle_s=args.settle_s)
+        known = res.true_heading_deg is not None
+        st = heading_rmse(res, startup_end_s=args.startup_end_s,
+                          stable_start_s=args.stable_start_s) if known else None
+        rows.append((run.name, run.meta.start_temperature_c, res.n_cycles,
+                     _circ_mean(res.heading_deg),
+                     st.startup_deg if st else math.nan, st.stable_deg if st else math.nan))
+        out["runs"].append({
+            "name": run.name, "start_temperature_c": run.meta.start_temperature_c,
+            "latitude_deg": run.meta.latitude_deg, "true_heading_deg": res.true_heading_deg,
+            "startup_rmse_deg": _j(st.startup_deg) if st else None,
+            "stable_rmse_deg": _j(st.stable_deg) if st else None,
+            "cycles": [{"t_start_s": _j(a), "t_end_s": _j(b), "heading_deg": _j(h),
+                        "error_deg": _j(e), "bias_dph": _j(bb)}
+                       for a, b, h, e, bb in zip(res.t_start_s, res.t_end_s, res.heading_deg,
+                                                 res.error_deg, res.bias_dph)],
+        })
+    print("| run | T0 [C] | cycles | mean heading [deg] | start-up RMSE [deg] | stable RMSE [deg] |")
+    print("|---|---:|---:|---:|---:|---:|")
+    for name, t0, n, h, su, sb in rows:
+        print(f"| {name} | {t0:g} | {n} | {h:.4f} | {_f(su)} | {_f(sb)} |")
+    if args.json:
+        atomic_write_text(args.json, json.dumps(out, indent=1) + "\n")
+    return 0
+
+
+def _circ_mean(angles_deg) -> float:
+    import numpy as np
+    a = np.radians(np.asarray(angles_deg, dtype=float))
+    a = a[np.isfinite(a)]
+    if a.size == 0:
+        return math.nan
+    return float(np.degrees(np.arctan2(np.sin(a).mean(), np.cos(a).mean())) % 360.0)
+
+
+def _f(v: float) -> str:
+    return "n/a" if not math.isfinite(v) else f"{v:.4f}"
+
+
+def _j(v):
+    v = float(v)
+    return v if math.isfinite(v) else None
+
+
+def _cmd_preset(args) -> int:
+    from .instrument import preset_names, preset_path
+    if args.name is None:
+        print("\n".join(preset_names()))
+        return 0
+    sys.stdout.write(preset_path(args.name).read_text(encoding="utf-8"))
+    return 0
+
+
+def _cmd_effects(args) -> int:
+    from .effects import available_effects, get_effect
+    for name in available_effects():
+        spec = get_effect(name)
+        params = ", ".join(f"{p.name} [{p.unit}]" if p.unit else p.name
+                           for p in spec.parameters)
+        print(f"{name} ({spec.kind}): {spec.summary}")
+        if params:
+            print(f"    parameters: {params}")
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(
+        prog="nfs",
+        description="Start-up experiments on fiber-optic-gyroscope north finders: simulate "
+                    "chamber runs, north-find them, tabulate heading RMSE by start temperature.")
+    sub = p.add_subparsers(dest="command", metavar="COMMAND")
+    sub.required = True
+
+    t = sub.add_parser("table", help="heading-RMSE table by start temperature",
+                       description="Simulate a scenario (the built-in default when none is "
+                                   "given), north-find every run, print the Markdown table "
+                                   "and write it as CSV, Markdown, JSON and a PNG bar chart.")
+    t.add_argument("scenario", nargs="?", default=None, help="scenario TOML file")
+    t.add_argument("-o", "--output", default="results", help="output folder (default: results)")
+    t.add_argument("--json", default=None, help="also write the table as JSON to this file")
+    t.add_argument("--seed", type=int, default=None, help="override the scenario's seed")
+    t.add_argument("--repeats", type=int, default=None,
+                   help="override the runs per start temperature (Monte Carlo)")
+    t.add_argument("-q", "--quiet", action="store_true", help="no progress on stderr")
+    t.set_defaults(func=_cmd_table)
+
+    s = sub.add_parser("simulate", help="write measurement files for a scenario",
+                       description="Simulate every run of a scenario and write each as "
+                                   "nfs-measurement/1 files (NAME.csv + NAME.toml).")
+    s.add_argument("scenario", help="scenario TOML file")
+    s.add_argument("-o", "--output", required=True, help="output folder")
+    s.add_argument("--seed", type=int, default=None, help="override the scenario's seed")
+    s.add_argument("--repeats", type=int, default=None, help="override runs per temperature")
+    s.add_argument("-q", "--quiet", action="store_true", help="no progress on stderr")
+    s.set_defaults(func=_cmd_simulate)
+
+    n = sub.add_parser("northfind", help="north-find measured or simulated runs",
+                       description="North-find runs in nfs-measurement/1 format (files or "
+                                   "folders) and print heading and RMSE per run.")
+    n.add_argument("data", nargs="+", help="NAME.csv files, NAME.toml files or folders")
+    n.add_argument("--json", default=None, help="write per-cycle results as JSON")
+    n.add_argument("--no-tilt", action="store_true", help="no tilt correction")
+    n.add_argument("--settle-s", type=float, default=0.0,
+                   help="seconds skipped at the start of each dwell (default 0)")
+    n.add_argument("--startup-end-s", type=float, default=3600.0,
+                   help="start-up stage: cycles ending before this time (default 3600)")
+    n.add_argument("--stable-start-s", type=float, default=5400.0,
+                   help="stable stage: cycles starting after this time (default 5400)")
+    n.set_defaults(func=_cmd_northfind)
+
+    pr = sub.add_parser("preset", help="print a built-in instrument preset (TOML)",
+                        description="Print a built-in instrument preset to copy and edit; "
+                                    "without a name, list the presets.")
+    pr.add_argument("name", nargs="?", default=None)
+    pr.set_defaults(func=_cmd_preset)
+
+    e = sub.add_parser("effects", help="list the registered physical effects")
+    e.set_defaults(func=_cmd_effects)
+    return p
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Entry point of the ``nfs`` console script; returns the exit code."""
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        return args.func(args)
+    except NfsError as exc:
+        print(f"nfs: error: {exc}", file=sys.stderr)
+        return EXIT_USAGE
+    except BrokenPipeError:
+        return 0
+    except KeyboardInterrupt:
+        print("nfs: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

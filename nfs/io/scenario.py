@@ -1,0 +1,212 @@
+"""Scenario files: a start-up experiment described in TOML.
+
+A scenario names an instrument (a built-in preset or an instrument TOML file), the start
+temperatures, the schedule and the north-finding settings; ``[[effects]]`` in the scenario,
+when present, replace the instrument's effect list.  Every key is checked: an unknown key is
+an error that names it and lists the allowed ones.  See ``scenarios/startup_7temps.toml``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..effects import load_effects_file
+from ..errors import EffectError, NfsError, ScenarioError
+from ..instrument import Instrument, _check_effect_targets, load_instrument, parse_effects
+from ..sensors import ORDERS, Schedule
+from .tomlio import check_keys, load_toml, number, number_list, string, table
+
+__all__ = ["NorthFindSettings", "ChamberProfile", "Scenario", "load_scenario",
+           "default_scenario_path"]
+
+_TOP = ("name", "description", "instrument", "seed", "start_temperatures_c", "repeats",
+        "duration_s", "sample_rate_hz", "latitude_deg", "true_heading_deg", "effects_files",
+        "effects", "schedule", "northfind", "chamber")
+_SCHEDULE = ("positions_deg", "order", "dwell_s", "move_s")
+_NORTHFIND = ("startup_end_s", "stable_start_s", "tilt_correction", "settle_s")
+_CHAMBER = ("ripple_c", "ripple_period_s")
+
+
+@dataclass(frozen=True)
+class NorthFindSettings:
+    """How runs are north-found and scored."""
+
+    startup_end_s: float = 3600.0
+    """Start-up stage: cycles ending within this time after power-on [s]."""
+    stable_start_s: float = 5400.0
+    """Stable stage: cycles starting after this time [s]."""
+    tilt_correction: bool = True
+    """Correct each position for tilt with the x accelerometer."""
+    settle_s: float = 0.0
+    """Samples skipped at the start of each dwell [s]."""
+
+
+@dataclass(frozen=True)
+class ChamberProfile:
+    """Chamber air temperature T_amb(t) = T0 + ripple_c sin(2 pi t / ripple_period_s)."""
+
+    ripple_c: float = 0.0
+    """Amplitude of the chamber control ripple [K]."""
+    ripple_period_s: float = 600.0
+    """Period of the ripple [s]."""
+
+    def ambient(self, start_temperature_c: float):
+        """T_amb(t) as a function of time [degC], or None when the chamber holds T0."""
+        if self.ripple_c == 0.0:
+            return None
+        a, p = self.ripple_c, self.ripple_period_s
+        return lambda t: start_temperature_c + a * np.sin(2.0 * np.pi * np.asarray(t) / p)
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """A start-up experiment: instrument, temperatures, schedule, scoring."""
+
+    name: str
+    """Name; run files are called ``{name}_T{T0}C_r{repeat}``."""
+    instrument: Instrument
+    """The instrument (with the scenario's effect list, if it gives one)."""
+    start_temperatures_c: tuple[float, ...]
+    """T0 of each run set [degC]."""
+    schedule: Schedule
+    """North-finding schedule."""
+    seed: int = 0
+    """Root seed; run (i, r) draws from SeedSequence([seed, i, r])."""
+    repeats: int = 1
+    """Monte Carlo runs per start temperature (different noise)."""
+    duration_s: float = 9000.0
+    """Length of each run [s]."""
+    sample_rate_hz: float = 1.0
+    """Sample rate [Hz]."""
+    latitude_deg: float = 30.0
+    """Latitude L [deg]."""
+    true_heading_deg: float = 0.0
+    """psi, azimuth of the FOG axis at position 0 [deg]."""
+    northfind: NorthFindSettings = field(default_factory=NorthFindSettings)
+    """North-finding settings."""
+    chamber: ChamberProfile = field(default_factory=ChamberProfile)
+    """Chamber temperature profile."""
+    description: str = ""
+    """Free text."""
+    path: Path | None = None
+    """The file it was read from."""
+
+    def run_name(self, i_temp: int, repeat: int) -> str:
+        """File stem of run (i_temp, repeat)."""
+        t0 = self.start_temperatures_c[i_temp]
+        t0s = f"{t0:+g}".replace(".", "p")
+        return f"{self.name}_T{t0s}C_r{repeat}"
+
+    def conditions(self):
+        """The :class:`~nfs.experiment.RunConditions` of every run, temperature-major."""
+        from ..experiment import RunConditions
+        out = []
+        for i, t0 in enumerate(self.start_temperatures_c):
+            for r in range(self.repeats):
+                out.append(RunConditions(
+                    name=self.run_name(i, r), start_temperature_c=t0,
+                    latitude_deg=self.latitude_deg, true_heading_deg=self.true_heading_deg,
+                    schedule=self.schedule, duration_s=self.duration_s,
+                    sample_rate_hz=self.sample_rate_hz, seed=(self.seed, i, r),
+                    chamber_c=self.chamber.ambient(t0)))
+        return out
+
+
+def default_scenario_path() -> Path:
+    """The built-in default scenario (seed 004's seven start temperatures)."""
+    return Path(str(resources.files("nfs") / "presets" / "startup_7temps.toml"))
+
+
+def _bool(tbl, key, prefix, file, default):
+    if key not in tbl:
+        return default
+    v = tbl[key]
+    if not isinstance(v, bool):
+        raise ScenarioError(f"must be true or false, got {v!r}", file=file,
+                            key=f"{prefix}.{key}" if prefix else key)
+    return v
+
+
+def load_scenario(path: str | Path | None = None) -> Scenario:
+    """Read and check a scenario file (the built-in default when ``path`` is None)."""
+    path = default_scenario_path() if path is None else Path(path)
+    d = load_toml(path)
+    f = path
+    check_keys(d, _TOP, "", f, required=("start_temperatures_c", "schedule"))
+    base = path.parent
+    files = d.get("effects_files", [])
+    if not isinstance(files, list) or not all(isinstance(x, str) for x in files):
+        raise ScenarioError("must be a list of Python file paths", file=f, key="effects_files")
+    for name in files:
+        p = Path(name) if Path(name).is_absolute() else base / name
+        try:
+            load_effects_file(p)
+        except EffectError as exc:
+            raise ScenarioError(str(exc), file=f, key="effects_files") from None
+    inst_ref = string(d, "instrument", "", f, "default")
+    try:
+        inst = load_instrument(inst_ref, base=base)
+    except ScenarioError as exc:
+        if exc.file is None:
+            raise ScenarioError(exc.message, file=f, key="instrument") from None
+        raise
+    if "effects" in d:
+        effects = parse_effects(d["effects"], f)
+        inst = Instrument(**{**inst.__dict__, "effects": effects})
+        _check_effect_targets(inst, f)
+
+    sch = table(d, "schedule", "", f)
+    check_keys(sch, _SCHEDULE, "schedule", f, required=("positions_deg", "dwell_s"))
+    try:
+        schedule = Schedule(
+            positions_deg=number_list(sch, "positions_deg", "schedule", f),
+            dwell_s=number(sch, "dwell_s", "schedule", f, positive=True),
+            move_s=number(sch, "move_s", "schedule", f, 10.0, minimum=0.0),
+            order=string(sch, "order", "schedule", f, "sequential", choices=ORDERS))
+    except ScenarioError:
+        raise
+    except NfsError as exc:
+        raise ScenarioError(str(exc), file=f, key="schedule") from None
+
+    nf = table(d, "northfind", "", f, {})
+    check_keys(nf, _NORTHFIND, "northfind", f)
+    settings = NorthFindSettings(
+        startup_end_s=number(nf, "startup_end_s", "northfind", f, 3600.0, positive=True),
+        stable_start_s=number(nf, "stable_start_s", "northfind", f, 5400.0, minimum=0.0),
+        tilt_correction=_bool(nf, "tilt_correction", "northfind", f, True),
+        settle_s=number(nf, "settle_s", "northfind", f, 0.0, minimum=0.0))
+    ch = table(d, "chamber", "", f, {})
+    check_keys(ch, _CHAMBER, "chamber", f)
+    chamber = ChamberProfile(ripple_c=number(ch, "ripple_c", "chamber", f, 0.0, minimum=0.0),
+                             ripple_period_s=number(ch, "ripple_period_s", "chamber", f,
+                                                    600.0, positive=True))
+    seed = d.get("seed", 0)
+    if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
+        raise ScenarioError(f"must be a non-negative integer, got {seed!r}", file=f, key="seed")
+    repeats = d.get("repeats", 1)
+    if isinstance(repeats, bool) or not isinstance(repeats, int) or repeats < 1:
+        raise ScenarioError(f"must be a positive integer, got {repeats!r}", file=f,
+                            key="repeats")
+    temps = number_list(d, "start_temperatures_c", "", f)
+    for t0 in temps:
+        if t0 < -273.15:
+            raise ScenarioError(f"{t0} is below absolute zero", file=f,
+                                key="start_temperatures_c")
+    duration = number(d, "duration_s", "", f, 9000.0, positive=True)
+    if duration < schedule.cycle_s:
+        raise ScenarioError(f"{duration} s is shorter than one cycle ({schedule.cycle_s} s)",
+                            file=f, key="duration_s")
+    return Scenario(
+        name=string(d, "name", "", f, path.stem), instrument=inst,
+        start_temperatures_c=temps, schedule=schedule, seed=seed, repeats=repeats,
+        duration_s=duration,
+        sample_rate_hz=number(d, "sample_rate_hz", "", f, 1.0, positive=True),
+        latitude_deg=number(d, "latitude_deg", "", f, 30.0, minimum=-89.0, maximum=89.0),
+        true_heading_deg=number(d, "true_heading_deg", "", f, 0.0),
+        northfind=settings, chamber=chamber,
+        description=string(d, "description", "", f, ""), path=path)
