@@ -18,8 +18,9 @@ Missing values
 
 Values
     Every column is numeric: a value is what Python's ``float`` reads (after stripping
-    blanks), so ``1``, ``1.0``, ``1e3`` and `` 2.5 `` all load. A non-numeric value in any
-    column, known or not, is an error naming the column and line.
+    blanks; ASCII only, no ``_`` digit separators), so ``1``, ``1.0``, ``1e3``, ``+2.5``
+    and ``NaN`` all load. A non-numeric value in any column, known or not, is an error
+    naming the column and line.
 
 Writing
     :func:`write_run` writes both files atomically (:mod:`nfs.io.atomic`), required columns
@@ -515,14 +516,22 @@ def _is_blank(row: list[str]) -> bool:
 
 
 def _parse_values(values: tuple[str, ...]) -> tuple[np.ndarray, int | None]:
-    """Floats of *values* (empty -> NaN) and the index of the first one that does not parse."""
-    try:
-        return np.array(list(map(float, values)), dtype=np.float64), None
-    except ValueError:
-        pass
+    """Floats of *values* (empty -> NaN) and the index of the first one that does not parse.
+
+    A value is what ``float`` reads, except digit separators (``1_000``) and non-ASCII
+    digits, which neither the spec nor numpy's parser (the fast path) accepts.
+    """
+    joined = "".join(values)
+    if "_" not in joined and joined.isascii():
+        try:
+            return np.array(list(map(float, values)), dtype=np.float64), None
+        except ValueError:
+            pass
     out = np.empty(len(values))
     for i, value in enumerate(values):
         try:
+            if "_" in value or not value.isascii():
+                raise ValueError
             out[i] = float(value)
         except ValueError:
             if value.strip():
