@@ -165,8 +165,7 @@ def north_find(run: Run, *, tilt_correction: bool = True, settle_s: float = 0.0,
     else:
         cos_e, y = np.ones(shape), rate
 
-    x_dph = np.full(n_cyc, np.nan)
-    y_dph, b_dph, omh, rms = (np.full(n_cyc, np.nan) for _ in range(4))
+    x_dph, y_dph, b_dph, omh, rms = (np.full(n_cyc, np.nan) for _ in range(5))
     ok = np.all(np.isfinite(y), axis=1)
     ambiguous = False
     if len(_distinct_angles(np.radians(theta[0]), math.radians(position_tol_deg))) >= 3:
@@ -179,7 +178,8 @@ def north_find(run: Run, *, tilt_correction: bool = True, settle_s: float = 0.0,
         psi = np.full(n_cyc, np.nan)
         for k in np.flatnonzero(ok):
             s = solve_heading(theta[k], y[k], cos_elevation=cos_e[k],
-                              latitude_deg=meta.latitude_deg, heading_hint_deg=heading_hint_deg)
+                              latitude_deg=meta.latitude_deg, heading_hint_deg=heading_hint_deg,
+                              angle_tol_deg=position_tol_deg)
             psi[k], x_dph[k], y_dph[k], b_dph[k] = s.psi_deg, s.X_dph, s.Y_dph, s.bias_dph
             omh[k], rms[k] = s.horizontal_rate_dph, s.residual_dph
             ambiguous |= s.ambiguous

@@ -48,7 +48,8 @@ class Dwell:
     """One dwell: the samples used at one turntable position."""
 
     theta_deg: float
-    """Turntable angle theta_k: circular mean of ``position_deg`` over the dwell, in [0, 360) [deg]."""
+    """Turntable angle theta_k: circular mean of ``position_deg`` over the dwell, in
+    [0, 360) [deg]."""
     start: int
     """Index of the first sample used."""
     stop: int

@@ -26,7 +26,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from nfs.constants import OMEGA_IE_DPH, earth_rate_components_dph
+from nfs.constants import earth_rate_components_dph
 from nfs.errors import NfsError
 
 __all__ = [
@@ -114,7 +114,7 @@ class HeadingSolution:
     """Root mean square of the fit residuals over the positions [deg/h] (0 when the
     positions leave no degree of freedom)."""
     n_positions: int
-    """Number of rates used."""
+    """Number of rates given."""
     ambiguous: bool = False
     """True for a two-position solution whose sign of (psi + theta_a) was not resolved by a
     heading hint; psi is then the branch with sin(psi + theta_a) >= 0."""
@@ -196,8 +196,8 @@ def _solve_two_position(theta_a, theta_rad, rate, cos_e, weights, latitude_deg,
 
 
 def solve_heading(theta_deg, rate_dph, *, weights=None, cos_elevation=None,
-                  latitude_deg: float | None = None,
-                  heading_hint_deg: float | None = None) -> HeadingSolution:
+                  latitude_deg: float | None = None, heading_hint_deg: float | None = None,
+                  angle_tol_deg: float = ANGLE_TOL_DEG) -> HeadingSolution:
     """Heading psi from the mean rates of one multiposition cycle (physics.md section 5).
 
     Least squares of ``w_k = c_k (X cos theta_k - Y sin theta_k) + b`` with c_k = cos e_k
@@ -230,6 +230,9 @@ def solve_heading(theta_deg, rate_dph, *, weights=None, cos_elevation=None,
         Latitude L [deg]; needed only by the two-position method.
     heading_hint_deg : float, optional
         Approximate psi [deg] that picks the two-position branch.
+    angle_tol_deg : float
+        Angles closer than this (modulo 360) count as one position, and two positions this
+        close to 180 deg apart as a two-position pair [deg].
 
     Returns
     -------
@@ -255,7 +258,7 @@ def solve_heading(theta_deg, rate_dph, *, weights=None, cos_elevation=None,
     if not (np.all(np.isfinite(theta)) and np.all(np.isfinite(rate))):
         raise NfsError("theta_deg and rate_dph must be finite")
     used = theta if w is None else theta[w > 0]
-    distinct = _distinct_angles(used, math.radians(ANGLE_TOL_DEG))
+    distinct = _distinct_angles(used, math.radians(angle_tol_deg))
     n = theta.size
     if len(distinct) >= 3:
         x, y, b, rms = (float(v[0]) for v in _solve_stack(theta[None], rate[None],
@@ -265,7 +268,7 @@ def solve_heading(theta_deg, rate_dph, *, weights=None, cos_elevation=None,
         return HeadingSolution(float(wrap_deg_360(math.degrees(psi))), x, y, b,
                                math.hypot(x, y), rms, n)
     if len(distinct) == 2 and abs(abs(math.remainder(distinct[1] - distinct[0], 2 * math.pi))
-                                  - math.pi) <= math.radians(ANGLE_TOL_DEG):
+                                  - math.pi) <= math.radians(angle_tol_deg):
         psi, omega_h, b, rms, amb = _solve_two_position(distinct[0], theta, rate, c, w,
                                                         latitude_deg, heading_hint_deg)
         return HeadingSolution(float(wrap_deg_360(math.degrees(psi))), omega_h * math.cos(psi),
