@@ -52,6 +52,7 @@ __all__ = [
     "REQUIRED_COLUMNS",
     "NO_MISSING_COLUMNS",
     "MAX_ABS_ACC_G",
+    "SAMPLE_RATE_RTOL",
     "RunMeta",
     "Run",
     "read_run",
@@ -373,7 +374,8 @@ def check_columns(columns: Mapping[str, np.ndarray], *, file: str | os.PathLike 
 
     Checks, in this order: every value finite or NaN; no NaN in :data:`NO_MISSING_COLUMNS`;
     ``time_s`` strictly increasing; ``moving`` 0 or 1; every ``temp_*_c`` >= -273.15;
-    every ``|acc_*_g|`` <= 2. Column presence and equal lengths are the caller's concern.
+    every ``|acc_*_g|`` <= 2. Also that the required columns are there; equal lengths and
+    float dtype are the caller's concern (the reader and :func:`write_run` ensure them).
 
     Parameters
     ----------
@@ -395,6 +397,12 @@ def check_columns(columns: Mapping[str, np.ndarray], *, file: str | os.PathLike 
 
     def fail(message: str, name: str, index: int) -> MeasurementError:
         return MeasurementError(message, file=file, column=name, row=line_of(index))
+
+    missing = [name for name in REQUIRED_COLUMNS if name not in columns]
+    if missing:
+        raise MeasurementError(f"required column{'s' if len(missing) > 1 else ''} missing: "
+                               f"{', '.join(missing)}", file=file,
+                               column=missing[0] if len(missing) == 1 else None)
 
     for name, values in columns.items():
         i = _first(np.isinf(values))

@@ -25,6 +25,7 @@ from nfs.io.measurement import (
     RunMeta,
     _parse_csv_careful,
     _parse_csv_fast,
+    check_columns,
     find_runs,
     read_run,
     read_runs,
@@ -627,3 +628,17 @@ def _timed(function, *args):
     start = time.perf_counter()
     function(*args)
     return time.perf_counter() - start
+
+
+def test_check_columns_alone():
+    run = make_run(n=20)
+    check_columns(run.columns)  # a valid run passes
+    columns = dict(run.columns, acc_z_g=np.full(20, 0.5))
+    columns["acc_z_g"][4] = 2.5  # any acc_*_g column is bounded
+    with pytest.raises(MeasurementError, match=r"^column 'acc_z_g', row 6: "):
+        check_columns(columns)
+    with pytest.raises(MeasurementError, match=r"^x\.csv, column 'acc_z_g', row 40: "):
+        check_columns(columns, file="x.csv", line_of=lambda i: 10 * i)
+    columns = {k: v for k, v in run.columns.items() if k != "moving"}
+    with pytest.raises(MeasurementError, match="missing: moving"):
+        check_columns(columns)
