@@ -145,25 +145,14 @@ def find_dwells(time_s, position_deg, moving, *, dwell_s: float | None = None,
     tau = float(np.median(durations)) if dwell_s is None else float(dwell_s)
     counts = np.maximum(1, np.rint(durations / tau).astype(int))
 
-    # split blocks holding several dwells into equal parts by time
-    d_start, d_stop, d_t0 = [], [], []
-    for i0, i1, m, dur in zip(starts, stops, counts, durations):
-        if m == 1:
-            d_start.append(i0)
-            d_stop.append(i1)
-            d_t0.append(time_s[i0])
-            continue
-        t0 = time_s[i0]
-        edges = t0 + dur * np.arange(m + 1) / m
-        idx = i0 + np.searchsorted(time_s[i0:i1], edges[:-1] - 1e-9 * dt, side="left")
-        idx = np.append(idx, i1)
-        d_start.extend(idx[:-1])
-        d_stop.extend(idx[1:])
-        d_t0.extend(edges[:-1])
-    d_start = np.asarray(d_start)
-    d_stop = np.asarray(d_stop)
+    # split blocks holding several dwells into equal parts by time (time_s increases)
+    blk = np.repeat(np.arange(starts.size), counts)
+    j = np.arange(blk.size) - (np.cumsum(counts) - counts)[blk]
+    d_t0 = time_s[starts][blk] + durations[blk] * j / counts[blk]
+    d_start = np.maximum(starts[blk], np.searchsorted(time_s, d_t0 - 1e-9 * dt, side="left"))
+    d_stop = np.where(j == counts[blk] - 1, stops[blk], np.append(d_start[1:], 0))
     if settle_s > 0:
-        t_first = np.asarray(d_t0) + settle_s
+        t_first = d_t0 + settle_s
         moved = np.maximum(d_start, np.searchsorted(time_s, t_first - 1e-9 * dt, side="left"))
         if np.any(moved >= d_stop):
             k = int(np.argmax(moved >= d_stop))
