@@ -10,8 +10,8 @@ import math
 
 import numpy as np
 
-from nfs.constants import earth_rate_components_dph
 from nfs.errors import NfsError
+from nfs.northfind.solve import _omega_h
 
 __all__ = [
     "white_noise_floor_deg",
@@ -19,13 +19,6 @@ __all__ = [
     "linear_drift_error_deg",
     "east_tilt_error_deg",
 ]
-
-
-def _omega_h(latitude_deg: float) -> float:
-    omega_h, _ = earth_rate_components_dph(latitude_deg)
-    if omega_h <= 0.0:
-        raise NfsError(f"no horizontal Earth rate at latitude {latitude_deg} deg")
-    return omega_h
 
 
 def white_noise_floor_deg(arw_deg_per_rth_h: float, dwell_s: float, n_positions: int,

@@ -12,11 +12,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from nfs.constants import earth_rate_components_dph
 from nfs.errors import MeasurementError, NfsError
 from nfs.io.measurement import Run
 from nfs.northfind.segment import Cycle, dwell_samples, find_dwells, segment_cycles
-from nfs.northfind.solve import (_distinct_angles, _elevation, _solve_stack,
+from nfs.northfind.solve import (_distinct_angles, _solve_stack, _vertical_rate_removed,
                                  solve_heading, wrap_deg_180, wrap_deg_360)
 
 __all__ = ["NorthFindResult", "north_find", "StageRMSE", "heading_rmse"]
@@ -159,9 +158,7 @@ def north_find(run: Run, *, tilt_correction: bool = True, settle_s: float = 0.0,
         acc_x = np.full(shape, np.nan)
 
     if tilt_correction:
-        _, omega_v = earth_rate_components_dph(meta.latitude_deg)
-        sin_e, cos_e = _elevation(np.nan_to_num(acc_x, nan=0.0))
-        y = rate - omega_v * np.where(np.isfinite(acc_x), sin_e, np.nan)
+        y, cos_e = _vertical_rate_removed(rate, acc_x, meta.latitude_deg)
     else:
         cos_e, y = np.ones(shape), rate
 

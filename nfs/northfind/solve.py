@@ -58,13 +58,23 @@ def wrap_deg_180(angle_deg):
     return out if np.ndim(out) else float(out)
 
 
-def _elevation(acc_x_g):
-    """sin e and cos e of the x axis from the mean x specific force [g] (f_x = sin e)."""
+def _omega_h(latitude_deg: float) -> float:
+    """Omega_h = Omega_ie cos L [deg/h]; NfsError at a pole, where psi is undefined."""
+    omega_h, _ = earth_rate_components_dph(latitude_deg)
+    if not omega_h > 1e-9:
+        raise NfsError(f"no horizontal Earth rate at latitude {latitude_deg} deg: "
+                       "the heading is undefined")
+    return omega_h
+
+
+def _vertical_rate_removed(rate_dph, acc_x_g, latitude_deg: float):
+    """(w_k - Omega_ie sin L sin e_k, cos e_k) with sin e_k = f_x,k (NaN passes through)."""
     sin_e = np.asarray(acc_x_g, dtype=float)
     if np.any(np.abs(sin_e) > 1.0):
         raise NfsError(f"|acc_x_g| must not exceed 1 g to give an elevation; got "
                        f"{np.nanmax(np.abs(sin_e)):.6g} g")
-    return sin_e, np.sqrt(1.0 - sin_e * sin_e)
+    _, omega_v = earth_rate_components_dph(latitude_deg)
+    return np.asarray(rate_dph, dtype=float) - omega_v * sin_e, np.sqrt(1.0 - sin_e * sin_e)
 
 
 def tilt_correct(rate_dph, acc_x_g, latitude_deg: float):
@@ -90,9 +100,8 @@ def tilt_correct(rate_dph, acc_x_g, latitude_deg: float):
         w_k' [deg/h]. A gyro bias b becomes b / cos e_k here; :func:`north_find` avoids
         that second-order effect by solving with ``cos_elevation`` instead (same model).
     """
-    _, omega_v = earth_rate_components_dph(latitude_deg)
-    sin_e, cos_e = _elevation(acc_x_g)
-    return (np.asarray(rate_dph, dtype=float) - omega_v * sin_e) / cos_e
+    rate_v, cos_e = _vertical_rate_removed(rate_dph, acc_x_g, latitude_deg)
+    return rate_v / cos_e
 
 
 @dataclass(frozen=True)
@@ -173,9 +182,7 @@ def _solve_two_position(theta_a, theta_rad, rate, cos_e, weights, latitude_deg,
         raise NfsError("two positions 180 deg apart observe only Omega_h cos(psi + theta_a): "
                        "pass latitude_deg (for the known Omega_h) or use at least 3 distinct "
                        "positions")
-    omega_h, _ = earth_rate_components_dph(latitude_deg)
-    if omega_h <= 0.0:
-        raise NfsError(f"no horizontal Earth rate at latitude {latitude_deg} deg: psi is undefined")
+    omega_h = _omega_h(latitude_deg)
     sgn = np.where(np.abs(np.angle(np.exp(1j * (theta_rad - theta_a)))) < np.pi / 2, 1.0, -1.0)
     c = np.ones_like(theta_rad) if cos_e is None else cos_e
     sw = np.ones_like(theta_rad) if weights is None else np.sqrt(np.asarray(weights, float))

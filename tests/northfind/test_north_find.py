@@ -174,6 +174,13 @@ def test_missing_data_gives_nan_for_that_cycle_only():
     res = north_find(dataclasses.replace(run, columns={**run.columns, "gyro_dph": gyro}))
     assert np.isnan(res.heading_deg[1])
     assert np.all(np.abs(res.error_deg[[0, 2]]) < 1e-9)
+    # the same for a dwell without accelerometer data, when tilt correction needs it
+    acc = run.columns["acc_x_g"].copy()
+    acc[north_find(run).cycles[2].dwells[0].index] = np.nan
+    run_acc = dataclasses.replace(run, columns={**run.columns, "acc_x_g": acc})
+    res = north_find(run_acc)
+    assert np.isnan(res.heading_deg[2]) and np.all(np.abs(res.error_deg[:2]) < 1e-9)
+    assert np.all(np.abs(north_find(run_acc, tilt_correction=False).error_deg) < 1e-9)
 
 
 def test_result_is_frozen_and_errors_locate_the_fault():
