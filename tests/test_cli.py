@@ -1,0 +1,172 @@
+"""The nfs command: outputs, JSON form, and one-line errors with exit code 2 on bad input."""
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from nfs.cli import main
+from nfs.io.scenario import default_scenario_path
+
+ROOT = Path(__file__).resolve().parents[1]
+
+SMALL = """
+name = "small"
+seed = 7
+start_temperatures_c = [-20.0, 40.0]
+duration_s = 1300.0
+latitude_deg = 35.0
+true_heading_deg = 80.0
+[schedule]
+positions_deg = [0.0, 90.0, 180.0, 270.0]
+dwell_s = 150.0
+move_s = 10.0
+"""
+
+
+def run_cli(capsys, *argv):
+    code = main(list(argv))
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def one_line_error(code, err):
+    assert code == 2
+    lines = [l for l in err.splitlines() if l.strip()]
+    assert len(lines) == 1, err
+    assert lines[0].startswith("nfs: error: ") and "Traceback" not in err
+    return lines[0]
+
+
+def test_scenarios_folder_holds_the_builtin_default():
+    assert (ROOT / "scenarios" / "startup_7temps.toml").read_text() == \
+        default_scenario_path().read_text()
+
+
+def test_table_simulate_northfind(tmp_path, capsys):
+    scen = tmp_path / "small.toml"
+    scen.write_text(SMALL)
+    code, out, err = run_cli(capsys, "table", str(scen), "-o", str(tmp_path / "tab"),
+                             "--json", str(tmp_path / "h.json"))
+    assert code == 0
+    assert out.splitlines()[0] == "| method | -20 | 40 | mean |"
+    for suffix in (".md", ".csv", ".json", ".png"):
+        assert (tmp_path / "tab" / f"heading_rmse{suffix}").stat().st_size > 0
+    doc = json.loads((tmp_path / "h.json").read_text())
+    assert doc["temperatures_c"] == [-20.0, 40.0]
+    assert [r["method"] for r in doc["rows"]] == ["before", "stable", "floor"]
+    before = doc["rows"][0]
+    assert before["mean_deg"] == pytest.approx(np.mean(before["rmse_deg"]), rel=1e-6)
+    assert "simulating" in err                      # progress on stderr
+
+    code, out, _ = run_cli(capsys, "simulate", str(scen), "-o", str(tmp_path / "runs"), "-q")
+    assert code == 0 and len(list((tmp_path / "runs").glob("*.csv"))) == 2
+    code, out, _ = run_cli(capsys, "northfind", str(tmp_path / "runs"),
+                           "--json", str(tmp_path / "nf.json"))
+    assert code == 0
+    nf = json.loads((tmp_path / "nf.json").read_text())
+    # The same runs north-found from files give the table's start-up RMSE (all cycles of a
+    # 1300 s run end before 3600 s).
+    by_t0 = {r["start_temperature_c"]: r["startup_rmse_deg"] for r in nf["runs"]}
+    assert by_t0[-20.0] == pytest.approx(before["rmse_deg"][0], abs=1e-8)
+    assert by_t0[40.0] == pytest.approx(before["rmse_deg"][1], abs=1e-8)
+
+
+def test_preset_and_effects(capsys):
+    code, out, _ = run_cli(capsys, "preset")
+    assert code == 0 and "default" in out.split()
+    code, out, _ = run_cli(capsys, "preset", "default")
+    assert code == 0 and "[thermal.nodes.housing]" in out
+    code, out, _ = run_cli(capsys, "effects")
+    assert code == 0 and "shupe_product (gyro)" in out
+
+
+# ---------------------------------------------------------------- bad scenario files
+
+@pytest.mark.parametrize("edit, expect", [
+    (lambda s: "colour = 'red'\n" + s, ["key 'colour'", "allowed keys here", "start_temperatures_c"]),
+    (lambda s: s.replace("dwell_s = 150.0", "dwel_s = 150.0"),
+     ["key 'schedule.dwel_s'", "allowed keys here: positions_deg"]),
+    (lambda s: s.replace("positions_deg = [0.0, 90.0, 180.0, 270.0]", "positions_deg = []"),
+     ["schedule.positions_deg", "must not be empty"]),
+    (lambda s: s.replace('name = "small"', 'name = "small"\ninstrument = "inst.toml"'),
+     ["inst.toml", "thermal.nodes.board.capacity_j_per_k", "must be > 0"]),
+    (lambda s: s.replace('name = "small"', 'name = "small"\ninstrument = "inst2.toml"'),
+     ["inst2.toml", "thermal.links[1].conductance_w_per_k", "must be >= 0"]),
+    (lambda s: s + "[[effects]]\nname = 'shupe_gradeint'\nk_r = 0.1\n",
+     ["effects[0]", "unknown effect 'shupe_gradeint'", "valid names:", "shupe_gradient"]),
+    (lambda s: s + "[[effects]]\nname = 'heat_source'\nnode = 'attic'\npower = 1.0\n",
+     ["unknown node 'attic'"]),
+    (lambda s: s + "[[effects]]\nname = 'shupe_rate'\n", ["needs parameter 'k_s'"]),
+    (lambda s: s + "[schedule\n", ["TOML syntax error"]),
+])
+def test_bad_scenario(tmp_path, capsys, edit, expect):
+    from nfs.instrument import preset_path
+    text = preset_path("default").read_text()
+    (tmp_path / "inst.toml").write_text(text.replace(
+        "capacity_j_per_k = 380.0", "capacity_j_per_k = -380.0"))
+    (tmp_path / "inst2.toml").write_text(text.replace(
+        "conductance_w_per_k = 0.8", "conductance_w_per_k = -0.8"))
+    scen = tmp_path / "bad.toml"
+    scen.write_text(edit(SMALL))
+    out_dir = tmp_path / "out"
+    for cmd in (["simulate", str(scen), "-o", str(out_dir)], ["table", str(scen), "-o",
+                                                              str(out_dir)]):
+        code, out, err = run_cli(capsys, *cmd)
+        line = one_line_error(code, err)
+        assert "bad.toml" in line or "inst" in line
+        for e in expect:
+            assert e in line, line
+        assert not out_dir.exists()       # nothing written, nothing half-written
+
+
+def test_missing_scenario_file(capsys, tmp_path):
+    code, _, err = run_cli(capsys, "table", str(tmp_path / "nope.toml"))
+    assert "nope.toml: file not found" in one_line_error(code, err)
+
+
+# ---------------------------------------------------------------- bad measurement files
+
+GOOD_CSV = ("time_s,position_deg,moving,gyro_dph,acc_x_g,acc_y_g,temp_fog_c,temp_acc_x_c,"
+            "temp_acc_y_c\n"
+            + "".join(f"{t},{0 if t < 5 else 180},{int(t == 5)},1.0,0.0,0.0,20.0,20.0,20.0\n"
+                      for t in range(11)))
+GOOD_TOML = 'format = "nfs-measurement/1"\nlatitude_deg = 30.0\nstart_temperature_c = 20.0\n'
+
+
+@pytest.mark.parametrize("csv_edit, toml_edit, expect", [
+    (lambda s: s.replace("gyro_dph,", "gyro_rate,"), None, ["column", "gyro_dph"]),
+    (lambda s: s.replace("3,0,0,1.0", "3,0,0,abc"), None, ["gyro_dph", "row 5"]),
+    (lambda s: s.replace("\n4,", "\n2,"), None, ["time_s", "row 6"]),
+    (lambda s: s.replace("7,180,0,1.0,0.0,0.0,20.0", "7,180,0,1.0,0.0,0.0,-300.0"), None,
+     ["temp_fog_c", "row 9"]),
+    (lambda s: s.replace("8,180,0,1.0,0.0", "8,180,0,1.0,2.5"), None, ["acc_x_g", "row 10"]),
+    (None, lambda s: s.replace("latitude_deg = 30.0\n", ""), ["latitude_deg"]),
+])
+def test_bad_measurement(tmp_path, capsys, csv_edit, toml_edit, expect):
+    csv = GOOD_CSV if csv_edit is None else csv_edit(GOOD_CSV)
+    toml = GOOD_TOML if toml_edit is None else toml_edit(GOOD_TOML)
+    (tmp_path / "run.csv").write_text(csv)
+    (tmp_path / "run.toml").write_text(toml)
+    js = tmp_path / "out.json"
+    js.write_text("previous")
+    code, _, err = run_cli(capsys, "northfind", str(tmp_path), "--json", str(js))
+    line = one_line_error(code, err)
+    assert "run.csv" in line or "run.toml" in line
+    for e in expect:
+        assert e in line, line
+    assert js.read_text() == "previous"     # nothing already written is lost
+
+
+def test_console_script_exit_code(tmp_path):
+    """The installed entry point: exit code 2, one line, no traceback."""
+    p = subprocess.run([sys.executable, "-m", "nfs.cli", "northfind", str(tmp_path / "none")],
+                       capture_output=True, text=True)
+    assert p.returncode == 2
+    assert p.stderr.count("\n") == 1 and "Traceback" not in p.stderr
+    h = subprocess.run([sys.executable, "-m", "nfs.cli", "--help"], capture_output=True,
+                       text=True)
+    assert h.returncode == 0 and "table" in h.stdout and "northfind" in h.stdout
