@@ -39,6 +39,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from nfs.errors import NfsError
+from nfs.northfind.solve import wrap_deg_180, wrap_deg_360
 
 __all__ = ["Dwell", "Cycle", "segment_cycles", "find_dwells"]
 
@@ -88,11 +89,6 @@ class Cycle:
         return np.array([d.theta_deg for d in self.dwells])
 
 
-def _angle_diff_deg(a, b):
-    """a - b wrapped to [-180, 180) [deg]."""
-    return np.mod(np.asarray(a, dtype=float) - b + 180.0, 360.0) - 180.0
-
-
 def dwell_samples(start, stop):
     """Sample indices of consecutive index ranges [start_i, stop_i) and the range of each.
 
@@ -109,7 +105,7 @@ def dwell_samples(start, stop):
 def _blocks(time_s, position_deg, moving, position_tol_deg):
     """Start and stop indices of the stationary blocks."""
     still = (np.asarray(moving) == 0) & np.isfinite(position_deg) & np.isfinite(time_s)
-    jump = np.abs(_angle_diff_deg(position_deg[1:], position_deg[:-1])) > position_tol_deg
+    jump = np.abs(wrap_deg_180(position_deg[1:] - position_deg[:-1])) > position_tol_deg
     # a block starts where a still sample follows a non-still one, or the position jumps
     start = still.copy()
     start[1:] &= ~still[:-1] | jump
@@ -163,15 +159,14 @@ def find_dwells(time_s, position_deg, moving, *, dwell_s: float | None = None,
     # circular mean of the position over each dwell, relative to its first sample
     ref = position_deg[d_start]
     idx, owner = dwell_samples(d_start, d_stop)
-    rel = _angle_diff_deg(position_deg[idx], ref[owner])
-    theta = np.mod(ref + np.bincount(owner, rel) / (d_stop - d_start), 360.0)
-    theta = np.where(theta >= 360.0, 0.0, theta)
+    rel = wrap_deg_180(position_deg[idx] - ref[owner])
+    theta = wrap_deg_360(ref + np.bincount(owner, rel) / (d_stop - d_start))
     return [Dwell(float(th), int(a), int(b), float(time_s[a]), float(time_s[b - 1]))
             for th, a, b in zip(theta, d_start, d_stop)]
 
 
 def _same_angles(a, b, tol):
-    return bool(np.all(np.abs(_angle_diff_deg(a, b)) <= tol))
+    return bool(np.all(np.abs(wrap_deg_180(np.asarray(a) - np.asarray(b))) <= tol))
 
 
 def _period(theta, tol):

@@ -38,7 +38,7 @@ def synthetic_run(*, heading_deg: float, latitude_deg: float = 30.0,
                   bias_dph: float = 0.0,
                   drift_dph: Callable[[np.ndarray], np.ndarray] | None = None,
                   arw_deg_per_rth_h: float = 0.0, skip_null_moves: bool = True,
-                  store_true_heading: bool = True, name: str = "synthetic",
+                  name: str = "synthetic",
                   random_state: int | np.random.Generator | None = None) -> Run:
     """Build an ideal multiposition run (see the module docstring for the model).
 
@@ -73,8 +73,6 @@ def synthetic_run(*, heading_deg: float, latitude_deg: float = 30.0,
         Angle random walk [deg/sqrt(h)] of white rate noise.
     skip_null_moves : bool
         No move between consecutive dwells at the same angle.
-    store_true_heading : bool
-        Write ``heading_deg`` into the metadata.
     name : str
         Run name.
     random_state : int or numpy.random.Generator, optional
@@ -136,7 +134,7 @@ def synthetic_run(*, heading_deg: float, latitude_deg: float = 30.0,
         "temp_fog_c": temp, "temp_acc_x_c": temp.copy(), "temp_acc_y_c": temp.copy(),
     }
     meta = RunMeta(latitude_deg=latitude_deg, start_temperature_c=25.0,
-                   true_heading_deg=heading_deg if store_true_heading else None,
+                   true_heading_deg=heading_deg,
                    sample_rate_hz=fs, positions_deg=tuple(float(p) for p in sched),
                    dwell_s=n_dwell / fs, move_s=n_move / fs, instrument="ideal (synthetic)")
     return Run(name=name, columns=columns, meta=meta)
