@@ -124,11 +124,16 @@ def test_held_power_law_matches_per_interval_closed_form():
     np.testing.assert_allclose(res.power_w[:, 0], k_f * (t_set - np.array(expected)), rtol=1e-9)
 
 
-def test_ambient_is_held_over_each_interval():
+@pytest.mark.parametrize("grid", ["uniform", "non-uniform"])
+def test_ambient_is_held_over_each_interval(grid):
     """Zero-order hold: an ambient sample at t_k acts over [t_k, t_k+1); RC closed form per
-    interval with the held value."""
-    t = np.array([0.0, 50.0, 80.0, 200.0, 201.0, 400.0])
-    amb = np.array([10.0, 30.0, -5.0, 0.0, 12.0, 99.0])
+    interval with the held value (the uniform grid takes the vectorised modal path)."""
+    if grid == "uniform":
+        t = np.arange(0.0, 600.0, 2.0)
+        amb = np.repeat([10.0, 30.0, -5.0, 0.0, 12.0, 99.0], 50)
+    else:
+        t = np.array([0.0, 50.0, 80.0, 200.0, 201.0, 400.0])
+        amb = np.array([10.0, 30.0, -5.0, 0.0, 12.0, 99.0])
     res = simulate(one_node(), t, ambient_c=amb, initial_c=0.0)
     expected = [0.0]
     for k in range(t.size - 1):
@@ -136,6 +141,22 @@ def test_ambient_is_held_over_each_interval():
         expected.append(amb[k] + (expected[-1] - amb[k]) * decay)
     np.testing.assert_allclose(res.node("coil"), expected, rtol=1e-12)
     np.testing.assert_array_equal(res.ambient_c, amb)
+
+
+@pytest.mark.parametrize("path", ["vectorised", "march"])
+def test_floating_pair_closed_form(path):
+    """Two nodes with no path to the chamber, 1 W into a: the mean (C-weighted) temperature
+    rises at P / (C_a + C_b); x = Ta - Tb obeys dx/dt = -G (1/C_a + 1/C_b) x + P / C_a."""
+    net = Network((Node("a", 1.0, 1.0), Node("b", 2.0)), (Link("a", "b", 1.0),))
+    t = np.arange(0.0, 50.0, 0.5)
+    law = (lambda t_s, temp: np.zeros(2)) if path == "march" else None
+    res = simulate(net, t, ambient_c=5.0, initial_c=[0.0, 1.0], power_w=law)
+    rate, x_ss = 1.0 + 1.0 / 2.0, 1.0 / 1.5
+    x = x_ss + (0.0 - 1.0 - x_ss) * np.exp(-rate * t)
+    mean = (0.0 * 1.0 + 1.0 * 2.0 + 1.0 * t) / 3.0
+    np.testing.assert_allclose(res.node("a"), mean + 2.0 / 3.0 * x, rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(res.node("b"), mean - 1.0 / 3.0 * x, rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(res.heat_lost_j, 0.0, atol=0)
 
 
 # --- invariants --------------------------------------------------------------------------
@@ -240,3 +261,11 @@ def test_power_law_cannot_change_the_state():
         return np.zeros(2)
     with pytest.raises(ValueError):
         simulate(two_nodes(), [0.0, 1.0], ambient_c=0.0, initial_c=0.0, power_w=meddling)
+
+
+def test_linspace_grid_counts_as_uniform():
+    """np.linspace steps differ in the last bits; the answer equals that of np.arange."""
+    net = seven_nodes()
+    a = simulate(net, np.arange(0.0, 9001.0), ambient_c=43.0, initial_c=43.0)
+    b = simulate(net, np.linspace(0.0, 9000.0, 9001), ambient_c=43.0, initial_c=43.0)
+    np.testing.assert_allclose(b.temperature_c, a.temperature_c, rtol=1e-12)
