@@ -129,12 +129,14 @@ def _thermal_power(inst: Instrument, time_s: np.ndarray, moving: np.ndarray):
     # The per-sample law: the state-dependent sources from the current node temperature,
     # held over the sample interval by the exact solver.
     index = {float(t): k for k, t in enumerate(time_s)}
+    moving_list = moving.tolist()
+    calls = [(e.spec.function, j, params) for e, j, params in stateful]
 
     def law(t_s: float, temperature_c: np.ndarray) -> np.ndarray:
-        k = index[float(t_s)]
+        k = index[t_s]
         p = fixed[k].copy()
-        for e, j, params in stateful:
-            p[j] += e.spec.function(t_s, float(temperature_c[j]), bool(moving[k]), **params)
+        for f, j, params in calls:
+            p[j] += f(t_s, float(temperature_c[j]), moving_list[k], **params)
         return p
 
     return law, terms, stateful
