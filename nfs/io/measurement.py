@@ -31,7 +31,6 @@ Writing
 from __future__ import annotations
 
 import csv
-import datetime as _dt
 import io
 import math
 import os
@@ -46,6 +45,7 @@ import numpy as np
 from nfs.constants import ABSOLUTE_ZERO_C
 from nfs.errors import MeasurementError
 from nfs.io.atomic import atomic_write_files
+from nfs.io.tomlio import toml_key, toml_value
 
 __all__ = [
     "FORMAT",
@@ -276,54 +276,14 @@ def _read_meta(path: Path) -> RunMeta:
     return _meta_from_toml(doc, path)
 
 
-# A tiny TOML writer: tomllib (standard library) only reads TOML, and the metadata are a flat
-# table of scalars and lists, so a few lines do instead of a dependency.
-
-_BARE_KEY = re.compile(r"[A-Za-z0-9_-]+")
-_TOML_ESCAPES = {'"': '\\"', "\\": "\\\\", "\b": "\\b", "\t": "\\t", "\n": "\\n",
-                 "\f": "\\f", "\r": "\\r"}
-
-
-def _toml_string(text: str) -> str:
-    out = []
-    for char in text:
-        if char in _TOML_ESCAPES:
-            out.append(_TOML_ESCAPES[char])
-        elif ord(char) < 0x20 or ord(char) == 0x7F:
-            out.append(f"\\u{ord(char):04X}")
-        else:
-            out.append(char)
-    return '"' + "".join(out) + '"'
-
-
-def _toml_key(key: str) -> str:
-    return key if _BARE_KEY.fullmatch(key) else _toml_string(key)
-
+# The TOML value writer is nfs.io.tomlio's (tomllib only reads TOML); errors get the file here.
 
 def _toml_value(value: object, key: str, file: Path) -> str:
-    """One TOML value (inline: arrays and tables on one line)."""
-    if isinstance(value, np.generic):
-        value = value.item()
-    elif isinstance(value, np.ndarray):
-        value = value.tolist()
-    if isinstance(value, bool):
-        return "true" if value else "false"
-    if isinstance(value, int):
-        return str(value)
-    if isinstance(value, float):
-        return repr(value)  # shortest exact form; inf/nan/1e-05 are valid TOML
-    if isinstance(value, str):
-        return _toml_string(value)
-    if isinstance(value, (_dt.datetime, _dt.date, _dt.time)):
-        return value.isoformat()
-    if isinstance(value, (list, tuple)):
-        return "[" + ", ".join(_toml_value(v, key, file) for v in value) + "]"
-    if isinstance(value, Mapping):
-        items = ", ".join(f"{_toml_key(str(k))} = {_toml_value(v, key, file)}"
-                          for k, v in value.items())
-        return "{" + (f" {items} " if items else "") + "}"
-    raise MeasurementError(f"cannot write a {type(value).__name__} to TOML", file=file,
-                           key=key)
+    """One TOML value, or MeasurementError naming the key when it cannot be written."""
+    try:
+        return toml_value(value)
+    except TypeError as exc:
+        raise MeasurementError(str(exc), file=file, key=key) from None
 
 
 def _format_meta(meta: RunMeta, file: Path) -> str:
@@ -355,7 +315,7 @@ def _format_meta(meta: RunMeta, file: Path) -> str:
                                    file=file, key=key)
         if value is None:
             raise MeasurementError("TOML has no null value", file=file, key=key)
-        lines.append(f"{_toml_key(str(key))} = {_toml_value(value, str(key), file)}")
+        lines.append(f"{toml_key(str(key))} = {_toml_value(value, str(key), file)}")
     return "\n".join(lines) + "\n"
 
 

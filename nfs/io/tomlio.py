@@ -2,14 +2,19 @@
 
 from __future__ import annotations
 
+import datetime as _dt
 import math
+import re
 import tomllib
 from pathlib import Path
 from typing import Any, Iterable
 
+import numpy as np
+
 from ..errors import ScenarioError
 
-__all__ = ["load_toml", "check_keys", "number", "string", "number_list", "table", "dumps_toml"]
+__all__ = ["load_toml", "check_keys", "number", "string", "number_list", "table", "dumps_toml",
+           "toml_value", "toml_key", "toml_string"]
 
 
 def load_toml(path: str | Path) -> dict[str, Any]:
@@ -114,28 +119,58 @@ def number_list(tbl: dict[str, Any], key: str, prefix: str, file: Any, default: 
     return tuple(float(v) for v in value)
 
 
-def _value(v: Any) -> str:
-    if isinstance(v, bool):
-        return "true" if v else "false"
-    if isinstance(v, int):
-        return str(v)
-    if isinstance(v, float):
-        if math.isnan(v):
+_BARE_KEY = re.compile(r"[A-Za-z0-9_-]+")
+_TOML_ESCAPES = {'"': '\\"', "\\": "\\\\", "\b": "\\b", "\t": "\\t", "\n": "\\n",
+                 "\f": "\\f", "\r": "\\r"}
+
+
+def toml_string(text: str) -> str:
+    """A TOML basic string with every character that needs it escaped."""
+    out = []
+    for char in text:
+        if char in _TOML_ESCAPES:
+            out.append(_TOML_ESCAPES[char])
+        elif ord(char) < 0x20 or ord(char) == 0x7F:
+            out.append(f"\\u{ord(char):04X}")
+        else:
+            out.append(char)
+    return '"' + "".join(out) + '"'
+
+
+def toml_key(key: str) -> str:
+    """A bare key when allowed, else a quoted one."""
+    return key if _BARE_KEY.fullmatch(key) else toml_string(key)
+
+
+def toml_value(value: Any) -> str:
+    """One TOML value, inline (arrays and tables on one line); TypeError if not writable.
+
+    Floats are written in their shortest exact form (``repr``), so they read back bitwise.
+    """
+    if isinstance(value, np.generic):
+        value = value.item()
+    elif isinstance(value, np.ndarray):
+        value = value.tolist()
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, int):
+        return str(value)
+    if isinstance(value, float):
+        if math.isnan(value):
             return "nan"
-        if math.isinf(v):
-            return "inf" if v > 0 else "-inf"
-        return repr(v)
-    if isinstance(v, str):
-        return '"' + v.replace("\\", "\\\\").replace('"', '\\"').replace("\n", "\\n") + '"'
-    if isinstance(v, (list, tuple)):
-        return "[" + ", ".join(_value(x) for x in v) + "]"
-    if isinstance(v, dict):
-        return "{ " + ", ".join(f"{_key(k)} = {_value(x)}" for k, x in v.items()) + " }"
-    raise TypeError(f"cannot write {type(v).__name__} to TOML")
-
-
-def _key(k: str) -> str:
-    return k if k.replace("_", "").replace("-", "").isalnum() else _value(k)
+        if math.isinf(value):
+            return "inf" if value > 0 else "-inf"
+        return repr(value)
+    if isinstance(value, str):
+        return toml_string(value)
+    if isinstance(value, (_dt.datetime, _dt.date, _dt.time)):
+        return value.isoformat()
+    if isinstance(value, (list, tuple)):
+        return "[" + ", ".join(toml_value(v) for v in value) + "]"
+    if isinstance(value, dict):
+        items = ", ".join(f"{toml_key(str(k))} = {toml_value(v)}" for k, v in value.items())
+        return "{" + (f" {items} " if items else "") + "}"
+    raise TypeError(f"cannot write a {type(value).__name__} to TOML")
 
 
 def dumps_toml(data: dict[str, Any], _prefix: str = "") -> str:
@@ -149,9 +184,9 @@ def dumps_toml(data: dict[str, Any], _prefix: str = "") -> str:
     scalars = {k: v for k, v in data.items()
                if not isinstance(v, dict) and not _is_table_array(v)}
     for k, v in scalars.items():
-        lines.append(f"{_key(k)} = {_value(v)}")
+        lines.append(f"{toml_key(k)} = {toml_value(v)}")
     for k, v in data.items():
-        name = _join(_prefix, _key(k))
+        name = _join(_prefix, toml_key(k))
         if isinstance(v, dict):
             if lines:
                 lines.append("")
