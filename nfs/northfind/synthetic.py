@@ -23,9 +23,9 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 
-from nfs.constants import earth_rate_components_dph
 from nfs.errors import NfsError
 from nfs.io.measurement import Run, RunMeta
+from nfs.sensors import axis_elevation_deg, earth_rate_along_axis_dph
 
 __all__ = ["synthetic_run"]
 
@@ -115,13 +115,10 @@ def synthetic_run(*, heading_deg: float, latitude_deg: float = 30.0,
     n = position.size
     time_s = np.arange(n) / fs
 
-    psi = math.radians(heading_deg)
-    a = psi + np.radians(position)
-    a_n, a_e = math.radians(tilt_north_deg), math.radians(tilt_east_deg)
-    e_x = a_n * np.cos(a) + a_e * np.sin(a)
-    e_y = -a_n * np.sin(a) + a_e * np.cos(a)
-    omega_h, omega_v = earth_rate_components_dph(latitude_deg)
-    gyro = omega_h * np.cos(a) * np.cos(e_x) + omega_v * np.sin(e_x) + bias_dph
+    azimuth = heading_deg + position
+    e_x = axis_elevation_deg(azimuth, tilt_north_deg, tilt_east_deg)
+    e_y = axis_elevation_deg(azimuth + 90.0, tilt_north_deg, tilt_east_deg)
+    gyro = earth_rate_along_axis_dph(azimuth, e_x, latitude_deg) + bias_dph
     if drift_dph is not None:
         gyro = gyro + np.asarray(drift_dph(time_s), dtype=float)
     if arw_deg_per_rth_h > 0:
@@ -130,7 +127,7 @@ def synthetic_run(*, heading_deg: float, latitude_deg: float = 30.0,
     temp = np.full(n, 25.0)
     columns = {
         "time_s": time_s, "position_deg": position, "moving": is_move.astype(float),
-        "gyro_dph": gyro, "acc_x_g": np.sin(e_x), "acc_y_g": np.sin(e_y),
+        "gyro_dph": gyro, "acc_x_g": np.sin(np.radians(e_x)), "acc_y_g": np.sin(np.radians(e_y)),
         "temp_fog_c": temp, "temp_acc_x_c": temp.copy(), "temp_acc_y_c": temp.copy(),
     }
     meta = RunMeta(latitude_deg=latitude_deg, start_temperature_c=25.0,
