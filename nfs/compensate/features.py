@@ -32,7 +32,7 @@ from ..constants import T_REF_C
 from ..errors import NfsError
 
 __all__ = ["THERMOMETER_COLUMNS", "FEATURE_SETS", "available_features", "resolve_features",
-           "compute_features", "rate_k_per_min", "FeatureError"]
+           "compute_features", "rate_k_per_min", "FeatureError", "feature_columns"]
 
 #: Thermometer short names -> measurement columns (measurement-format.md).
 THERMOMETER_COLUMNS = {"fog": "temp_fog_c", "acc_x": "temp_acc_x_c", "acc_y": "temp_acc_y_c"}
@@ -122,6 +122,20 @@ def rate_k_per_min(temp_c: np.ndarray, time_s: np.ndarray, window_s: float = 121
     if w <= polyorder:
         return np.gradient(x, t) * 60.0
     return savgol_filter(x, w, polyorder, deriv=1, delta=dt, mode="interp") * 60.0
+
+
+def feature_columns(name: str) -> list[str]:
+    """The measurement columns a feature is computed from."""
+    if name.startswith("aux_"):
+        return [name]
+    if name == "time_min":
+        return ["time_s"]
+    kind, _, rest = name.partition("_")
+    if kind == "G":
+        return [THERMOMETER_COLUMNS[t] for t in _split_pair(rest)]
+    if rest in THERMOMETER_COLUMNS:
+        return [THERMOMETER_COLUMNS[rest]]
+    raise FeatureError(f"unknown feature '{name}'")
 
 
 def _column(columns: dict, name: str, run_name: str) -> np.ndarray:

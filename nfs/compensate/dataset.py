@@ -1,0 +1,92 @@
+"""Training data for drift compensators: features X, separated drift y, run groups.
+
+For each run with a known heading: the drift target is the wavelet-separated gyro drift
+(gyro output minus the Earth-rate projection at the known heading, denoised; seed 004,
+physics.md section 6), the inputs are named thermometer features
+(:mod:`nfs.compensate.features`).  Samples while the turntable moves are left out, and the
+rest is decimated (the separated drift is smooth: the wavelet cutoff is 8.5 min, so 0.1 Hz
+or less loses nothing, and kernel methods cost O(n^2)-O(n^3)).  ``groups`` numbers the runs,
+so validation leaves whole runs out: drift noise is correlated in time, and random samples
+of one run in both the training and the validation folds would leak.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Sequence
+
+import numpy as np
+
+from ..denoise import separate_drift
+from ..errors import NfsError
+from .features import compute_features
+
+__all__ = ["DriftDataset", "drift_dataset"]
+
+
+@dataclass(frozen=True)
+class DriftDataset:
+    """Stacked, decimated training samples of several runs."""
+
+    X: np.ndarray
+    """Features (n_samples, n_features)."""
+    y: np.ndarray
+    """Separated drift [deg/h]."""
+    groups: np.ndarray
+    """Run number of each sample (for leave-one-run-out validation)."""
+    time_s: np.ndarray
+    """Time since power-on of each sample [s]."""
+    feature_names: tuple[str, ...]
+    """Names of the feature columns."""
+    run_names: tuple[str, ...]
+    """Name of each run (index = group number)."""
+    start_temperatures_c: tuple[float, ...]
+    """T0 of each run."""
+
+
+def drift_dataset(runs: Sequence, features, *, decimate_s: float = 30.0,
+                  cutoff_period_s: float = 512.0, wavelet: str = "db4", rule: str = "visu",
+                  rate_window_s: float = 121.0) -> DriftDataset:
+    """Build the training set of ``runs`` (each needs ``true_heading_deg``).
+
+    Parameters
+    ----------
+    runs : sequence of Run
+    features : str or list of str
+        Feature names or sets (:func:`~nfs.compensate.features.resolve_features`).
+    decimate_s : float
+        Keep one sample every ``decimate_s`` seconds [s].
+    cutoff_period_s : float
+        Wavelet cutoff period of the drift separation [s] (512 s: level 8 at 1 Hz).
+    wavelet, rule : str
+        Wavelet family and threshold rule of the separation.
+    rate_window_s : float
+        Window of the temperature-rate features [s].
+    """
+    if not runs:
+        raise NfsError("no runs to train on")
+    Xs, ys, gs, ts = [], [], [], []
+    names = None
+    for g, run in enumerate(runs):
+        X, names_g = compute_features(run, features, rate_window_s=rate_window_s)
+        if names is None:
+            names = names_g
+        elif names_g != names:
+            raise NfsError(f"run '{run.name}' gives features {names_g}, the others {names}")
+        sep = separate_drift(run, cutoff_period_s=cutoff_period_s, wavelet=wavelet, rule=rule)
+        t = np.asarray(run.columns["time_s"], dtype=float)
+        dt = float(np.median(np.diff(t)))
+        step = max(1, int(round(decimate_s / dt)))
+        keep = np.zeros(t.size, dtype=bool)
+        keep[::step] = True
+        keep &= ~np.asarray(sep.moving, dtype=bool)
+        keep &= np.all(np.isfinite(X), axis=1) & np.isfinite(sep.drift_dph)
+        Xs.append(X[keep])
+        ys.append(np.asarray(sep.drift_dph)[keep])
+        gs.append(np.full(int(keep.sum()), g))
+        ts.append(t[keep])
+    return DriftDataset(X=np.vstack(Xs), y=np.concatenate(ys), groups=np.concatenate(gs),
+                        time_s=np.concatenate(ts), feature_names=tuple(names),
+                        run_names=tuple(r.name for r in runs),
+                        start_temperatures_c=tuple(float(r.meta.start_temperature_c)
+                                                   for r in runs))

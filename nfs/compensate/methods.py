@@ -1,0 +1,151 @@
+"""The compensation methods compared in the heading-RMSE table, by name.
+
+Each method is a recipe that builds a scikit-learn estimator mapping thermometer features to
+drift [deg/h].  Tuned methods wrap their model in
+:class:`~nfs.compensate.search.MetaheuristicSearchCV`: every tuned row gets the same budget of
+evaluations of the same leave-one-run-out validation error, so the tuners are compared on
+equal terms.
+
+| row | model | tuner | source |
+| --- | --- | --- | --- |
+| LS | cubic least squares | - | seed 000 |
+| stepwise | stepwise regression (F-test) | - | seed 000 |
+| BP | back-propagation network | - | seed 004 |
+| RBF | radial-basis-function network | - | seed 001 |
+| LSSVM | least-squares SVM | - | seed 000 |
+| IR-LSSVM | iteratively reweighted LSSVM (myriad weights, seed 000's best) | - | seed 000 |
+| SVR (grid) | epsilon-SVR, Gaussian kernel | grid search | seed 004 |
+| PSO-SVR | epsilon-SVR | particle swarm | seed 004 |
+| GWO-SVR | epsilon-SVR | grey wolf | seed 004 |
+| SSA-SVR | epsilon-SVR | sparrow search | seed 004 (the method reproduced) |
+| HHO-RVR | relevance vector regression | Harris hawks | seed 003 |
+| TPE-SVR | epsilon-SVR | Optuna TPE (optional extra) | baseline |
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, Callable
+
+from ..errors import NfsError
+
+__all__ = ["MethodSpec", "METHODS", "TABLE_METHODS", "get_method", "SVR_SPACE", "RVR_SPACE"]
+
+
+@dataclass(frozen=True)
+class MethodSpec:
+    """A compensation method: a table row and how to build its estimator."""
+
+    name: str
+    """Row label in the tables (e.g. ``SSA-SVR``)."""
+    key: str
+    """Command-line key (e.g. ``ssa-svr``)."""
+    tuned: bool
+    """True when hyperparameters are searched with a budget of evaluations."""
+    build: Callable[..., Any]
+    """build(budget=, random_state=, n_jobs=) -> unfitted estimator."""
+    reference: str
+    """Where the method comes from."""
+
+
+def _space_svr():
+    from .search import Real
+    # Bounds: C and epsilon bounded (seed 004 Table 1 found C 1.05, sigma 0.95 on
+    # standardised inputs); epsilon is in units of the standardised target.
+    return {"C": Real(1e-2, 1e3, log=True), "sigma": Real(0.1, 10.0, log=True),
+            "epsilon": Real(1e-3, 0.5, log=True)}
+
+
+def _space_rvr():
+    from .search import Real
+    return {"sigma": Real(0.1, 10.0, log=True)}
+
+
+SVR_SPACE = _space_svr
+RVR_SPACE = _space_rvr
+
+
+def _tuned_svr(method: str):
+    def build(*, budget: int, random_state: int, n_jobs: int | None):
+        from .kernels import SVRRegressor
+        from .search import MetaheuristicSearchCV
+        return MetaheuristicSearchCV(SVRRegressor(), _space_svr(), method=method,
+                                     budget=budget, random_state=random_state, n_jobs=n_jobs)
+    return build
+
+
+def _hho_rvr(*, budget: int, random_state: int, n_jobs: int | None):
+    from .kernels import RVRRegressor
+    from .search import MetaheuristicSearchCV
+    return MetaheuristicSearchCV(RVRRegressor(), _space_rvr(), method="hho", budget=budget,
+                                 random_state=random_state, n_jobs=n_jobs)
+
+
+def _plain(factory: Callable[[int], Any]):
+    def build(*, budget: int, random_state: int, n_jobs: int | None):
+        return factory(random_state)
+    return build
+
+
+def _ls(rs):
+    from .regression import CubicLeastSquares
+    return CubicLeastSquares()
+
+
+def _stepwise(rs):
+    from .regression import StepwiseRegression
+    return StepwiseRegression()
+
+
+def _bp(rs):
+    from .neural import BPNetwork
+    return BPNetwork(random_state=rs)
+
+
+def _rbf(rs):
+    from .neural import RBFNetwork
+    return RBFNetwork(random_state=rs)
+
+
+def _lssvm(rs):
+    from .kernels import LSSVMRegressor
+    return LSSVMRegressor(gamma=100.0, sigma=2.0)
+
+
+def _irlssvm(rs):
+    from .kernels import IRLSSVMRegressor
+    return IRLSSVMRegressor(gamma=100.0, sigma=2.0, weight="myriad")
+
+
+_ALL = (
+    MethodSpec("LS", "ls", False, _plain(_ls), "seed 000: cubic least squares"),
+    MethodSpec("stepwise", "stepwise", False, _plain(_stepwise), "seed 000: stepwise regression"),
+    MethodSpec("BP", "bp", False, _plain(_bp), "seed 004: BP network"),
+    MethodSpec("RBF", "rbf", False, _plain(_rbf), "seed 001: RBF network"),
+    MethodSpec("LSSVM", "lssvm", False, _plain(_lssvm), "seed 000: LSSVM"),
+    MethodSpec("IR-LSSVM", "ir-lssvm", False, _plain(_irlssvm),
+               "seed 000: IR-LSSVM, myriad weights"),
+    MethodSpec("SVR (grid)", "svr-grid", True, _tuned_svr("grid"), "seed 004: SVR, grid search"),
+    MethodSpec("PSO-SVR", "pso-svr", True, _tuned_svr("pso"), "seed 004: PSO-tuned SVR"),
+    MethodSpec("GWO-SVR", "gwo-svr", True, _tuned_svr("gwo"), "seed 004: GWO-tuned SVR"),
+    MethodSpec("SSA-SVR", "ssa-svr", True, _tuned_svr("ssa"), "seed 004: SSA-tuned SVR"),
+    MethodSpec("HHO-RVR", "hho-rvr", True, _hho_rvr, "seed 003: HHO-tuned RVR"),
+    MethodSpec("TPE-SVR", "tpe-svr", True, _tuned_svr("tpe"),
+               "Optuna TPE-tuned SVR (optional 'tune' extra)"),
+)
+
+#: Every method by key.
+METHODS: dict[str, MethodSpec] = {m.key: m for m in _ALL}
+
+#: The compensated rows of ``nfs table``, in order.
+TABLE_METHODS: tuple[str, ...] = ("ls", "stepwise", "bp", "rbf", "lssvm", "ir-lssvm",
+                                  "svr-grid", "pso-svr", "gwo-svr", "ssa-svr", "hho-rvr")
+
+
+def get_method(name: str) -> MethodSpec:
+    """A method by key (``ssa-svr``) or row label (``SSA-SVR``); error listing the valid ones."""
+    for m in _ALL:
+        if name in (m.key, m.name) or name.lower() == m.key:
+            return m
+    raise NfsError(f"unknown compensation method '{name}'; methods: "
+                   + ", ".join(m.key for m in _ALL))

@@ -1,0 +1,206 @@
+"""The compensation study behind ``nfs table``: train every method, apply, score.
+
+Protocol (seed 004, done on equal terms):
+
+1. Training start-ups: the scenario's instrument at its start temperatures (by default all
+   seven), simulated with a different seed from the test start-ups, so no test noise is seen
+   in training.  The drift target is wavelet-separated; inputs are named thermometer features.
+2. Each method is fitted on the stacked, decimated training data.  Tuned methods search their
+   hyperparameters with the same budget of evaluations of the same leave-one-run-out (one
+   start temperature out) validation error.
+3. Test start-ups (the scenario's own runs, the ``before`` row): predict the drift from each
+   run's thermometers, subtract it from the gyro output, north-find, score the start-up RMSE by
+   start temperature.  The drift table scores the predicted drift against the separated drift
+   of the test runs over the start-up stage (seed 004, Table 2).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+from dataclasses import dataclass, field
+from typing import Any, Callable, Sequence
+
+import numpy as np
+
+from ..denoise import separate_drift
+from ..errors import NfsError
+from .compensator import DriftCompensator, train_compensator
+from .dataset import DriftDataset, drift_dataset
+from .methods import TABLE_METHODS, get_method
+
+__all__ = ["CompensationSettings", "MethodResult", "CompensationStudy", "run_study",
+           "DriftRow"]
+
+
+@dataclass(frozen=True)
+class CompensationSettings:
+    """How the compensators are trained and compared (``[compensation]`` of a scenario)."""
+
+    methods: tuple[str, ...] = TABLE_METHODS
+    """Method keys, in table order."""
+    features: tuple[str, ...] = ("seed004",)
+    """Input features (names, sets or patterns) of every method."""
+    budget: int = 40
+    """Evaluations of the validation error per tuned method (the same for all)."""
+    decimate_s: float = 30.0
+    """Training samples are kept every ``decimate_s`` [s]."""
+    cutoff_period_s: float = 512.0
+    """Wavelet cutoff of the drift separation [s] (level 8 at 1 Hz)."""
+    train_seed: int = 1
+    """Seed of the training start-ups (the test start-ups use the scenario's seed)."""
+    train_repeats: int = 1
+    """Training start-ups per temperature."""
+    train_temperatures_c: tuple[float, ...] | None = None
+    """Start temperatures of the training start-ups (None: the scenario's)."""
+    random_state: int = 0
+    """Seed of every stochastic model and tuner."""
+    n_jobs: int | None = -1
+    """Parallel evaluations of a tuner's population (joblib; -1: every core)."""
+
+
+@dataclass(frozen=True)
+class DriftRow:
+    """Drift residual over the start-up stage of the test runs (seed 004, Table 2)."""
+
+    method: str
+    mae_dph: float
+    """Mean absolute residual [deg/h] (NaN for the uncompensated row)."""
+    std_dph: float
+    """Standard deviation of the residual [deg/h]."""
+
+
+@dataclass(frozen=True)
+class MethodResult:
+    """One method's compensator and its scores on the test runs."""
+
+    compensator: DriftCompensator
+    northfind: tuple[Any, ...]
+    """NorthFindResult of each compensated test run."""
+    drift: DriftRow
+    """Drift residual statistics."""
+
+
+@dataclass(frozen=True)
+class CompensationStudy:
+    """Everything the study computed."""
+
+    settings: CompensationSettings
+    test: Any
+    """The :class:`~nfs.experiment.ScenarioResult` of the test start-ups."""
+    train_runs: tuple[Any, ...]
+    """The training runs (measurements)."""
+    dataset: DriftDataset
+    """The training data."""
+    results: dict[str, MethodResult] = field(default_factory=dict)
+    """Method name -> result, in table order."""
+    uncompensated_drift: DriftRow | None = None
+    """STD of the separated start-up drift of the test runs."""
+
+    def heading_table(self):
+        """The heading-RMSE table: before, every method, stable, floor."""
+        from ..experiment import stage_errors, uncompensated_table
+        from ..report import TableRow, pooled_rmse
+        base = uncompensated_table(self.test)
+        sc = self.test.scenario
+        rows = []
+        for name, res in self.results.items():
+            vals = []
+            for i in range(len(sc.start_temperatures_c)):
+                errs = [stage_errors(res.northfind[k], sc.northfind)[0]
+                        for k in self.test.runs_at(i)]
+                vals.append(pooled_rmse(errs))
+            rows.append(TableRow(name, tuple(vals)))
+        s = self.settings
+        temps = (s.train_temperatures_c or sc.start_temperatures_c)
+        notes = (
+            f"Compensated rows: trained on {len(self.train_runs)} other start-ups (seed "
+            f"{s.train_seed}, T0 = {', '.join(f'{t:g}' for t in temps)} C), features "
+            f"{', '.join(self.dataset.feature_names)}, drift by wavelet separation "
+            f"(cutoff {s.cutoff_period_s:g} s), training samples every {s.decimate_s:g} s.",
+            f"Tuned rows (SVR (grid), PSO-SVR, GWO-SVR, SSA-SVR, HHO-RVR): {s.budget} "
+            "evaluations each of the leave-one-start-temperature-out validation RMSE.",
+        )
+        return base.with_rows(rows, notes)
+
+    def drift_rows(self) -> list[DriftRow]:
+        """Drift table rows: the uncompensated separated drift, then each method."""
+        out = [self.uncompensated_drift] if self.uncompensated_drift else []
+        return out + [r.drift for r in self.results.values()]
+
+    def tuned_parameters(self) -> dict[str, dict[str, float]]:
+        """Best hyperparameters found by each tuned method (seed 004, Table 1)."""
+        out = {}
+        for name, res in self.results.items():
+            est = res.compensator.estimator
+            if hasattr(est, "best_params_"):
+                out[name] = {k: float(v) for k, v in est.best_params_.items()}
+        return out
+
+
+def _test_drift(runs, cutoff_period_s: float, startup_end_s: float):
+    """Separated drift of each test run on its start-up, non-moving samples."""
+    out = []
+    for run in runs:
+        sep = separate_drift(run, cutoff_period_s=cutoff_period_s)
+        t = np.asarray(run.columns["time_s"])
+        mask = (t < startup_end_s) & ~np.asarray(sep.moving, dtype=bool)
+        out.append((np.asarray(sep.drift_dph), mask))
+    return out
+
+
+def run_study(scenario, settings: CompensationSettings | None = None, *,
+              test=None, progress: Callable[[int, int, str], None] | None = None
+              ) -> CompensationStudy:
+    """Train every method of ``settings`` on training start-ups, apply to the test start-ups.
+
+    ``test`` is the scenario's :class:`~nfs.experiment.ScenarioResult` if already computed.
+    """
+    from ..experiment import northfind_runs, run_scenario, simulate_run
+    s = settings or CompensationSettings()
+    specs = [get_method(m) for m in s.methods]
+    n_steps = 2 + len(specs)
+    step = 0
+
+    def tick(msg):
+        nonlocal step
+        if progress is not None:
+            progress(step, n_steps, msg)
+        step += 1
+
+    if test is None:
+        tick("simulating the test start-ups")
+        test = run_scenario(scenario)
+    else:
+        step += 1
+    tick("simulating the training start-ups")
+    train_sc = dataclasses.replace(
+        scenario, seed=s.train_seed, repeats=s.train_repeats, name=f"{scenario.name}_train",
+        start_temperatures_c=tuple(s.train_temperatures_c or scenario.start_temperatures_c))
+    if train_sc.seed == scenario.seed and train_sc.start_temperatures_c == \
+            scenario.start_temperatures_c:
+        raise NfsError("the training start-ups must differ from the test start-ups: "
+                       "set compensation.train_seed different from the scenario's seed")
+    train_runs = tuple(simulate_run(train_sc.instrument, c).run for c in train_sc.conditions())
+    data = drift_dataset(train_runs, list(s.features), decimate_s=s.decimate_s,
+                         cutoff_period_s=s.cutoff_period_s)
+    test_runs = [sim.run for sim in test.simulations]
+    drifts = _test_drift(test_runs, s.cutoff_period_s, scenario.northfind.startup_end_s)
+    all_d = np.concatenate([d[m] for d, m in drifts])
+    study = CompensationStudy(settings=s, test=test, train_runs=train_runs, dataset=data,
+                              uncompensated_drift=DriftRow("denoised (no compensation)",
+                                                           float("nan"), float(np.std(all_d))))
+    for spec in specs:
+        tick(f"training {spec.name}")
+        comp = train_compensator(spec.key, data, budget=s.budget,
+                                 random_state=s.random_state, n_jobs=s.n_jobs)
+        preds = [comp.predict_drift(r) for r in test_runs]
+        compensated = [comp.compensate(r) for r in test_runs]
+        nf = northfind_runs(compensated, scenario.northfind)
+        res = np.concatenate([(d - p)[m] for (d, m), p in zip(drifts, preds)])
+        res = res[np.isfinite(res)]
+        study.results[spec.name] = MethodResult(
+            compensator=comp, northfind=tuple(nf),
+            drift=DriftRow(spec.name, float(np.mean(np.abs(res))), float(np.std(res))))
+    tick("done")
+    return study
