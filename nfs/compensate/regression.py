@@ -10,7 +10,13 @@ Standardisation
     Every feature is standardised before the monomials are formed,
     ``z_j = (x_j - mean_j) / scale_j`` (``mean_``, ``scale_``; a constant feature keeps
     ``scale_j = 1``), so that e.g. T^3 at T ~ 50 degC and (dT/dt)^2 at 1e-3 degC/s give
-    columns of order one and the normal equations stay well conditioned.  ``coef_`` holds
+    columns of order one and the least-squares problem stays well conditioned.
+    :class:`CubicLeastSquares` centres and scales (mean and standard deviation): a full
+    polynomial, or one of pure powers, spans the same functions whatever the origin.
+    :class:`StepwiseRegression` only scales (``mean_ = 0``, ``scale_`` the root mean
+    square): its candidates are single monomials, and shifting the origin would turn the
+    raw monomial T dT/dt into a mix of z_T z_dT, z_T and z_dT, so that the selection would
+    no longer be among the raw monomials of seed 000.  ``coef_`` holds
     the coefficients of the monomials *of z*; :meth:`raw_polynomial` and :meth:`equation`
     expand them back to monomials of the features in their own units, the form in which
     seed 000 prints its models.
@@ -56,27 +62,33 @@ __all__ = [
 # Helpers shared by the polynomial models (and by nfs.compensate.neural)
 # --------------------------------------------------------------------------------------
 
-def _validate(estimator: BaseEstimator, X, y=None, *, reset: bool):
+def _validate(estimator: BaseEstimator, X, y="no_validation", *, reset: bool):
     """``sklearn.utils.validation.validate_data`` (or the estimator method before 1.6):
-    dense float arrays, finite values, ``n_features_in_`` / ``feature_names_in_``."""
+    dense float arrays, finite values, ``n_features_in_`` / ``feature_names_in_``.
+    Without ``y`` only X is validated; ``y=None`` passed by a caller of ``fit`` is an
+    error (a regressor requires y)."""
     kwargs = dict(reset=reset, dtype=np.float64)
-    if y is not None:
+    if not (isinstance(y, str) and y == "no_validation"):
         kwargs["y_numeric"] = True
     if _sk_validate_data is not None:
-        if y is None:
-            return _sk_validate_data(estimator, X, **kwargs)
         return _sk_validate_data(estimator, X, y, **kwargs)
-    if y is None:  # pragma: no cover
-        return estimator._validate_data(X, **kwargs)
     return estimator._validate_data(X, y, **kwargs)  # pragma: no cover
 
 
-def _fit_scaling(X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Column means and standard deviations of X for ``z = (x - mean) / scale``; a
-    (numerically) constant column keeps scale 1 so that it maps to z = 0, not to nan."""
-    mean = X.mean(axis=0)
-    scale = X.std(axis=0)
-    tiny = 10.0 * np.finfo(float).eps * np.maximum(np.abs(mean), 1.0)
+def _fit_scaling(X: np.ndarray, center: bool = True) -> tuple[np.ndarray, np.ndarray]:
+    """Offsets and scales of X for ``z = (x - mean) / scale``.
+
+    ``center=True``: column means and standard deviations.  ``center=False``: zero offsets
+    and the root mean squares about zero, so that z is x rescaled, nothing more.  A
+    (numerically) constant or all-zero column keeps scale 1, so that it maps to a finite z.
+    """
+    if center:
+        mean = X.mean(axis=0)
+        scale = X.std(axis=0)
+    else:
+        mean = np.zeros(X.shape[1])
+        scale = np.sqrt(np.mean(X ** 2, axis=0))
+    tiny = 10.0 * np.finfo(float).eps * np.maximum(np.abs(X.mean(axis=0)), 1.0)
     scale = np.where(scale > tiny, scale, 1.0)
     return mean, scale
 
@@ -363,8 +375,11 @@ class StepwiseRegression(_PolynomialModel):
     """Forward-backward stepwise polynomial regression by partial F tests, seed 000's
     "second-order multivariate stepwise regression" (section 4.2).
 
-    The candidate library holds monomials of the standardised features (T, dT/dt, their
-    cross terms, ... up to ``degree``; see the module docstring).  Starting from the
+    The candidate library holds monomials of the scaled features z_j = x_j / scale_j
+    (T, dT/dt, their cross terms, ... up to ``degree``; scaling without centring, so that
+    each candidate is a raw monomial times a constant and the selection is the same in any
+    units -- though not for another origin, e.g. kelvin instead of degC, as for every
+    polynomial stepwise selection; see the module docstring).  Starting from the
     intercept alone, Efroymson's procedure repeats:
 
     1. *Entry*: for every candidate not in the model, the partial F statistic of adding it,
@@ -400,8 +415,10 @@ class StepwiseRegression(_PolynomialModel):
 
     Attributes
     ----------
-    mean_, scale_ : ndarray, shape (n_features_in_,)
-        Standardisation of each feature [unit of the feature].
+    mean_ : ndarray, shape (n_features_in_,)
+        Zeros (the features are not centred).
+    scale_ : ndarray, shape (n_features_in_,)
+        Root mean square of each feature [unit of the feature].
     candidate_powers_ : ndarray of int, shape (n_candidates, n_features_in_)
         The candidate library.
     candidate_names_ : ndarray of str, shape (n_candidates,)
@@ -416,7 +433,7 @@ class StepwiseRegression(_PolynomialModel):
     feature_names_out_ : ndarray of str
         Same as ``selected_names_``.
     coef_ : ndarray, shape (n_terms,)
-        Coefficient of each selected standardised monomial [unit of y].
+        Coefficient of each selected monomial of the scaled features [unit of y].
     intercept_ : float
         Constant term [unit of y].
     pvalues_ : ndarray, shape (n_terms,)
@@ -473,7 +490,7 @@ class StepwiseRegression(_PolynomialModel):
         _check_int(self.max_terms, "max_terms", 1, allow_none=True)
         X, y = _validate(self, X, y, reset=True)
         n = X.shape[0]
-        self.mean_, self.scale_ = _fit_scaling(X)
+        self.mean_, self.scale_ = _fit_scaling(X, center=False)
         self.candidate_powers_ = self._candidate_library(X.shape[1])
         names = _feature_names(self, X.shape[1])
         self.candidate_names_ = np.array(
