@@ -273,7 +273,8 @@ def hampel_weight(r: np.ndarray, c1: float = 2.5, c2: float = 3.0) -> np.ndarray
                1e-4                    otherwise
 
     The floor 1e-4 (:data:`HAMPEL_FLOOR`) is that of Suykens et al. 2002; seed 000 writes 0,
-    which would make the weighted KKT system infinite.  r [-], c1 < c2 [-].
+    which would make the weighted KKT system infinite.  The ramp is floored at it too, so v
+    is continuous at |r| = c2.  r [-], c1 < c2 [-].
     """
     a = np.abs(np.asarray(r, dtype=float))
     ramp = (c2 - a) / (c2 - c1)
@@ -348,13 +349,14 @@ class _KernelRegressor(RegressorMixin, BaseEstimator):
         else:
             self.x_mean_ = np.zeros(X.shape[1])
             self.x_scale_ = np.ones(X.shape[1])
-        if scale_y and self.standardize:
+        if not scale_y:
+            return self._scale_X(X), y
+        if self.standardize:
             m, s = _center_scale(y[:, None])
             self.y_mean_, self.y_scale_ = float(m[0]), float(s[0])
         else:
             self.y_mean_, self.y_scale_ = 0.0, 1.0
-        ys = (y - self.y_mean_) / self.y_scale_
-        return self._scale_X(X), ys
+        return self._scale_X(X), (y - self.y_mean_) / self.y_scale_
 
     def _scale_X(self, X: np.ndarray) -> np.ndarray:
         return (np.asarray(X, dtype=float) - self.x_mean_) / self.x_scale_
