@@ -43,7 +43,13 @@ from sklearn.base import BaseEstimator, RegressorMixin
 from sklearn.exceptions import ConvergenceWarning
 from sklearn.svm import SVR
 from sklearn.utils import gen_batches
-from sklearn.utils.validation import check_is_fitted, validate_data
+from sklearn.utils.validation import check_is_fitted
+
+try:                                     # scikit-learn >= 1.6
+    from sklearn.utils.validation import validate_data
+except ImportError:                      # pragma: no cover - scikit-learn 1.3 to 1.5
+    def validate_data(estimator, X, y="no_validation", **kwargs):
+        return estimator._validate_data(X, y, **kwargs)
 
 from ..errors import NfsError
 
@@ -749,8 +755,8 @@ class RVRRegressor(_KernelRegressor):
             beta = max(n - float(g.sum()), eps * n) / max(rss, tiny)
             beta = min(beta, 1.0 / (eps * max(float(np.var(t)), eps)))  # noise >= 1e-8 std
             finite = np.isfinite(alpha_new)
-            change = float(np.max(np.abs(np.log(alpha_new[finite]) - np.log(alpha[keep][finite])),
-                                  initial=0.0))
+            dlog = np.log(alpha_new[finite]) - np.log(alpha[keep][finite])
+            change = float(np.max(np.abs(dlog), initial=0.0))
             alpha[keep] = alpha_new
             keep = keep[alpha_new < threshold]
             if keep.size == 0 or (change < tol and np.all(finite)):
