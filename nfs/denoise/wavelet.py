@@ -29,7 +29,8 @@ Because the details below the cutoff are thresholded, not discarded, white noise
 but a step or transient large against the noise (a turn-on transient, a heat pulse) is kept,
 shrunk by T_j / sqrt(2^j) per surviving coefficient (the bias of soft thresholding).
 
-Record ends: see :data:`BOUNDARIES` and the comment above :func:`_smooth_extend`.
+Record ends: see :data:`BOUNDARIES` and the comment "record ends" in this module's source
+(a measured comparison of the extension modes and why "smooth-extend" is the default).
 """
 
 from __future__ import annotations
@@ -72,9 +73,9 @@ ThresholdRule = Callable[[np.ndarray, float, int], float]
 #: Thresholding functions (``pywt.threshold`` modes) that :func:`wavelet_denoise` accepts.
 THRESHOLD_MODES: tuple[str, ...] = ("soft", "hard", "garrote")
 
-#: Record-end treatments. ``"smooth-extend"`` (the default) pads the record itself (see
-#: :func:`_smooth_extend`); every other name is a PyWavelets signal-extension mode passed to
-#: ``wavedec``/``waverec`` unchanged.
+#: Record-end treatments. ``"smooth-extend"`` (the default) pads the record itself with an odd
+#: extension about a fitted end value (see the comment "record ends"); every other name is a
+#: PyWavelets signal-extension mode passed to ``wavedec``/``waverec`` unchanged.
 BOUNDARIES: tuple[str, ...] = ("smooth-extend",) + tuple(pywt.Modes.modes)
 
 
@@ -86,8 +87,9 @@ def level_for_cutoff(cutoff_period_s: float, sample_rate_hz: float) -> int:
     """DWT level J whose approximation keeps the periods longer than ``cutoff_period_s``.
 
     Each DWT level halves the band: the level-J approximation holds frequencies below
-    fs / 2^(J+1), i.e. periods longer than 2^(J+1) samples (Mallat 2009, *A Wavelet Tour of
-    Signal Processing*, 3rd ed., section 7.1: the dyadic band of level J). Hence
+    fs / 2^(J+1), i.e. periods longer than 2^(J+1) samples (the dyadic bands of a
+    multiresolution analysis: Mallat 2009, *A Wavelet Tour of Signal Processing*, 3rd ed.,
+    chapter 7; section not checked). Hence
 
         J = round(log2(P fs)) - 1,   P: cutoff period [s], fs: sample rate [Hz],
 
@@ -132,8 +134,9 @@ def edge_span_samples(level: int, filter_length: int) -> int:
         (L - 1)(2^J - 1)
 
     is the support, in samples of the record, of a level-J wavelet or scaling function of a
-    filter of length L (Daubechies 1992, *Ten Lectures on Wavelets*, section 6.1: the support
-    of phi is [0, L - 1] at scale 1). A sample farther than this from an end is rebuilt only
+    filter of length L (the scaling function of a length-L filter is supported on [0, L - 1]
+    at scale 1: Daubechies 1992, *Ten Lectures on Wavelets*, chapter 6; section not checked).
+    A sample farther than this from an end is rebuilt only
     from coefficients that never see the extension. At db4 (L = 8), J = 8: 1785 samples.
     """
     return (int(filter_length) - 1) * (2 ** int(level) - 1)
@@ -148,10 +151,10 @@ def mad_sigma(detail: np.ndarray) -> float:
 
         sigma = median(|d|) / 0.6745
 
-    (Donoho & Johnstone 1994, Biometrika 81(3) 425-455, section 4.2; Donoho 1995, IEEE Trans.
-    Inf. Theory 41(3) 613-627), applied to the finest-level details d_1, where a smooth
-    signal leaves almost nothing and the median ignores the few large coefficients it does
-    leave. 0.6745 is Phi^-1(3/4) (:data:`MAD_TO_SIGMA`).
+    (Donoho & Johnstone 1994, Biometrika 81(3) 425-455; Donoho 1995, IEEE Trans. Inf. Theory
+    41(3) 613-627; section numbers not checked against the papers), applied to the
+    finest-level details d_1, where a smooth signal leaves almost nothing and the median
+    ignores the few large coefficients it does leave. 0.6745 is Phi^-1(3/4) (:data:`MAD_TO_SIGMA`).
 
     Parameters
     ----------
@@ -180,8 +183,9 @@ def visu_threshold(sigma: float, n: int) -> float:
 
         T = sigma sqrt(2 ln n)
 
-    (Donoho & Johnstone 1994, Biometrika 81(3) 425-455, eq. for lambda_n^u in section 4:
-    with probability tending to 1 every pure-noise coefficient of n lies below T.)
+    (Donoho & Johnstone 1994, Biometrika 81(3) 425-455, the universal threshold; equation
+    number not checked against the paper: with probability tending to 1 every pure-noise
+    coefficient of n lies below T.)
 
     Parameters
     ----------
@@ -201,7 +205,8 @@ def sure_risk(t: float | np.ndarray, x: np.ndarray) -> np.ndarray:
 
         SURE(t; x) = m - 2 #{i : |x_i| <= t} + sum_i min(|x_i|, t)^2
 
-    (Donoho & Johnstone 1995, JASA 90(432) 1200-1224, section 2.3, from Stein 1981), m = len(x):
+    (Donoho & Johnstone 1995, JASA 90(432) 1200-1224, from Stein 1981, Ann. Stat. 9(6)
+    1135-1151; section number not checked), m = len(x):
     an unbiased estimate of E ||eta_t(x) - mu||^2 for x ~ N(mu, I). Vectorised over t.
     """
     x = np.abs(np.asarray(x, dtype=float))
@@ -271,7 +276,8 @@ def bayes_shrink_threshold(coeffs: np.ndarray, sigma: float) -> float:
         T = sigma^2 / sigma_x,   sigma_x = sqrt(max(sigma_y^2 - sigma^2, 0)),
         sigma_y^2 = mean(d^2)
 
-    (IEEE Trans. Image Process. 9(9) 1532-1546, section III: the threshold that nearly
+    (IEEE Trans. Image Process. 9(9) 1532-1546; section not checked against the paper, the
+    formula matches scikit-image's ``_bayes_thresh``: the threshold that nearly
     minimises the Bayes risk of soft thresholding for a generalised-Gaussian prior, with the
     signal variance sigma_x^2 estimated from the observed variance sigma_y^2.) When
     sigma_y <= sigma the level looks like pure noise and T = max |d| (all coefficients set to
@@ -566,7 +572,9 @@ def wavelet_denoise(x: np.ndarray, *, sample_rate_hz: float = 1.0,
     wavelet : str
         A discrete PyWavelets wavelet (db4, sym8, coif3, ...).
     rule : str or callable
-        A name of :data:`THRESHOLD_RULES` or a function ``rule(detail, sigma, n_samples)``.
+        A name of :data:`THRESHOLD_RULES` or a function ``rule(detail, sigma, n_samples)``
+        (called once per level in each of the two passes: the result and the second guess
+        behind ``edge_error_estimate``).
     mode : str
         Thresholding function, one of :data:`THRESHOLD_MODES` (soft: Donoho 1995).
     keep_approximation : bool
