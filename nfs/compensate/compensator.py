@@ -139,6 +139,8 @@ def train_compensator(method: str, runs: Sequence[Run] | DriftDataset, *,
     if spec.tuned and len(set(data.groups.tolist())) < 2:
         raise NfsError(f"{spec.name} tunes by leave-one-run-out validation: it needs at least "
                        "2 training runs")
+    if spec.max_samples is not None and data.X.shape[0] > spec.max_samples:
+        data = data.thinned(spec.max_samples)
     est = spec.build(budget=budget, random_state=random_state, n_jobs=n_jobs)
     t0 = time.perf_counter()
     if spec.tuned:

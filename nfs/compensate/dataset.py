@@ -12,6 +12,7 @@ of one run in both the training and the validation folds would leak.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 from typing import Sequence
 
@@ -42,6 +43,14 @@ class DriftDataset:
     """Name of each run (index = group number)."""
     start_temperatures_c: tuple[float, ...]
     """T0 of each run."""
+
+
+    def thinned(self, max_samples: int) -> "DriftDataset":
+        """Every k-th sample, k = ceil(n / max_samples): at most ``max_samples`` samples."""
+        k = -(-self.X.shape[0] // max_samples)
+        sl = slice(None, None, k)
+        return dataclasses.replace(self, X=self.X[sl], y=self.y[sl], groups=self.groups[sl],
+                                   time_s=self.time_s[sl])
 
 
 def drift_dataset(runs: Sequence, features, *, decimate_s: float = 30.0,

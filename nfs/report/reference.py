@@ -1,0 +1,37 @@
+"""Published figures of seed 004, for the report that sets our tables beside the paper.
+
+Copied from the paper (facts only); the same numbers are in
+../shared/reference/seed004_table*.csv, and tests/report checks the copy against them when
+../shared is present.  Kept in the package because nothing may read ../shared at run time.
+
+Source: "A FOG start-up drift compensation method at full temperatures", seed 004 of this
+project (Opto-Electronic Engineering), Tables 1-3.
+"""
+
+from __future__ import annotations
+
+__all__ = ["SEED004_TEMPERATURES_C", "SEED004_TABLE3_HEADING_RMSE_DEG",
+           "SEED004_TABLE2_DRIFT_DPH", "SEED004_TABLE1_SVR"]
+
+#: Start temperatures of Table 3 [degC].
+SEED004_TEMPERATURES_C = (-32.0, -16.0, -5.0, 17.0, 28.0, 43.0, 54.0)
+
+#: Table 3: start-up north-finding heading RMSE [deg] by method; last entry is the mean.
+SEED004_TABLE3_HEADING_RMSE_DEG = {
+    "before": (0.0284, 0.0181, 0.0216, 0.0205, 0.0303, 0.0171, 0.0106, 0.0209),
+    "BP": (0.0284, 0.0113, 0.0143, 0.0137, 0.0209, 0.0106, 0.0100, 0.0156),
+    "PSO-SVR": (0.0146, 0.0088, 0.0120, 0.0144, 0.0186, 0.0054, 0.0060, 0.0114),
+    "GWO-SVR": (0.0110, 0.0051, 0.0132, 0.0093, 0.0194, 0.0077, 0.0096, 0.0108),
+    "SSA-SVR": (0.0113, 0.0087, 0.0117, 0.0131, 0.0170, 0.0046, 0.0045, 0.0101),
+}
+
+#: Table 2: (MAE, STD) of the drift residual [deg/h]; MAE is None for the denoised data.
+SEED004_TABLE2_DRIFT_DPH = {
+    "denoised (no compensation)": (None, 0.0134),
+    "BP": (0.0056, 0.0073),
+    "SVR": (0.0030, 0.0035),
+    "SSA-SVR": (0.0025, 0.0031),
+}
+
+#: Table 1: SSA-tuned SVR kernel parameters.
+SEED004_TABLE1_SVR = {"C": 1.0520, "sigma": 0.9506}
