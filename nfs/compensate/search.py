@@ -23,12 +23,14 @@ from __future__ import annotations
 import math
 import numbers
 import time
+import warnings
 from dataclasses import dataclass
 from typing import Mapping
 
 import numpy as np
 from joblib import Parallel, delayed
 from sklearn.base import BaseEstimator, MetaEstimatorMixin, clone, is_classifier
+from sklearn.exceptions import ConvergenceWarning
 from sklearn.metrics import check_scoring
 from sklearn.model_selection import LeaveOneGroupOut, check_cv
 from sklearn.utils import _safe_indexing, check_random_state
@@ -126,7 +128,12 @@ def _fit_and_score(estimator, X, y, train, test, scorer) -> tuple[float, float]:
     t0 = time.perf_counter()
     y_train = None if y is None else _safe_indexing(y, train)
     y_test = None if y is None else _safe_indexing(y, test)
-    estimator.fit(_safe_indexing(X, train), y_train)
+    with warnings.catch_warnings():
+        # A candidate that does not converge is scored as it is: the tuner is asking what
+        # these hyperparameters give, and a warning per fold per candidate (in every joblib
+        # worker) would bury the progress output.
+        warnings.simplefilter("ignore", ConvergenceWarning)
+        estimator.fit(_safe_indexing(X, train), y_train)
     fit_time = time.perf_counter() - t0
     score = scorer(estimator, _safe_indexing(X, test), y_test)
     return float(score), fit_time
