@@ -168,7 +168,7 @@ _ALL = (
     MethodSpec("SSA-SVR", "ssa-svr", True, _tuned_svr("ssa"), "seed 004: SSA-tuned SVR",
                max_samples=1000),
     MethodSpec("HHO-RVR", "hho-rvr", True, _hho_rvr, "seed 003: HHO-tuned RVR",
-               max_samples=500),
+               max_samples=400),
     MethodSpec("TPE-SVR", "tpe-svr", True, _tuned_svr("tpe"),
                "Optuna TPE-tuned SVR (optional 'tune' extra)", max_samples=1000),
 )
