@@ -3,6 +3,8 @@
     nfs table [SCENARIO] [-o DIR] [--json FILE]      heading-RMSE table by start temperature
     nfs simulate SCENARIO -o DIR                     measurement files, one run per T0
     nfs northfind DATA... [--json FILE]              north-find measured or simulated runs
+    nfs train DATA... --method M -o MODEL            train a drift compensator
+    nfs compensate DATA... --model MODEL -o DIR      apply it
     nfs preset [NAME]                                print a built-in instrument preset
     nfs effects                                      list the registered physical effects
 """
@@ -27,7 +29,7 @@ class Progress:
     """A progress line on stderr (rewritten in place on a terminal)."""
 
     def __init__(self, what: str, quiet: bool = False) -> None:
-        self.what = what
+        self.what = what  # prefix of each line; may be empty
         self.quiet = quiet
         self.tty = sys.stderr.isatty()
         self.t0 = time.perf_counter()
@@ -35,7 +37,8 @@ class Progress:
     def __call__(self, i: int, n: int, name: str) -> None:
         if self.quiet:
             return
-        msg = f"{self.what} {min(i + 1, n)}/{n}: {name} ({time.perf_counter() - self.t0:.1f} s)"
+        msg = (f"{self.what} " if self.what else "") + \
+            f"{min(i + 1, n)}/{n}: {name} ({time.perf_counter() - self.t0:.1f} s)"
         if self.tty:
             sys.stderr.write("\r\033[K" + msg)
             if i >= n:
@@ -50,13 +53,69 @@ def _cmd_table(args) -> int:
     from .io.scenario import load_scenario
     from .report import write_table
     scenario = _with_overrides(load_scenario(args.scenario), args)
-    res = run_scenario(scenario, progress=Progress("simulating", args.quiet))
-    table = uncompensated_table(res)
-    paths = write_table(table, args.output, json_path=args.json,
-                        title=f"{scenario.name}: heading RMSE by start temperature")
+    title = f"{scenario.name}: heading RMSE by start temperature"
+    progress = Progress("", args.quiet)
+    if args.no_compensation:
+        progress.what = "simulating"
+        res = run_scenario(scenario, progress=progress)
+        table = uncompensated_table(res)
+        paths = write_table(table, args.output, json_path=args.json, title=title)
+    else:
+        import dataclasses
+        from .compensate.study import CompensationSettings, run_study
+        from .report.compensation import write_study
+        settings = scenario.compensation or CompensationSettings()
+        if args.budget is not None:
+            if args.budget < 1:
+                raise NfsError(f"--budget must be >= 1, got {args.budget}")
+            settings = dataclasses.replace(settings, budget=args.budget)
+        if args.repeats is not None:
+            settings = dataclasses.replace(settings, test_repeats=args.repeats)
+        if args.n_jobs is not None:
+            settings = dataclasses.replace(settings, n_jobs=args.n_jobs)
+        study = run_study(scenario, settings, progress=progress)
+        table = study.heading_table()
+        paths = write_study(study, args.output, json_path=args.json, title=title)
     print(table.to_markdown(), end="")
     if not args.quiet:
         print("\nwrote " + ", ".join(str(p) for p in paths), file=sys.stderr)
+    return 0
+
+
+def _cmd_train(args) -> int:
+    from .compensate import get_method, resolve_features, train_compensator
+    from .io.measurement import read_runs
+    get_method(args.method)                  # a bad name fails before any work
+    resolve_features(args.features, ["aux_*"])
+    runs = read_runs(args.data)
+    missing = [r.name for r in runs if r.meta.true_heading_deg is None]
+    if missing:
+        raise NfsError(f"run '{missing[0]}' has no true_heading_deg in its TOML: training "
+                       "needs the known heading to separate the drift")
+    if not args.quiet:
+        print(f"training {args.method} on {len(runs)} run(s)...", file=sys.stderr)
+    comp = train_compensator(args.method, runs, features=args.features, budget=args.budget,
+                             random_state=args.seed, n_jobs=args.n_jobs,
+                             decimate_s=args.decimate_s, cutoff_period_s=args.cutoff_s)
+    comp.save(args.output)
+    print(f"{comp.method} trained on {len(runs)} run(s) in {comp.fit_time_s:.1f} s; "
+          f"features: {', '.join(comp.feature_names)}; wrote {args.output}")
+    est = comp.estimator
+    if hasattr(est, "best_params_"):
+        print("tuned: " + ", ".join(f"{k} = {v:.4g}" for k, v in est.best_params_.items()))
+    return 0
+
+
+def _cmd_compensate(args) -> int:
+    from .compensate import load_compensator
+    from .io.measurement import read_runs, write_run
+    comp = load_compensator(args.model)
+    runs = read_runs(args.data)
+    # Every run is compensated before anything is written: a run that lacks an input
+    # channel stops the command with nothing half-written.
+    out = [comp.compensate(r) for r in runs]
+    for r in out:
+        print(write_run(r, args.output))
     return 0
 
 
@@ -167,7 +226,8 @@ def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(
         prog="nfs",
         description="Start-up experiments on fiber-optic-gyroscope north finders: simulate "
-                    "chamber runs, north-find them, tabulate heading RMSE by start temperature.")
+                    "chamber runs, north-find them, compensate the drift, tabulate heading "
+                    "RMSE by start temperature.")
     sub = p.add_subparsers(dest="command", metavar="COMMAND")
     sub.required = True
 
@@ -181,8 +241,45 @@ def build_parser() -> argparse.ArgumentParser:
     t.add_argument("--seed", type=int, default=None, help="override the scenario's seed")
     t.add_argument("--repeats", type=int, default=None,
                    help="override the runs per start temperature (Monte Carlo)")
+    t.add_argument("--budget", type=int, default=None,
+                   help="evaluations per tuned method (default: the scenario's, 30)")
+    t.add_argument("--n-jobs", type=int, default=None,
+                   help="parallel evaluations of the tuners (default: the scenario's; -1 all)")
+    t.add_argument("--no-compensation", action="store_true",
+                   help="only the uncompensated rows (before, stable, floor)")
     t.add_argument("-q", "--quiet", action="store_true", help="no progress on stderr")
     t.set_defaults(func=_cmd_table)
+
+    tr = sub.add_parser("train", help="train a drift compensator on measured runs",
+                        description="Train a compensator (features of the three thermometers "
+                                    "-> wavelet-separated gyro drift) on runs with a known "
+                                    "heading, and save it with its feature list and versions.")
+    tr.add_argument("data", nargs="+", help="NAME.csv files, NAME.toml files or folders")
+    tr.add_argument("--method", default="ssa-svr",
+                    help="ls, stepwise, bp, rbf, lssvm, ir-lssvm, svr-grid, pso-svr, gwo-svr, "
+                         "ssa-svr (default), hho-rvr, tpe-svr")
+    tr.add_argument("-o", "--output", required=True, help="model file to write (.joblib)")
+    tr.add_argument("--features", nargs="+", default=["seed004"],
+                    help="feature names, sets or patterns (default: seed004)")
+    tr.add_argument("--budget", type=int, default=30, help="evaluations of a tuned method")
+    tr.add_argument("--decimate-s", type=float, default=30.0,
+                    help="training samples every this many seconds (default 30)")
+    tr.add_argument("--cutoff-s", type=float, default=512.0,
+                    help="wavelet cutoff period of the drift separation (default 512 s)")
+    tr.add_argument("--seed", type=int, default=0, help="random state of models and tuners")
+    tr.add_argument("--n-jobs", type=int, default=-1, help="parallel tuner evaluations")
+    tr.add_argument("-q", "--quiet", action="store_true")
+    tr.set_defaults(func=_cmd_train)
+
+    co = sub.add_parser("compensate", help="subtract a trained compensator's drift from runs",
+                        description="Predict each run's drift from its own thermometers with a "
+                                    "trained model, subtract it from gyro_dph and write the "
+                                    "compensated runs (gyro_uncompensated_dph and "
+                                    "drift_model_dph are kept as extra columns).")
+    co.add_argument("data", nargs="+", help="NAME.csv files, NAME.toml files or folders")
+    co.add_argument("--model", required=True, help="model file written by nfs train")
+    co.add_argument("-o", "--output", required=True, help="output folder")
+    co.set_defaults(func=_cmd_compensate)
 
     s = sub.add_parser("simulate", help="write measurement files for a scenario",
                        description="Simulate every run of a scenario and write each as "

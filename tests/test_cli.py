@@ -50,7 +50,7 @@ def test_table_simulate_northfind(tmp_path, capsys):
     scen = tmp_path / "small.toml"
     scen.write_text(SMALL)
     code, out, err = run_cli(capsys, "table", str(scen), "-o", str(tmp_path / "tab"),
-                             "--json", str(tmp_path / "h.json"))
+                             "--json", str(tmp_path / "h.json"), "--no-compensation")
     assert code == 0
     assert out.splitlines()[0] == "| method | -20 | 40 | mean |"
     for suffix in (".md", ".csv", ".json", ".png"):
@@ -113,8 +113,8 @@ def test_bad_scenario(tmp_path, capsys, edit, expect):
     scen = tmp_path / "bad.toml"
     scen.write_text(edit(SMALL))
     out_dir = tmp_path / "out"
-    for cmd in (["simulate", str(scen), "-o", str(out_dir)], ["table", str(scen), "-o",
-                                                              str(out_dir)]):
+    for cmd in (["simulate", str(scen), "-o", str(out_dir)],
+                ["table", str(scen), "-o", str(out_dir), "--no-compensation"]):
         code, out, err = run_cli(capsys, *cmd)
         line = one_line_error(code, err)
         assert "bad.toml" in line or "inst" in line

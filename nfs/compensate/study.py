@@ -172,7 +172,7 @@ def run_study(scenario, settings: CompensationSettings | None = None, *,
     ``test`` is the scenario's :class:`~nfs.experiment.ScenarioResult` if already computed.
     """
     from ..experiment import northfind_runs, run_scenario, simulate_run
-    s = settings or CompensationSettings()
+    s = settings or scenario.compensation or CompensationSettings()
     specs = [get_method(m) for m in s.methods]
     n_steps = 2 + len(specs)
     step = 0

@@ -26,7 +26,10 @@ __all__ = ["NorthFindSettings", "ChamberProfile", "Scenario", "load_scenario",
 
 _TOP = ("name", "description", "instrument", "seed", "start_temperatures_c", "repeats",
         "duration_s", "sample_rate_hz", "latitude_deg", "true_heading_deg", "effects_files",
-        "effects", "schedule", "northfind", "chamber")
+        "effects", "schedule", "northfind", "chamber", "compensation")
+_COMPENSATION = ("methods", "features", "budget", "decimate_s", "cutoff_period_s",
+                 "train_seed", "train_repeats", "train_temperatures_c", "test_repeats",
+                 "random_state", "n_jobs")
 _SCHEDULE = ("positions_deg", "order", "dwell_s", "move_s")
 _NORTHFIND = ("startup_end_s", "stable_start_s", "tilt_correction", "settle_s")
 _CHAMBER = ("ripple_c", "ripple_period_s")
@@ -93,6 +96,9 @@ class Scenario:
     """Chamber temperature profile."""
     description: str = ""
     """Free text."""
+    compensation: Any = None
+    """:class:`~nfs.compensate.study.CompensationSettings` of ``[compensation]`` (defaults
+    when the table is absent)."""
     path: Path | None = None
     """The file it was read from."""
 
@@ -130,6 +136,59 @@ def _bool(tbl, key, prefix, file, default):
         raise ScenarioError(f"must be true or false, got {v!r}", file=file,
                             key=f"{prefix}.{key}" if prefix else key)
     return v
+
+
+def _int(tbl, key, prefix, file, default, minimum=None, allow_none=False):
+    name = f"{prefix}.{key}" if prefix else key
+    if key not in tbl:
+        return default
+    v = tbl[key]
+    if isinstance(v, bool) or not isinstance(v, int) or (minimum is not None and v < minimum):
+        raise ScenarioError(f"must be an integer{'' if minimum is None else f' >= {minimum}'}"
+                            f", got {v!r}", file=file, key=name)
+    return v
+
+
+def _compensation(tbl: dict, file) -> Any:
+    from ..compensate.features import FeatureError, resolve_features
+    from ..compensate.methods import get_method
+    from ..compensate.study import CompensationSettings
+    p = "compensation"
+    check_keys(tbl, _COMPENSATION, p, file)
+    d = CompensationSettings()
+    methods = tbl.get("methods", list(d.methods))
+    if not isinstance(methods, list) or not all(isinstance(m, str) for m in methods):
+        raise ScenarioError("must be a list of method names", file=file, key=f"{p}.methods")
+    try:
+        methods = tuple(get_method(m).key for m in methods)
+    except NfsError as exc:
+        raise ScenarioError(str(exc), file=file, key=f"{p}.methods") from None
+    feats = tbl.get("features", list(d.features))
+    if isinstance(feats, str):
+        feats = [feats]
+    if not isinstance(feats, list) or not all(isinstance(f, str) for f in feats):
+        raise ScenarioError("must be a feature name or a list of them", file=file,
+                            key=f"{p}.features")
+    try:
+        resolve_features(feats, ["aux_*"])
+    except FeatureError as exc:
+        raise ScenarioError(str(exc), file=file, key=f"{p}.features") from None
+    temps = number_list(tbl, "train_temperatures_c", p, file, None)
+    n_jobs = tbl.get("n_jobs", d.n_jobs)
+    if n_jobs is not None and (isinstance(n_jobs, bool) or not isinstance(n_jobs, int)):
+        raise ScenarioError(f"must be an integer, got {n_jobs!r}", file=file, key=f"{p}.n_jobs")
+    return CompensationSettings(
+        methods=methods, features=tuple(feats),
+        budget=_int(tbl, "budget", p, file, d.budget, minimum=1),
+        decimate_s=number(tbl, "decimate_s", p, file, d.decimate_s, positive=True),
+        cutoff_period_s=number(tbl, "cutoff_period_s", p, file, d.cutoff_period_s,
+                               positive=True),
+        train_seed=_int(tbl, "train_seed", p, file, d.train_seed, minimum=0),
+        train_repeats=_int(tbl, "train_repeats", p, file, d.train_repeats, minimum=1),
+        train_temperatures_c=temps,
+        test_repeats=_int(tbl, "test_repeats", p, file, d.test_repeats, minimum=1),
+        random_state=_int(tbl, "random_state", p, file, d.random_state, minimum=0),
+        n_jobs=n_jobs)
 
 
 def load_scenario(path: str | Path | None = None) -> Scenario:
@@ -209,4 +268,5 @@ def load_scenario(path: str | Path | None = None) -> Scenario:
         latitude_deg=number(d, "latitude_deg", "", f, 30.0, minimum=-89.0, maximum=89.0),
         true_heading_deg=number(d, "true_heading_deg", "", f, 0.0),
         northfind=settings, chamber=chamber,
+        compensation=_compensation(table(d, "compensation", "", f, {}), f),
         description=string(d, "description", "", f, ""), path=path)
