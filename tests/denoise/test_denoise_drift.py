@@ -37,14 +37,18 @@ def rms(v: np.ndarray) -> float:
 
 @pytest.fixture(scope="module")
 def inst():
-    return load_instrument("default")
+    # The default instrument plus the scale-factor-vs-temperature effect (the default has
+    # none: its TEC holds the source), whose error (K(T) - 1) times the Earth rate jumps with
+    # every turntable position: a square wave of the cycle, not a slow drift, that the
+    # denoiser smooths (see test_position_dependent_scale_factor_is_smoothed).
+    from nfs.effects import make_effect
+    base = load_instrument("default")
+    return base.with_effects(list(base.effects)
+                             + [make_effect("scale_factor_temperature", {"s1": 2e-5})])
 
 
 @pytest.fixture(scope="module")
 def inst_no_sf(inst):
-    # Without the scale-factor-vs-temperature effect, whose error (K(T) - 1) times the Earth
-    # rate jumps with every turntable position: a square wave of the cycle, not a slow drift,
-    # that the denoiser smooths (see test_position_dependent_scale_factor_is_smoothed).
     return inst.with_effects([e for e in inst.effects
                               if e.label != "scale_factor_temperature"])
 
