@@ -27,6 +27,7 @@ from .sensors import (Schedule, axis_elevation_deg, earth_rate_along_axis_dph,
                       thermometer_reading, turntable_motion)
 
 __all__ = ["RunConditions", "SimulationResult", "simulate_run", "effect_context",
+           "conditions_from_run",
            "ScenarioResult", "run_scenario", "northfind_runs", "stage_errors", "floor_deg",
            "uncompensated_table"]
 
@@ -55,12 +56,52 @@ class RunConditions:
     """Entropy of the run's random streams (noise of every sensor)."""
     chamber_c: Callable[[np.ndarray], np.ndarray] | None = None
     """Chamber temperature T_amb(t) [degC]; None holds T0."""
+    motion: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
+    """(time_s, position_deg, moving) of a measured run to replay instead of the schedule:
+    the model is then simulated on the run's own time base and turntable motion."""
 
     @property
     def time_s(self) -> np.ndarray:
-        """Sample times t_k = k / fs from power-on [s]."""
+        """Sample times [s]: the replayed run's, or t_k = k / fs from power-on."""
+        if self.motion is not None:
+            return np.asarray(self.motion[0], dtype=float)
         n = int(round(self.duration_s * self.sample_rate_hz))
         return np.arange(n) / self.sample_rate_hz
+
+    def turntable(self, time_s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """theta(t) [deg] and the moving flag: replayed, or from the schedule."""
+        if self.motion is not None:
+            return (np.asarray(self.motion[1], dtype=float),
+                    np.asarray(self.motion[2], dtype=float) > 0.5)
+        return turntable_motion(self.schedule, time_s)
+
+
+def conditions_from_run(run: Run, *, seed=0, schedule: Schedule | None = None
+                        ) -> RunConditions:
+    """The conditions of a measured run, to simulate a model beside it.
+
+    The model replays the run's own time base and turntable motion (``position_deg``,
+    ``moving``), start temperature, latitude and heading (0 when unknown), and its chamber
+    temperature when the run recorded ``temp_chamber_c``.
+    """
+    m = run.meta
+    t = np.asarray(run.columns["time_s"], dtype=float)
+    cols = run.columns
+    chamber = None
+    if "temp_chamber_c" in cols and np.all(np.isfinite(cols["temp_chamber_c"])):
+        amb_t, amb = t.copy(), np.asarray(cols["temp_chamber_c"], dtype=float)
+        chamber = lambda tt: np.interp(tt, amb_t, amb)  # noqa: E731
+    if schedule is None:
+        pos = tuple(m.positions_deg) if m.positions_deg else (0.0,)
+        schedule = Schedule(pos, m.dwell_s or 1.0, m.move_s or 0.0)
+    fs = m.sample_rate_hz or (1.0 / float(np.median(np.diff(t))) if t.size > 1 else 1.0)
+    return RunConditions(
+        name=run.name, start_temperature_c=m.start_temperature_c, latitude_deg=m.latitude_deg,
+        true_heading_deg=m.true_heading_deg if m.true_heading_deg is not None else 0.0,
+        schedule=schedule, duration_s=float(t[-1] - t[0]) if t.size else 0.0,
+        sample_rate_hz=fs, seed=seed, chamber_c=chamber,
+        motion=(t, np.asarray(cols["position_deg"], dtype=float),
+                np.asarray(cols["moving"], dtype=float)))
 
 
 @dataclass(frozen=True)
@@ -178,7 +219,7 @@ def simulate_run(inst: Instrument, cond: RunConditions) -> SimulationResult:
     t = cond.time_s
     fs = cond.sample_rate_hz
     rngs = _streams(cond.seed)
-    theta, moving = turntable_motion(cond.schedule, t)
+    theta, moving = cond.turntable(t)
     azimuth = np.mod(cond.true_heading_deg + theta, 360.0)
     tilt = inst.turntable
     elev_x = axis_elevation_deg(azimuth, tilt.tilt_north_deg, tilt.tilt_east_deg)
