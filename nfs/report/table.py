@@ -127,8 +127,18 @@ def plot_heading_table(table: HeadingTable, title: str = ""):
     bars = [r for r in table.rows if r.method != "floor"]
     x = np.arange(len(table.temperatures_c))
     width = 0.8 / max(1, len(bars))
+    # Enough distinct colours for every method (the default cycle repeats after 10);
+    # the reference rows in greys.
+    import matplotlib
+    tab20 = matplotlib.colormaps["tab20"].colors
+    palette = [c for j, c in enumerate(tab20[0::2] + tab20[1::2]) if j not in (7, 17)]  # no greys
+    fixed = {"before": "0.25", "stable": "0.7"}
+    k = 0
     for i, r in enumerate(bars):
-        ax.bar(x - 0.4 + width * (i + 0.5), r.rmse_deg, width, label=r.method)
+        color = fixed.get(r.method)
+        if color is None:
+            color, k = palette[k % len(palette)], k + 1
+        ax.bar(x - 0.4 + width * (i + 0.5), r.rmse_deg, width, label=r.method, color=color)
     for r in table.rows:
         if r.method == "floor":
             ax.axhline(r.mean_deg, color="k", ls="--", lw=1.0, label="white-noise floor")
