@@ -1,0 +1,1 @@
+"""Model against measurements: fit a model to runs, compare, diagnose the missing effect."""

@@ -1,0 +1,108 @@
+"""Parameter paths into an instrument (nfs.diagnose.params).
+
+Oracles: invariants (get after set returns what was set; the original instrument is
+unchanged; a TOML round trip keeps the set value), the instrument's own TOML form (the path
+names the same number as the TOML key), and the error contract (a bad path names itself
+and lists close valid ones).
+"""
+
+import math
+
+import pytest
+
+from nfs.diagnose.params import (ParameterError, default_bounds, expand_paths, fit_bounds,
+                                 get_param, list_params, set_params)
+from nfs.errors import NfsError
+from nfs.instrument import instrument_from_dict, load_instrument
+
+
+@pytest.fixture(scope="module")
+def inst():
+    return load_instrument("default")
+
+
+def test_round_trip_every_path(inst):
+    paths = list_params(inst)
+    assert len(paths) == len(set(paths)) > 40
+    for p in paths:
+        v = get_param(inst, p)
+        new = v * 1.25 + 0.5
+        out = set_params(inst, {p: new})
+        assert get_param(out, p) == pytest.approx(new, rel=1e-15), p
+        # the original is unchanged
+        assert get_param(inst, p) == v, p
+        # every other parameter unchanged
+        for q in paths:
+            if q != p:
+                assert get_param(out, q) == get_param(inst, q), (p, q)
+
+
+def test_set_many_and_toml_round_trip(inst):
+    values = {"thermal.nodes.coil_inner.capacity_j_per_k": 222.0,
+              "thermal.links.chamber-housing.conductance_w_per_k": 1.9,   # reversed order
+              "thermometers.fog.lag_s": 36.0, "gyro.bias_dph": 0.03,
+              "effects.shupe_gradient.k_r": 0.12,
+              "effects.acc_bias_temperature:x.b_q1": 3e-5,
+              "effects.tec_power.c_h": 0.04}
+    out = set_params(inst, values)
+    back = instrument_from_dict(out.to_dict())
+    for p, v in values.items():
+        assert get_param(back, p) == v
+    # the other axis's effect with the same name is untouched
+    assert get_param(out, "effects.acc_bias_temperature:y.b_q1") == -1.5e-5
+    # node powers and the original network untouched
+    assert inst.network.nodes[4].capacity_j_per_k == 190.0
+
+
+def test_kinds(inst):
+    thermal = list_params(inst, "thermal")
+    assert "thermal.nodes.housing.capacity_j_per_k" in thermal
+    assert "effects.tec_power.c_h" in thermal
+    assert "effects.shupe_gradient.k_r" in list_params(inst, "drift")
+    assert "gyro.bias_dph" in list_params(inst, "drift")
+    assert "effects.acc_bias_temperature:x.b_q1" in list_params(inst, "accelerometer")
+    assert set(list_params(inst, "thermometer")) >= {"thermometers.fog.lag_s",
+                                                     "thermometers.acc_y.offset_c"}
+    with pytest.raises(NfsError, match="kinds"):
+        list_params(inst, "gyros")
+
+
+def test_patterns(inst):
+    caps = expand_paths(inst, "thermal.nodes.*.capacity_j_per_k")
+    assert len(caps) == len(inst.network.nodes)
+    got = expand_paths(inst, ["thermometers.*.lag_s", "effects.shupe_*.*",
+                              "thermal.links.chamber-housing.conductance_w_per_k"])
+    assert got == ["thermal.links.housing-chamber.conductance_w_per_k",
+                   "thermometers.fog.lag_s", "thermometers.acc_x.lag_s",
+                   "thermometers.acc_y.lag_s", "effects.shupe_gradient.k_r",
+                   "effects.shupe_rate.k_s", "effects.shupe_product.k_p"]
+    with pytest.raises(ParameterError, match="matches no parameter"):
+        expand_paths(inst, "thermal.nodes.*.capacity_w")
+
+
+@pytest.mark.parametrize("bad, close", [
+    ("effects.shupe_gradiant.k_r", "effects.shupe_gradient.k_r"),
+    ("thermal.links.coil_outer-board.conductance_w_per_k", "thermal.links."),
+    ("thermometers.fog.lag", "thermometers.fog.lag_s"),
+    ("gyro.bias", "gyro.bias_dph"),
+])
+def test_bad_path(inst, bad, close):
+    with pytest.raises(NfsError) as err:
+        get_param(inst, bad)
+    msg = str(err.value)
+    assert bad in msg and close in msg and "\n" not in msg
+    with pytest.raises(ParameterError):
+        set_params(inst, {bad: 1.0})
+
+
+def test_default_bounds(inst):
+    assert default_bounds("thermal.nodes.housing.capacity_j_per_k", 3500.0) == (350.0, 35000.0)
+    assert default_bounds("thermal.links.a-b.conductance_w_per_k", 1.6) == (0.16, 16.0)
+    assert default_bounds("thermometers.fog.lag_s", 30.0) == (0.0, 300.0)
+    assert default_bounds("thermometers.fog.offset_c", 0.0) == (-2.0, 2.0)
+    assert default_bounds("effects.shupe_gradient.k_r", 0.1) == (-math.inf, math.inf)
+    assert fit_bounds(inst, "effects.tec_power.c_h") == (0.0, 1.0)
+    assert fit_bounds(inst, "effects.turn_on_transient.tau") == (12.0, 1200.0)
+    for p in list_params(inst):
+        lo, hi = fit_bounds(inst, p)
+        assert lo <= get_param(inst, p) <= hi, p
