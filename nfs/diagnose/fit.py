@@ -1,0 +1,792 @@
+"""Calibrate a model's free parameters to measured runs (issue 4, part 1: "Fit").
+
+Bounded nonlinear least squares (:func:`scipy.optimize.least_squares`, method ``trf``,
+``x_scale="jac"``) in two stages:
+
+**thermal**
+    Free thermal parameters (capacities, conductances, node powers, thermal-effect
+    coefficients such as the TEC slopes) and thermometer parameters (lags, offsets).
+    Residual: the model's noise-free thermometer readings minus the measured ``temp_fog_c``,
+    ``temp_acc_x_c``, ``temp_acc_y_c`` of every run, on a decimated grid (every
+    ``decimate_s``).  Each run is replayed with its own start temperature, chamber and
+    motion (:func:`nfs.experiment.conditions_from_run`).  For speed the thermal network is
+    solved on the decimated grid: the chamber temperature and the turntable's moving
+    fraction are averaged over each decimated step and a state-dependent power (the TEC law)
+    is held over each decimated step (an O(h) error, about 3e-3 K at h = 10 s for the default
+    TEC against the simulator's 1 s hold).  The sensed node temperatures are brought back to
+    the run's own time base by cubic Hermite interpolation (values and the solver's exact
+    rates at the knots), and the thermometer chain of the simulator
+    (:func:`nfs.sensors.thermometer_reading`: lag, thermometer effects, offset) runs there
+    with its noise and quantisation switched off; the residual is taken at the knots.
+**drift**
+    Thermal parameters fixed at the thermal fit.  Free: ``gyro.bias_dph``, the gyro effect
+    coefficients, the accelerometer biases, accelerometer effect coefficients and the
+    turntable tilts.  The thermal solution of each run is computed once, at the run's own
+    time base (as the simulator does), and the effects are evaluated on its
+    :func:`nfs.experiment.effect_context`; a free parameter of a thermal effect makes the
+    stage re-simulate at every evaluation.  Residuals, as means over windows of
+    ``decimate_s`` of the samples at rest (moving samples excluded):
+
+    - drift: model drift minus the measured raw drift ``gyro_dph - Earth projection``
+      (:func:`nfs.denoise.earth_rate_projection_dph`, the drift that
+      :func:`nfs.denoise.separate_drift` denoises).  Window means are linear, so they do
+      not bias fast terms (the turn-on transient) the way the denoiser's shrinkage can;
+      ``drift_signal="denoised"`` uses ``separate_drift(run).drift_dph`` instead.  The
+      model drift is b + sum of the gyro effect terms + (K - 1) projection
+      - Omega_ie sin L (b_x + accelerometer x terms): the last term is the x accelerometer's
+      error seen through the elevation in the projection (nfs/denoise/drift.py).
+    - ``acc_x_g``, ``acc_y_g``: model sin(e) + bias + accelerometer effects minus measured,
+      when an accelerometer or turntable parameter is free.
+
+    Each channel is divided by the standard error of its window means (within-window
+    scatter / sqrt(count), median over windows) so the units mix on a common scale.
+
+Uncertainties: cov = s^2 (J^T J)^-1 with s^2 = 2 cost / (m - n) at the solution of each
+stage (pseudo-inverse; a direction the data do not constrain gives an infinite standard
+error and its parameters are reported as not identifiable).  These are conditional on the
+other stage's parameters and on the model being right.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Any, Iterable, Sequence
+
+import numpy as np
+from scipy.optimize import least_squares
+
+import thermal
+from thermal.solve import step_matrices
+
+from ..constants import OMEGA_IE_DPH
+from ..effects.thermometer import THERMOMETERS
+from ..errors import InputError, NfsError
+from ..experiment import _thermal_power, conditions_from_run, effect_context
+from ..instrument import Instrument
+from ..io.atomic import atomic_write_text
+from ..io.measurement import Run
+from ..sensors import axis_elevation_deg, thermometer_reading
+from .params import (_all_paths, expand_paths, fit_bounds, get_param, list_params,
+                     set_params)
+
+__all__ = ["StageReport", "FitResult", "fit_model", "default_free", "write_fitted_model",
+           "STAGES", "DEFAULT_DECIMATE_S"]
+
+#: The stages of :func:`fit_model`, in order.
+STAGES = ("thermal", "drift")
+
+#: Default decimation of the residual grid [s].
+DEFAULT_DECIMATE_S = 10.0
+
+_THERMAL_KINDS = ("thermal", "thermometer")
+_NOT_FREE_UNITS = ("s", "K", "degC", "channel unit")
+"""Effect parameters left out of the default free set: time constants [s], temperature
+periods [K], set points [degC] and channel references (collinear with the bias)."""
+
+_ZERO_RNG = np.random.default_rng(0)
+
+
+# ---------------------------------------------------------------------------------------------
+# Results
+
+@dataclass(frozen=True)
+class StageReport:
+    """How one stage of the fit went."""
+
+    name: str
+    """``thermal`` or ``drift``."""
+    free: tuple[str, ...]
+    """The parameters this stage fitted."""
+    converged: bool
+    """True when least_squares stopped on a tolerance (status > 0), not on max_nfev."""
+    message: str
+    """least_squares' own message."""
+    nfev: int
+    """Residual evaluations."""
+    cost_start: float
+    """0.5 sum r^2 at the start (weighted residuals)."""
+    cost: float
+    """0.5 sum r^2 at the solution."""
+    n_residuals: int
+    """m, the number of residuals."""
+    time_s: float
+    """Wall time of the stage [s]."""
+
+
+@dataclass(frozen=True)
+class FitResult:
+    """The fitted instrument and an honest account of the fit."""
+
+    instrument: Instrument
+    """The fitted instrument."""
+    initial: Instrument
+    """The instrument the fit started from."""
+    params: dict[str, float]
+    """Fitted value of every free parameter {path: value}."""
+    initial_params: dict[str, float]
+    """Starting value of every free parameter."""
+    stderr: dict[str, float]
+    """Standard error {path: value} from the Jacobian (inf: not identifiable)."""
+    bounds: dict[str, tuple[float, float]]
+    """The box each parameter was kept in."""
+    at_bound: tuple[str, ...]
+    """Parameters that ended on a bound (the fit wanted to go further)."""
+    unidentifiable: dict[str, str]
+    """Parameters the runs cannot determine, with the reason."""
+    stages: dict[str, StageReport]
+    """Report of each stage run, by name."""
+    rms_before: dict[str, float]
+    """Residual RMS per channel with the initial parameters of its stage (thermometers [K],
+    ``drift_dph`` [deg/h], ``acc_x_g``/``acc_y_g`` [g]); the drift stage starts from the
+    thermally fitted model."""
+    rms_after: dict[str, float]
+    """Residual RMS per channel after the fit."""
+    warnings: tuple[str, ...] = ()
+    """Everything a user should know: no convergence, bounds hit, one run, ..."""
+
+    @property
+    def converged(self) -> dict[str, bool]:
+        """Convergence of each stage."""
+        return {k: s.converged for k, s in self.stages.items()}
+
+    @property
+    def cost(self) -> dict[str, float]:
+        """Final cost of each stage."""
+        return {k: s.cost for k, s in self.stages.items()}
+
+    @property
+    def n_residuals(self) -> dict[str, int]:
+        """Number of residuals of each stage."""
+        return {k: s.n_residuals for k, s in self.stages.items()}
+
+    def summary(self) -> str:
+        """A few lines of text: each parameter with its error, flags and warnings."""
+        lines = []
+        for p, v in self.params.items():
+            flag = " (at bound)" if p in self.at_bound else ""
+            if p in self.unidentifiable:
+                flag += " (not identifiable)"
+            lines.append(f"{p} = {v:.6g} +- {self.stderr.get(p, math.nan):.3g}"
+                         f" (start {self.initial_params[p]:.6g}){flag}")
+        for ch in self.rms_after:
+            lines.append(f"rms {ch}: {self.rms_before.get(ch, math.nan):.4g} -> "
+                         f"{self.rms_after[ch]:.4g}")
+        lines += [f"warning: {w}" for w in self.warnings]
+        return "\n".join(lines)
+
+
+# ---------------------------------------------------------------------------------------------
+# Free parameters
+
+def default_free(inst: Instrument, stages: Sequence[str] = STAGES) -> list[str]:
+    """The default free set.
+
+    thermal stage: every node capacity, every conductance to the chamber, every non-zero
+    node power, every thermometer lag and offset, the coefficients of the thermal effects
+    (TEC slopes c_h, c_c; heat powers).  drift stage: ``gyro.bias_dph``, every coefficient of
+    the gyro and accelerometer effects, the accelerometer biases and the turntable tilts.
+    Effect time constants [s], temperature periods [K], set points [degC] and channel
+    references are left out (list them to free them).
+    """
+    out = []
+    for path, kind in _all_paths(inst):
+        leaf = path.rsplit(".", 1)[-1]
+        if path.startswith("effects."):
+            label = path[len("effects."):].rsplit(".", 1)[0]
+            unit = inst.effect(label).spec.parameter(leaf).unit
+            take = unit not in _NOT_FREE_UNITS
+        elif kind == "thermal":
+            take = (leaf == "capacity_j_per_k"
+                    or (leaf == "power_w" and get_param(inst, path) != 0.0)
+                    or (leaf == "conductance_w_per_k"
+                        and "chamber" in path.split(".")[2].split("-")))
+        elif kind == "thermometer":
+            take = leaf in ("lag_s", "offset_c")
+        elif kind == "drift":
+            take = leaf == "bias_dph"
+        elif kind == "accelerometer":
+            take = leaf in ("bias_x_g", "bias_y_g")
+        else:  # turntable
+            take = leaf.startswith("tilt_")
+        stage = "thermal" if kind in _THERMAL_KINDS else "drift"
+        if take and stage in stages:
+            out.append(path)
+    return out
+
+
+def _stage_of(kind: str, stages: Sequence[str]) -> str:
+    if kind in _THERMAL_KINDS and "thermal" in stages:
+        return "thermal"
+    return "drift"
+
+
+# ---------------------------------------------------------------------------------------------
+# Per-run data
+
+_THERMAL_COLUMNS = ("time_s", "position_deg", "moving") + tuple(THERMOMETERS.values())
+
+
+def _require(run: Run, columns: Iterable[str], stage: str) -> None:
+    for c in columns:
+        if c not in run.columns:
+            raise InputError(f"run '{run.name}' has no column '{c}', which the {stage} stage "
+                             "of the fit needs", file=run.path, column=c)
+
+
+def _step(t: np.ndarray, decimate_s: float) -> int:
+    dt = float(np.median(np.diff(t))) if t.size > 1 else 1.0
+    return max(1, int(round(decimate_s / dt)))
+
+
+def _window_mean(x: np.ndarray, k: int) -> np.ndarray:
+    """Mean of x over consecutive windows of k samples (the last one may be shorter)."""
+    n = x.size
+    w = np.arange(n) // k
+    return np.bincount(w, weights=x) / np.bincount(w)
+
+
+@dataclass
+class _ThermalRun:
+    """A run prepared for the thermal stage: decimated grid, measured readings."""
+
+    run: Run
+    t0_c: float
+    time_s: np.ndarray          # full time base (up to the last knot)
+    knots: np.ndarray           # indices of the knots into time_s
+    t_knot: np.ndarray
+    moving_knot: np.ndarray     # moving fraction over each decimated step
+    ambient_knot: np.ndarray    # chamber temperature averaged over each step
+    measured: dict[str, np.ndarray]
+    mask: dict[str, np.ndarray]
+    interval: np.ndarray        # Hermite interpolation: knot interval of every sample
+    basis: tuple[np.ndarray, ...]
+
+
+def _prepare_thermal(run: Run, decimate_s: float) -> _ThermalRun:
+    _require(run, _THERMAL_COLUMNS, "thermal")
+    cond = conditions_from_run(run)
+    t_all = np.asarray(run["time_s"], dtype=float)
+    if t_all.size < 3:
+        raise InputError(f"run '{run.name}' has {t_all.size} samples; the fit needs a record",
+                         file=run.path)
+    k = _step(t_all, decimate_s)
+    knots = np.arange(0, t_all.size, k)
+    t = t_all[: knots[-1] + 1]
+    moving = np.asarray(run["moving"], dtype=float)[: t.size]
+    if cond.chamber_c is None:
+        amb = np.full(t.size, cond.start_temperature_c)
+    else:
+        amb = np.asarray(run["temp_chamber_c"], dtype=float)[: t.size]
+    t_knot = t[knots]
+    interval = np.minimum(np.searchsorted(t_knot, t, side="right") - 1, knots.size - 2)
+    h = np.diff(t_knot)[interval]
+    s = (t - t_knot[interval]) / h
+    basis = (2 * s**3 - 3 * s**2 + 1, (s**3 - 2 * s**2 + s) * h, -2 * s**3 + 3 * s**2,
+             (s**3 - s**2) * h)
+    measured, mask = {}, {}
+    for col in THERMOMETERS.values():
+        y = np.asarray(run[col], dtype=float)[knots]
+        measured[col] = y
+        mask[col] = np.isfinite(y)
+    return _ThermalRun(run=run, t0_c=cond.start_temperature_c, time_s=t, knots=knots,
+                       t_knot=t_knot, moving_knot=_window_mean(moving, k),
+                       ambient_knot=_window_mean(amb, k), measured=measured, mask=mask,
+                       interval=interval, basis=basis)
+
+
+@dataclass
+class _Knots:
+    """Node temperatures and exact rates at the knots of one run (what _readings needs)."""
+
+    node_names: tuple[str, ...]
+    temperature_c: np.ndarray
+    rate_c_per_s: np.ndarray
+
+
+def _state_power(f, params: dict, t_s: float, temp: np.ndarray, moving: np.ndarray,
+                 vector: list[bool]) -> np.ndarray:
+    """A state-dependent thermal law for every run at once (per run when it needs scalars)."""
+    if vector[0]:
+        try:
+            p = np.asarray(f(t_s, temp, moving, **params), dtype=float)
+            if p.shape == temp.shape:
+                return p
+        except Exception:  # a user's law written for scalars only
+            pass
+        vector[0] = False
+    return np.array([float(f(t_s, float(x), float(m), **params)) for x, m in zip(temp, moving)])
+
+
+def _simulate_knots(inst: Instrument, data: list[_ThermalRun]) -> list[_Knots]:
+    """Solve the network of ``inst`` on the knots of every run, all runs in one march.
+
+    The same exact step as :func:`thermal.simulate` (zero-order hold of the inputs over each
+    knot interval, :func:`thermal.solve.step_matrices` computed once for all runs), with the
+    state-dependent thermal effects evaluated for all runs at each knot.  Runs whose knots
+    are not uniform (or whose step differs) are solved one by one with
+    :func:`thermal.simulate`.
+    """
+    net = inst.network
+    names = net.node_names
+    n = len(names)
+    out: list[_Knots | None] = [None] * len(data)
+    groups: dict[float, list[int]] = {}
+    for i, rd in enumerate(data):
+        dt = np.diff(rd.t_knot)
+        h = float(dt[0])
+        if np.allclose(dt, h, rtol=1e-9, atol=0.0):
+            groups.setdefault(round(h, 9), []).append(i)
+        else:
+            power, _, _ = _thermal_power(inst, rd.t_knot, rd.moving_knot)
+            th = thermal.simulate(net, rd.t_knot, ambient_c=rd.ambient_knot,
+                                  initial_c=rd.t0_c, power_w=power)
+            out[i] = _Knots(names, th.temperature_c, th.rate_c_per_s)
+    if not groups:
+        return out  # type: ignore[return-value]
+    a, b = net.matrices()
+    p_const = net.node_power_w
+    effects = []
+    for e in inst.effects:
+        if e.spec.kind == "thermal":
+            node = e.params.get("node") or inst.gyro.source
+            params = dict(e.params)
+            if "node" in params:
+                params["node"] = node
+            effects.append((e, names.index(node), params))
+    for h, members in groups.items():
+        mats = step_matrices(a, b, h)
+        step = mats.phi_minus_i.T
+        g_amb = mats.gamma[:, 0]
+        g_pow = mats.gamma[:, 1:].T
+        n_k = max(data[i].t_knot.size for i in members)
+        r = len(members)
+        t_knot = np.zeros(n_k)
+        amb = np.empty((r, n_k))
+        moving = np.zeros((r, n_k))
+        fixed = np.zeros((r, n_k, n)) + p_const
+        t0 = np.empty(r)
+        for q, i in enumerate(members):
+            rd = data[i]
+            m = rd.t_knot.size
+            if m == n_k:
+                t_knot = rd.t_knot
+            amb[q, :m], amb[q, m:] = rd.ambient_knot, rd.ambient_knot[-1]
+            moving[q, :m], moving[q, m:] = rd.moving_knot, rd.moving_knot[-1]
+            t0[q] = rd.t0_c
+        stateful = []
+        for e, j, params in effects:
+            if e.spec.state_dependent:
+                stateful.append((e.spec.function, j, params, [True]))
+                continue
+            for q, i in enumerate(members):
+                rd = data[i]
+                m = rd.t_knot.size
+                p = np.broadcast_to(np.asarray(e.spec.function(rd.t_knot, None, rd.moving_knot,
+                                                               **params), dtype=float), (m,))
+                fixed[q, :m, j] += p
+                fixed[q, m:, j] += p[-1]
+        drive = amb[:, :, None] * g_amb + fixed @ g_pow      # (r, n_k, n)
+        temp = np.empty((r, n_k, n))
+        extra = np.zeros((r, n_k, n))
+        temp[:, 0, :] = t0[:, None]
+        times = t_knot.tolist()
+        for k in range(n_k):
+            tk = temp[:, k, :]
+            if stateful:
+                pk = extra[:, k, :]
+                for f, j, params, vector in stateful:
+                    pk[:, j] += _state_power(f, params, times[k], tk[:, j], moving[:, k], vector)
+            if k + 1 < n_k:
+                nxt = tk + tk @ step + drive[:, k]
+                if stateful:
+                    nxt += extra[:, k, :] @ g_pow
+                temp[:, k + 1, :] = nxt
+        power = fixed + extra
+        rate = temp @ a.T + amb[:, :, None] * b[:, 0] + power @ b[:, 1:].T
+        for q, i in enumerate(members):
+            m = data[i].t_knot.size
+            out[i] = _Knots(names, temp[q, :m], rate[q, :m])
+    return out  # type: ignore[return-value]
+
+
+def _readings(inst: Instrument, rd: _ThermalRun, th: _Knots) -> dict[str, np.ndarray]:
+    """Noise-free thermometer readings at the knots."""
+    out = {}
+    names = tuple(th.node_names)
+    j, (b0, b1, b2, b3) = rd.interval, rd.basis
+    for name, col in THERMOMETERS.items():
+        model = inst.thermometers[name]
+        y = model.sensed(th.temperature_c, names)
+        m = model.sensed(th.rate_c_per_s, names)
+        full = b0 * y[j] + b1 * m[j] + b2 * y[j + 1] + b3 * m[j + 1]
+        transforms = [(lambda v, e=e: e.spec.function(v, rd.time_s, **e.params))
+                      for e in inst.effects
+                      if e.spec.kind == "thermometer" and e.params.get("thermometer") == name]
+        quiet = replace(model, noise_c=0.0, quantum_c=0.0)
+        out[col] = thermometer_reading(full, rd.time_s, quiet, _ZERO_RNG, transforms)[rd.knots]
+    return out
+
+
+def _thermal_residual_parts(inst: Instrument, data: list[_ThermalRun]
+                            ) -> dict[str, list[np.ndarray]]:
+    parts: dict[str, list[np.ndarray]] = {c: [] for c in THERMOMETERS.values()}
+    for rd, th in zip(data, _simulate_knots(inst, data)):
+        model = _readings(inst, rd, th)
+        for col, y in model.items():
+            parts[col].append((y - rd.measured[col])[rd.mask[col]])
+    return parts
+
+
+@dataclass
+class _DriftRun:
+    """A run prepared for the drift stage."""
+
+    run: Run
+    cond: Any
+    k: int
+    windows: np.ndarray         # window index of every trusted sample
+    trusted: np.ndarray
+    keep: np.ndarray            # windows with enough trusted samples
+    counts: np.ndarray
+    projection: np.ndarray
+    measured: dict[str, np.ndarray]   # window means of the measured channels
+    scale: dict[str, float]           # standard error of a window mean, per channel
+    azimuth: np.ndarray
+    aux: dict[str, np.ndarray]
+    ctx: Any = None
+
+
+def _prepare_drift(run: Run, decimate_s: float, acc_channels: bool,
+                   drift_signal: str) -> _DriftRun:
+    _require(run, ("time_s", "position_deg", "moving", "gyro_dph", "acc_x_g"), "drift")
+    if acc_channels:
+        _require(run, ("acc_y_g",), "drift")
+    if run.meta.true_heading_deg is None:
+        raise InputError(f"run '{run.name}' has no true_heading_deg: the drift stage needs the "
+                         "Earth-rate projection, which needs the true heading",
+                         file=run.path, key="true_heading_deg")
+    from ..denoise import earth_rate_projection_dph, separate_drift
+    cond = conditions_from_run(run)
+    t = np.asarray(run["time_s"], dtype=float)
+    k = _step(t, decimate_s)
+    proj = earth_rate_projection_dph(run)
+    if drift_signal == "denoised":
+        drift = separate_drift(run).drift_dph
+    elif drift_signal == "raw":
+        drift = np.asarray(run["gyro_dph"], dtype=float) - proj
+    else:
+        raise NfsError(f"drift_signal must be 'raw' or 'denoised', got '{drift_signal}'")
+    channels = {"drift_dph": drift}
+    if acc_channels:
+        channels["acc_x_g"] = np.asarray(run["acc_x_g"], dtype=float)
+        channels["acc_y_g"] = np.asarray(run["acc_y_g"], dtype=float)
+    trusted = np.asarray(run["moving"], dtype=float) == 0.0
+    for v in channels.values():
+        trusted &= np.isfinite(v)
+    if not trusted.any():
+        raise InputError(f"run '{run.name}' has no sample at rest with the gyro and "
+                         "accelerometer channels present", file=run.path)
+    w = (np.arange(t.size) // k)[trusted]
+    n_w = int(w.max()) + 1
+    counts = np.bincount(w, minlength=n_w)
+    keep = counts >= max(1, k // 2)
+    measured, scale = {}, {}
+    for name, v in channels.items():
+        x = v[trusted]
+        mean = np.bincount(w, weights=x, minlength=n_w)
+        sq = np.bincount(w, weights=x * x, minlength=n_w)
+        c = np.maximum(counts, 1)
+        m = mean / c
+        var = np.maximum(sq / c - m * m, 0.0) / np.maximum(c - 1, 1)
+        measured[name] = m[keep]
+        se = float(np.median(np.sqrt(var[keep]))) if k > 1 else float(np.std(np.diff(x)))
+        scale[name] = se if se > 0 else 1.0
+    aux = {c: np.asarray(v, dtype=float) for c, v in run.columns.items() if c.startswith("aux_")}
+    azimuth = np.mod(cond.true_heading_deg + np.asarray(run["position_deg"], dtype=float), 360.0)
+    return _DriftRun(run=run, cond=cond, k=k, windows=w, trusted=trusted, keep=keep,
+                     counts=counts, projection=proj, measured=measured, scale=scale,
+                     azimuth=azimuth, aux=aux)
+
+
+def _drift_context(inst: Instrument, rd: _DriftRun):
+    cond = rd.cond
+    t = cond.time_s
+    _, moving = cond.turntable(t)
+    power, _, _ = _thermal_power(inst, t, moving)
+    ambient = cond.start_temperature_c if cond.chamber_c is None else cond.chamber_c(t)
+    th = thermal.simulate(inst.network, t, ambient_c=ambient,
+                          initial_c=cond.start_temperature_c, power_w=power)
+    return effect_context(inst, th, rd.azimuth, rd.projection, moving, rd.aux)
+
+
+def _block(rd: _DriftRun, x: np.ndarray) -> np.ndarray:
+    n_w = rd.counts.size
+    return (np.bincount(rd.windows, weights=x[rd.trusted], minlength=n_w)[rd.keep]
+            / rd.counts[rd.keep])
+
+
+def _drift_models(inst: Instrument, rd: _DriftRun, ctx) -> dict[str, np.ndarray]:
+    """Window means of the model's drift and accelerometer channels."""
+    n = rd.projection.size
+    acc = {"x": np.full(n, inst.accelerometers.bias_x_g),
+           "y": np.full(n, inst.accelerometers.bias_y_g)}
+    g = inst.gyro
+    gyro = np.full(n, g.bias_dph)
+    if g.scale_factor != 1.0:
+        gyro = gyro + (g.scale_factor - 1.0) * rd.projection
+    for e in inst.effects:
+        if e.spec.kind == "gyro":
+            gyro = gyro + e.spec.function(ctx, **e.params)
+        elif e.spec.kind == "accelerometer":
+            ax = e.params.get("axis")
+            acc[ax] = acc[ax] + e.spec.function(ctx, **e.params)
+    lat = math.radians(rd.cond.latitude_deg)
+    drift = gyro - OMEGA_IE_DPH * math.sin(lat) * acc["x"]
+    out = {"drift_dph": _block(rd, drift)}
+    if "acc_x_g" in rd.measured:
+        tt = inst.turntable
+        for axis, offset in (("x", 0.0), ("y", 90.0)):
+            elev = axis_elevation_deg(rd.azimuth + offset, tt.tilt_north_deg, tt.tilt_east_deg)
+            out[f"acc_{axis}_g"] = _block(rd, np.sin(np.radians(elev)) + acc[axis])
+    return out
+
+
+# ---------------------------------------------------------------------------------------------
+# The least-squares core shared by both stages
+
+def _solve(name: str, fun, x0: np.ndarray, lb: np.ndarray, ub: np.ndarray,
+           max_nfev: int | None, paths: Sequence[str]):
+    t0 = time.perf_counter()
+    x0 = np.clip(x0, lb, ub)
+    r0 = fun(x0)
+    res = least_squares(fun, x0, bounds=(lb, ub), method="trf", x_scale="jac",
+                        max_nfev=max_nfev)
+    m, n = res.fun.size, res.x.size
+    report = StageReport(name=name, free=tuple(paths), converged=bool(res.status > 0),
+                         message=str(res.message), nfev=int(res.nfev),
+                         cost_start=float(0.5 * r0 @ r0), cost=float(res.cost),
+                         n_residuals=int(m), time_s=time.perf_counter() - t0)
+    # cov = s^2 (J^T J)^-1 through the SVD of J (pseudo-inverse)
+    jac = np.asarray(res.jac, dtype=float)
+    s2 = 2.0 * res.cost / max(m - n, 1)
+    col = np.sqrt(np.sum(jac * jac, axis=0))
+    col_safe = np.where(col > 0, col, 1.0)
+    _, sv, vt = np.linalg.svd(jac / col_safe, full_matrices=False)
+    tol = max(m, n) * np.finfo(float).eps * 1e4 * (sv[0] if sv.size else 0.0)
+    good = sv > tol
+    inv = (vt[good].T / sv[good] ** 2) @ vt[good]
+    stderr = np.sqrt(np.maximum(np.diag(inv), 0.0) * s2) / col_safe
+    unident = {}
+    for i, p in enumerate(paths):
+        weak = col[i] == 0 or (np.abs(vt[~good, i]) > 0.1).any()
+        if weak:
+            stderr[i] = math.inf
+            unident[p] = ("the residual does not depend on it" if col[i] == 0 else
+                          "collinear with other free parameters on these runs")
+    span = ub - lb
+    at = [p for i, p in enumerate(paths)
+          if res.active_mask[i] != 0
+          or (np.isfinite(span[i]) and min(res.x[i] - lb[i], ub[i] - res.x[i]) <= 1e-6 * span[i])]
+    return res, report, dict(zip(paths, stderr)), unident, at
+
+
+def _rms(parts: dict[str, list[np.ndarray]]) -> dict[str, float]:
+    out = {}
+    for ch, arrays in parts.items():
+        x = np.concatenate(arrays) if arrays else np.empty(0)
+        out[ch] = float(np.sqrt(np.mean(x * x))) if x.size else math.nan
+    return out
+
+
+# ---------------------------------------------------------------------------------------------
+# The fit
+
+def _tec_identifiability(inst: Instrument, data: list[_ThermalRun], free: Sequence[str]
+                         ) -> dict[str, str]:
+    """c_h (c_c) of a TEC law needs samples with the source below (above) T_set."""
+    out = {}
+    for e in inst.effects:
+        if e.name != "tec_power":
+            continue
+        node = e.params.get("node") or inst.gyro.source
+        below = above = 0
+        for th in _simulate_knots(inst, data):
+            src = th.temperature_c[:, list(th.node_names).index(node)]
+            below += int(np.sum(src < e.params["T_set"]))
+            above += int(np.sum(src > e.params["T_set"]))
+        total = max(below + above, 1)
+        for par, n, side in (("c_h", below, "below"), ("c_c", above, "above")):
+            path = f"effects.{e.label}.{par}"
+            if path in free and n < 0.02 * total:
+                out[path] = (f"the source never sits {side} T_set = {e.params['T_set']:g} C "
+                             f"in these runs: it needs runs starting {side} T_set")
+    return out
+
+
+def fit_model(inst: Instrument, runs: Sequence[Run], free: Iterable[str] | None = None, *,
+              stages: Sequence[str] = STAGES, decimate_s: float = DEFAULT_DECIMATE_S,
+              max_nfev: int | None = 100, drift_signal: str = "raw") -> FitResult:
+    """Calibrate the free parameters of ``inst`` to ``runs`` (module docstring for the method).
+
+    Parameters
+    ----------
+    inst : Instrument
+        The model to start from.
+    runs : sequence of Run
+        Measured runs (any start temperatures, schedules, latitudes: each is replayed with
+        its own).
+    free : iterable of str, optional
+        Parameter paths or glob patterns (:mod:`nfs.diagnose.params`); default
+        :func:`default_free`.  Thermal and thermometer parameters go to the thermal stage,
+        the others to the drift stage (all to the drift stage when only it runs).
+    stages : sequence of str
+        Which of ``("thermal", "drift")`` to run, in that order.
+    decimate_s : float
+        Spacing of the residual grid [s] (thermal knots; drift window length).
+    max_nfev : int, optional
+        Residual evaluations allowed per stage; a stage that hits it is reported as not
+        converged.
+    drift_signal : ``"raw"`` or ``"denoised"``
+        Measured drift to fit: window means of gyro - projection, or the wavelet-denoised
+        drift of :func:`nfs.denoise.separate_drift`.
+
+    Raises
+    ------
+    NfsError
+        No runs, an unknown stage or parameter, a run without a channel a stage needs, no
+        true_heading_deg for the drift stage.
+    """
+    runs = list(runs)
+    if not runs:
+        raise NfsError("fit_model: no runs to fit")
+    stages = tuple(stages)
+    for s in stages:
+        if s not in STAGES:
+            raise NfsError(f"fit_model: unknown stage '{s}'; stages: {', '.join(STAGES)}")
+    if not decimate_s > 0:
+        raise NfsError(f"fit_model: decimate_s must be > 0, got {decimate_s}")
+    paths = default_free(inst, stages) if free is None else expand_paths(inst, list(free))
+    kinds = dict(_all_paths(inst))
+    by_stage = {s: [p for p in paths if _stage_of(kinds[p], stages) == s] for s in stages}
+    bounds = {p: fit_bounds(inst, p) for p in paths}
+    initial_params = {p: get_param(inst, p) for p in paths}
+
+    current = inst
+    stage_reports: dict[str, StageReport] = {}
+    stderr: dict[str, float] = {}
+    unident: dict[str, str] = {}
+    at_bound: list[str] = []
+    rms_before: dict[str, float] = {}
+    rms_after: dict[str, float] = {}
+    warnings: list[str] = []
+
+    if "thermal" in stages:
+        data = [_prepare_thermal(r, decimate_s) for r in runs]
+        sp = by_stage["thermal"]
+        rms_before.update(_rms(_thermal_residual_parts(current, data)))
+        if sp:
+            base = current
+
+            def fun(x):
+                model = set_params(base, dict(zip(sp, x)))
+                parts = _thermal_residual_parts(model, data)
+                return np.concatenate([a for arrs in parts.values() for a in arrs])
+
+            lb, ub = (np.array([bounds[p][i] for p in sp]) for i in (0, 1))
+            res, rep, se, un, at = _solve("thermal", fun, np.array([initial_params[p] for p in sp]),
+                                          lb, ub, max_nfev, sp)
+            current = set_params(base, dict(zip(sp, res.x)))
+            stage_reports["thermal"] = rep
+            stderr.update(se)
+            un.update(_tec_identifiability(current, data, sp))
+            unident.update(un)
+            at_bound += at
+        rms_after.update(_rms(_thermal_residual_parts(current, data)))
+
+    if "drift" in stages and by_stage["drift"]:
+        sp = by_stage["drift"]
+        acc_ch = any(kinds[p] in ("accelerometer", "turntable") for p in sp)
+        data_d = [_prepare_drift(r, decimate_s, acc_ch, drift_signal) for r in runs]
+        resim = any(kinds[p] in _THERMAL_KINDS for p in sp)
+        for rd in data_d:
+            rd.ctx = _drift_context(current, rd)
+        base = current
+        weights = {ch: float(np.median([rd.scale[ch] for rd in data_d]))
+                   for ch in data_d[0].measured}
+
+        def parts_of(model) -> dict[str, list[np.ndarray]]:
+            parts: dict[str, list[np.ndarray]] = {ch: [] for ch in weights}
+            for rd in data_d:
+                ctx = _drift_context(model, rd) if resim else rd.ctx
+                for ch, y in _drift_models(model, rd, ctx).items():
+                    parts[ch].append(y - rd.measured[ch])
+            return parts
+
+        def fun(x):
+            parts = parts_of(set_params(base, dict(zip(sp, x))))
+            return np.concatenate([a / weights[ch] for ch, arrs in parts.items() for a in arrs])
+
+        rms_before.update(_rms(parts_of(base)))
+        lb, ub = (np.array([bounds[p][i] for p in sp]) for i in (0, 1))
+        res, rep, se, un, at = _solve("drift", fun, np.array([initial_params[p] for p in sp]),
+                                      lb, ub, max_nfev, sp)
+        current = set_params(base, dict(zip(sp, res.x)))
+        stage_reports["drift"] = rep
+        stderr.update(se)
+        unident.update(un)
+        at_bound += at
+        rms_after.update(_rms(parts_of(current)))
+
+    params = {p: get_param(current, p) for p in paths}
+    for s, rep in stage_reports.items():
+        if not rep.converged:
+            warnings.append(f"{s} stage did not converge ({rep.nfev} evaluations): {rep.message}")
+    for p in at_bound:
+        warnings.append(f"{p} ended at its bound {bounds[p]} (value {params[p]:.6g}): the data "
+                        "push it further; the model may lack an effect")
+    for p, why in unident.items():
+        warnings.append(f"{p} is not identifiable: {why}")
+    if len(runs) == 1:
+        t0 = runs[0].meta.start_temperature_c
+        warnings.append(f"a single run (T0 = {t0:g} C): parameters whose effect depends on "
+                        "the start temperature cannot be separated; "
+                        + (", ".join(unident) if unident else "none flagged by the Jacobian")
+                        + " reported as not identifiable")
+    return FitResult(instrument=current, initial=inst, params=params,
+                     initial_params=initial_params, stderr=stderr, bounds=bounds,
+                     at_bound=tuple(at_bound), unidentifiable=unident, stages=stage_reports,
+                     rms_before=rms_before, rms_after=rms_after, warnings=tuple(warnings))
+
+
+def write_fitted_model(result: FitResult, path: str | Path) -> Path:
+    """Write the fitted instrument as a TOML file a user can read and edit.
+
+    A header comment lists every fitted parameter with its standard error and start value,
+    the parameters at a bound or not identifiable, and each stage's convergence.  Written
+    atomically (:func:`nfs.io.atomic.atomic_write_text`).
+    """
+    path = Path(path)
+    lines = [f"# Instrument fitted by nfs.diagnose.fit_model from '{result.initial.name}'.",
+             "# Fitted parameters (value +- standard error; start value):"]
+    for p, v in result.params.items():
+        flags = []
+        if p in result.at_bound:
+            flags.append("AT BOUND")
+        if p in result.unidentifiable:
+            flags.append("NOT IDENTIFIABLE")
+        flag = f"  [{', '.join(flags)}]" if flags else ""
+        lines.append(f"#   {p} = {v:.6g} +- {result.stderr.get(p, math.nan):.3g}"
+                     f"; start {result.initial_params[p]:.6g}{flag}")
+    for s, rep in result.stages.items():
+        lines.append(f"# {s} stage: {'converged' if rep.converged else 'NOT CONVERGED'} "
+                     f"after {rep.nfev} evaluations, cost {rep.cost:.6g} on "
+                     f"{rep.n_residuals} residuals")
+    for ch, v in result.rms_after.items():
+        lines.append(f"# residual RMS {ch}: {result.rms_before.get(ch, math.nan):.4g} -> {v:.4g}")
+    for w in result.warnings:
+        lines.append(f"# warning: {w}")
+    atomic_write_text(path, "\n".join(lines) + "\n" + result.instrument.to_toml())
+    return path

@@ -1,0 +1,151 @@
+"""Calibration of a model to runs (nfs.diagnose.fit).
+
+Oracle: runs simulated from a known instrument (the default with some parameters perturbed by
++20 %, noise as usual) -- the fit started from the unperturbed default must recover the
+perturbed values within the stated tolerance, and the thermometer residual must fall to the
+thermometer's own noise and quantisation level sqrt(0.01^2 + 0.0625^2/12) = 0.0206 K.
+At-bound, single-run and bad-input cases are checked against what they must report.
+"""
+
+import math
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from nfs.diagnose.fit import default_free, fit_model, write_fitted_model
+from nfs.diagnose.params import get_param, set_params
+from nfs.errors import NfsError
+from nfs.experiment import simulate_run
+from nfs.instrument import load_instrument
+from nfs.io.measurement import Run
+from nfs.io.scenario import load_scenario
+
+#: The perturbed parameters (+20 % of the default) and the truth.
+PERTURBED = {
+    "thermal.nodes.coil_inner.capacity_j_per_k": 1.2,
+    "thermal.links.housing-chamber.conductance_w_per_k": 1.2,
+    "thermometers.fog.lag_s": 1.2,
+    "effects.tec_power.c_h": 1.2,
+    "effects.shupe_gradient.k_r": 1.2,
+    "effects.bias_temperature.b1": 1.2,
+}
+
+#: Thermometer white noise 0.01 K and quantisation 0.0625 K (default instrument).
+THERMOMETER_FLOOR_K = math.hypot(0.01, 0.0625 / math.sqrt(12.0))
+
+
+@pytest.fixture(scope="module")
+def scenario():
+    return load_scenario()
+
+
+@pytest.fixture(scope="module")
+def truth(scenario):
+    inst = scenario.instrument
+    return set_params(inst, {p: f * get_param(inst, p) for p, f in PERTURBED.items()})
+
+
+@pytest.fixture(scope="module")
+def runs(scenario, truth):
+    return [simulate_run(truth, c).run for c in scenario.conditions()]
+
+
+@pytest.fixture(scope="module")
+def fitted(scenario, runs):
+    return fit_model(scenario.instrument, runs)
+
+
+def test_recovers_perturbed_parameters(fitted, truth):
+    # Tolerance: within 3 standard errors (or 1 % where the error is tiny) and never more
+    # than 6 % off (the thermal solver holds the TEC power over 10 s knots, and the
+    # capacities trade off against each other: coil_inner is seen only through the FOG's
+    # thermometer and the drift).
+    for p in PERTURBED:
+        want = get_param(truth, p)
+        got = fitted.params[p]
+        err = abs(got - want)
+        assert err <= max(3.0 * fitted.stderr[p], 0.01 * abs(want)), (p, got, want,
+                                                                      fitted.stderr[p])
+        assert err <= 0.06 * abs(want), (p, got, want)
+
+
+def test_thermometer_residual_at_noise_floor(fitted):
+    for ch in ("temp_fog_c", "temp_acc_x_c", "temp_acc_y_c"):
+        assert fitted.rms_before[ch] > 10 * THERMOMETER_FLOOR_K
+        assert fitted.rms_after[ch] == pytest.approx(THERMOMETER_FLOOR_K, rel=0.1), ch
+    assert fitted.rms_after["drift_dph"] < 0.5 * fitted.rms_before["drift_dph"]
+
+
+def test_report(fitted, scenario):
+    assert set(fitted.params) == set(default_free(scenario.instrument))
+    assert fitted.converged == {"thermal": True, "drift": True}
+    assert fitted.at_bound == ()
+    assert all(np.isfinite(v) and v > 0 for v in fitted.stderr.values())
+    assert fitted.n_residuals["thermal"] == 3 * 7 * 900
+    # the fitted instrument is the input with the fitted values, the input is untouched
+    for p, v in fitted.params.items():
+        assert get_param(fitted.instrument, p) == v
+        assert get_param(scenario.instrument, p) == fitted.initial_params[p]
+
+
+def test_write_fitted_model(fitted, tmp_path):
+    path = write_fitted_model(fitted, tmp_path / "fitted.toml")
+    text = path.read_text()
+    assert "# Fitted parameters" in text
+    assert "effects.shupe_gradient.k_r = " in text
+    back = load_instrument(path)
+    for p, v in fitted.params.items():
+        assert get_param(back, p) == pytest.approx(v, rel=1e-12)
+
+
+def _shift(run, column, delta):
+    cols = dict(run.columns)
+    cols[column] = cols[column] + delta
+    return replace(run, columns=cols)
+
+
+def test_at_bound_reported(scenario, runs):
+    # a 3 K thermometer offset lies outside the default +-2 K box: the offset must end at
+    # +2 K and be reported
+    shifted = [_shift(r, "temp_fog_c", 3.0) for r in runs[:2]]
+    res = fit_model(scenario.instrument, shifted, ["thermometers.fog.offset_c"],
+                    stages=("thermal",))
+    assert res.params["thermometers.fog.offset_c"] == pytest.approx(2.0, abs=1e-6)
+    assert res.at_bound == ("thermometers.fog.offset_c",)
+    assert any("bound" in w for w in res.warnings)
+
+
+def test_single_run_reports_unidentifiable(scenario, runs):
+    # at T0 = -32 C the source never reaches T_set = 25 C: c_c cannot be identified
+    res = fit_model(scenario.instrument, runs[:1],
+                    ["effects.tec_power.c_h", "effects.tec_power.c_c", "thermometers.fog.lag_s"],
+                    stages=("thermal",))
+    assert "effects.tec_power.c_c" in res.unidentifiable
+    assert "effects.tec_power.c_h" not in res.unidentifiable
+    assert math.isinf(res.stderr["effects.tec_power.c_c"])
+    assert any("single run" in w for w in res.warnings)
+    assert any("c_c" in w and "identifiable" in w for w in res.warnings)
+
+
+def test_not_converged_reported(scenario, runs):
+    res = fit_model(scenario.instrument, runs[:1], ["thermal.nodes.*.capacity_j_per_k"],
+                    stages=("thermal",), max_nfev=1)
+    assert res.converged == {"thermal": False}
+    assert any("did not converge" in w for w in res.warnings)
+
+
+def test_bad_input(scenario, runs):
+    inst = scenario.instrument
+    with pytest.raises(NfsError, match="no runs"):
+        fit_model(inst, [])
+    cols = {k: v for k, v in runs[0].columns.items() if k != "temp_acc_y_c"}
+    with pytest.raises(NfsError, match="temp_acc_y_c"):
+        fit_model(inst, [replace(runs[0], columns=cols)])
+    no_heading = replace(runs[0], meta=replace(runs[0].meta, true_heading_deg=None))
+    with pytest.raises(NfsError, match="true_heading_deg"):
+        fit_model(inst, [no_heading], stages=("drift",))
+    with pytest.raises(NfsError, match="shupe_gradient.k_r"):
+        fit_model(inst, runs[:1], ["effects.shupe_gradient.kr"])
+    with pytest.raises(NfsError, match="stage"):
+        fit_model(inst, runs[:1], stages=("thermals",))
