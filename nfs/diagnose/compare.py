@@ -1,0 +1,938 @@
+"""Model against measurement, channel by channel: where the model fails (issue 4, part 2).
+
+For every measured run the model is simulated beside it on the run's own time base,
+turntable motion, start temperature T0, latitude, heading and chamber
+(:func:`nfs.experiment.conditions_from_run`), and each channel is set against the model's
+prediction:
+
+==================  ==========================================================================
+channel             residual r = measured - model
+==================  ==========================================================================
+``temp_fog_c``,     thermometer reading minus the model's noise-free reading (sensed node
+``temp_acc_x_c``,   temperature through the thermometer's lag and offset, without noise or
+``temp_acc_y_c``    quantisation) [degC], every sample at rest
+``gyro_drift_dph``  separate_drift(measured).drift_dph - separate_drift(model run).drift_dph
+                    [deg/h]: the same wavelet separation on both sides, so its bias cancels
+``acc_x_g``,        dwell mean of the measured specific force minus the dwell mean of the
+``acc_y_g``         model's noise-free one [g], one point per dwell
+==================  ==========================================================================
+
+The sign is measured minus model throughout, so a positive bias is what the model lacks.
+
+Noise floor (what the residual would be if the model were right), per sample, squared:
+
+- thermometers: noise_c^2 + quantum_c^2 / 12 of the model's thermometer (white noise plus
+  uniform rounding error);
+- gyro drift: the model is simulated twice with independent noise (seeds ``(seed, k, SALT,
+  0)`` and ``(seed, k, SALT, 1)`` for run k) and the floor is the difference of the two
+  separated drifts.  A measured run and a correct model are two such independent realisations,
+  so this difference has the null distribution of the residual itself, including the bias
+  instability and ARW that leak through the denoiser (an estimate from the wavelet noise alone
+  would miss the bias instability, which no denoiser can tell from drift);
+- accelerometers: sigma^2 / n for a dwell of n samples, sigma the per-sample noise estimated
+  from the measured run itself (standard deviation of first differences within the dwells over
+  sqrt(2)).
+
+A channel whose pooled residual RMS is within :data:`CONSISTENT_RATIO` times its floor is
+"consistent with noise".  Otherwise its failure is put into words from three statistics:
+
+- *when*: the fraction of the excess residual energy sum(r^2 - floor^2) in the first N minutes
+  after power-on, pooled over the runs; "concentrated in the first N min" when at least half
+  of it lies in a span of at most a third of the run;
+- *T0*: the correlation over the runs of the excess RMS sqrt(max(rms^2 - floor^2, 0)) with
+  |T0 - 25 C| and with T0 (needs 3 runs at 3 start temperatures);
+- *positions*: per cycle, the dwell means of the residual minus their cycle mean (a slow
+  trend cancels); per position the mean over the cycles and its standard error from the
+  cycle-to-cycle scatter; "follows the turntable positions" when the spread (RMS) of the
+  per-position means is :data:`POSITION_RATIO` times their standard error or more, pooled over
+  the runs.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import re
+from dataclasses import dataclass, replace
+from pathlib import Path
+from typing import Any, Sequence
+
+import numpy as np
+
+from nfs.denoise import separate_drift
+from nfs.effects.thermometer import THERMOMETERS
+from nfs.errors import MeasurementError, NfsError
+from nfs.experiment import conditions_from_run, simulate_run
+from nfs.instrument import Instrument
+from nfs.io.atomic import atomic_write_bytes, atomic_write_text
+from nfs.io.measurement import Run
+from nfs.northfind import heading_rmse, north_find
+
+__all__ = [
+    "CHANNELS", "CONSISTENT_RATIO", "POSITION_RATIO", "T0_CORRELATION", "SEED_SALT",
+    "ChannelSpec", "ResidualStats", "ChannelRun", "PositionTest", "ChannelSummary",
+    "RunHeading", "Comparison", "compare", "noise_free", "write_report", "to_markdown",
+    "plot_overlay", "plot_residuals", "plot_rms_vs_t0",
+]
+
+#: A residual RMS up to this multiple of the noise floor is "consistent with noise".
+CONSISTENT_RATIO = 1.5
+#: Spread of the per-position biases, in standard errors, from which a residual "follows the
+#: turntable positions" (about 1 under the null hypothesis).
+POSITION_RATIO = 3.0
+#: |correlation| over the runs from which a residual is said to scale with T0 ...
+T0_CORRELATION = 0.8
+#: ... provided the per-run excess RMS varies by at least this coefficient of variation.
+T0_VARIATION = 0.3
+#: Reference temperature of |T0 - 25 C| [degC].
+T_REF_C = 25.0
+#: Spans after power-on tried for "concentrated in the first N min" [min].
+EARLY_SPANS_MIN = (5.0, 10.0, 15.0, 20.0, 30.0, 45.0, 60.0)
+#: Entropy word that keeps the model's noise streams apart from a scenario's own
+#: ``(seed, i_temp, repeat)`` streams, so a model never replays a run's noise exactly.
+SEED_SALT = 0xC0DE
+
+
+@dataclass(frozen=True)
+class ChannelSpec:
+    """One compared channel."""
+
+    key: str
+    """Name of the channel in the results (``gyro_drift_dph``, ``temp_fog_c``, ...)."""
+    column: str
+    """Measurement column it needs."""
+    label: str
+    """Words for the report."""
+    unit: str
+    """Unit of the residual."""
+    kind: str
+    """``thermometer``, ``gyro`` or ``accelerometer``."""
+
+
+#: The compared channels, in report order.
+CHANNELS: tuple[ChannelSpec, ...] = (
+    ChannelSpec("temp_fog_c", "temp_fog_c", "FOG thermometer", "C", "thermometer"),
+    ChannelSpec("temp_acc_x_c", "temp_acc_x_c", "QFA x thermometer", "C", "thermometer"),
+    ChannelSpec("temp_acc_y_c", "temp_acc_y_c", "QFA y thermometer", "C", "thermometer"),
+    ChannelSpec("gyro_drift_dph", "gyro_dph", "gyro drift", "deg/h", "gyro"),
+    ChannelSpec("acc_x_g", "acc_x_g", "QFA x dwell mean", "g", "accelerometer"),
+    ChannelSpec("acc_y_g", "acc_y_g", "QFA y dwell mean", "g", "accelerometer"),
+)
+_BY_KEY = {c.key: c for c in CHANNELS}
+_BASE_COLUMNS = ("time_s", "position_deg", "moving")
+_THERMOMETER_OF = {col: name for name, col in THERMOMETERS.items()}
+STAGES = ("startup", "stable", "all")
+
+
+# --------------------------------------------------------------------------------------------
+# Results
+
+
+@dataclass(frozen=True)
+class ResidualStats:
+    """Residual statistics of one channel over a set of samples (a stage or a position)."""
+
+    n: int
+    """Number of residual points (samples, or dwells for an accelerometer)."""
+    rms: float
+    """sqrt(mean(r^2)) [channel unit]."""
+    bias: float
+    """mean(r) [channel unit]."""
+    std: float
+    """Standard deviation of r [channel unit]."""
+    floor_rms: float
+    """sqrt(mean(floor^2)): the RMS expected from noise alone [channel unit]."""
+    worst_start_s: float
+    """Start of the window of ``window_s`` with the largest residual RMS [s]."""
+    worst_rms: float
+    """RMS of r in that window [channel unit]."""
+
+    def to_dict(self) -> dict[str, Any]:
+        return {k: _json(v) for k, v in vars(self).items()}
+
+
+@dataclass(frozen=True)
+class PositionTest:
+    """Whether a residual follows the turntable positions (module docstring)."""
+
+    theta_deg: tuple[float, ...]
+    """Turntable angles theta_k [deg]."""
+    bias: tuple[float, ...]
+    """Mean over the cycles of the dwell residual minus its cycle mean, per position."""
+    stderr: tuple[float, ...]
+    """Standard error of each, from the cycle-to-cycle scatter."""
+    n_cycles: int
+    """Cycles used."""
+
+    @property
+    def spread(self) -> float:
+        """RMS of the per-position biases [channel unit]."""
+        b = np.asarray(self.bias, dtype=float)
+        return float(np.sqrt(np.mean(b * b))) if b.size else math.nan
+
+    @property
+    def uncertainty(self) -> float:
+        """RMS of their standard errors [channel unit]."""
+        s = np.asarray(self.stderr, dtype=float)
+        return float(np.sqrt(np.mean(s * s))) if s.size else math.nan
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"theta_deg": [_json(v) for v in self.theta_deg],
+                "bias": [_json(v) for v in self.bias],
+                "stderr": [_json(v) for v in self.stderr], "n_cycles": self.n_cycles,
+                "spread": _json(self.spread), "uncertainty": _json(self.uncertainty)}
+
+
+@dataclass(frozen=True)
+class ChannelRun:
+    """One channel of one run: the traces and their statistics."""
+
+    channel: str
+    """Channel key."""
+    run_name: str
+    """Name of the run."""
+    start_temperature_c: float
+    """T0 of the run [degC]."""
+    time_s: np.ndarray
+    """Time of each residual point [s] (a sample at rest, or a dwell's mid-time)."""
+    position_deg: np.ndarray
+    """Turntable angle of each point [deg]."""
+    measured: np.ndarray
+    """Measured value at each point."""
+    model: np.ndarray
+    """Model value at each point."""
+    floor_sq: np.ndarray
+    """Squared noise floor at each point (see the module docstring)."""
+    stages: dict[str, ResidualStats]
+    """``startup``, ``stable`` and ``all``."""
+    positions: dict[float, ResidualStats]
+    """Statistics by turntable angle [deg]."""
+    position_test: PositionTest
+    """The cycle-contrast test of position dependence."""
+
+    @property
+    def residual(self) -> np.ndarray:
+        """measured - model."""
+        return self.measured - self.model
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"channel": self.channel, "run": self.run_name,
+                "start_temperature_c": _json(self.start_temperature_c),
+                "stages": {k: v.to_dict() for k, v in self.stages.items()},
+                "positions": [{"theta_deg": _json(k), **v.to_dict()}
+                              for k, v in self.positions.items()],
+                "position_test": self.position_test.to_dict()}
+
+
+@dataclass(frozen=True)
+class ChannelSummary:
+    """One channel over all runs, and where it fails in words."""
+
+    channel: str
+    """Channel key."""
+    unit: str
+    """Unit of the residual."""
+    stages: dict[str, tuple[float, float]]
+    """Per stage: (pooled residual RMS, pooled noise floor) [channel unit]."""
+    ratio: float
+    """Pooled residual RMS / noise floor over the whole runs."""
+    stage_ratios: dict[str, float]
+    """Pooled residual RMS / noise floor per stage."""
+    consistent: bool
+    """Every stage's ratio <= CONSISTENT_RATIO."""
+    early_fraction: dict[float, float]
+    """Span N [min] -> fraction of the excess residual energy in the first N minutes."""
+    early_span_min: float | None
+    """The shortest span that holds half the excess energy, if it is early (else None)."""
+    corr_abs_t0: float
+    """Correlation over the runs of the excess RMS with |T0 - 25 C| (NaN if undefined)."""
+    corr_t0: float
+    """Correlation over the runs of the excess RMS with T0 (NaN if undefined)."""
+    t0_variation: float
+    """Coefficient of variation of the per-run excess RMS."""
+    position_ratio: float
+    """Pooled spread of the per-position biases / their standard error."""
+    sentence: str
+    """Where it fails, in words."""
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"channel": self.channel, "unit": self.unit,
+                "stages": {k: {"rms": _json(r), "floor": _json(f)}
+                           for k, (r, f) in self.stages.items()},
+                "ratio": _json(self.ratio),
+                "stage_ratios": {k: _json(v) for k, v in self.stage_ratios.items()},
+                "consistent": self.consistent,
+                "early_fraction": {f"{k:g}": _json(v) for k, v in self.early_fraction.items()},
+                "early_span_min": _json(self.early_span_min),
+                "corr_abs_t0": _json(self.corr_abs_t0), "corr_t0": _json(self.corr_t0),
+                "t0_variation": _json(self.t0_variation),
+                "position_ratio": _json(self.position_ratio), "sentence": self.sentence}
+
+
+@dataclass(frozen=True)
+class RunHeading:
+    """Heading RMSE of a run, measured and as the model predicts it [deg]."""
+
+    run_name: str
+    """Name of the run."""
+    start_temperature_c: float
+    """T0 [degC]."""
+    measured_startup_deg: float
+    """North-finding the measured run, start-up cycles."""
+    measured_stable_deg: float
+    """... stable cycles."""
+    model_startup_deg: float
+    """North-finding the model's run, start-up cycles."""
+    model_stable_deg: float
+    """... stable cycles."""
+
+    def to_dict(self) -> dict[str, Any]:
+        return {k: _json(v) for k, v in vars(self).items()}
+
+
+@dataclass(frozen=True)
+class Comparison:
+    """The model against a set of runs (:func:`compare`)."""
+
+    model_name: str
+    """Name of the compared instrument model."""
+    run_names: tuple[str, ...]
+    """The runs, in the order given."""
+    start_temperatures_c: tuple[float, ...]
+    """T0 of each run [degC]."""
+    settings: dict[str, Any]
+    """seed, startup_end_s, stable_start_s, window_s."""
+    per_run: dict[str, tuple[ChannelRun, ...]]
+    """Channel key -> one :class:`ChannelRun` per run."""
+    summaries: dict[str, ChannelSummary]
+    """Channel key -> :class:`ChannelSummary`."""
+    headings: tuple[RunHeading, ...]
+    """Heading RMSE per run."""
+
+    def sentences(self) -> list[str]:
+        """"Where it fails", one sentence per channel, in channel order."""
+        return [self.summaries[c.key].sentence for c in CHANNELS if c.key in self.summaries]
+
+    @property
+    def heading_pooled(self) -> dict[str, float]:
+        """RMS over the runs of each heading RMSE column [deg]."""
+        out = {}
+        for k in ("measured_startup_deg", "measured_stable_deg", "model_startup_deg",
+                  "model_stable_deg"):
+            v = np.array([getattr(h, k) for h in self.headings], dtype=float)
+            v = v[np.isfinite(v)]
+            out[k] = float(np.sqrt(np.mean(v * v))) if v.size else math.nan
+        return out
+
+    def heading_sentence(self) -> str:
+        """Measured against predicted heading RMSE, in words."""
+        p = self.heading_pooled
+        return (f"heading RMSE start-up: measured {_g(p['measured_startup_deg'])} deg, model "
+                f"{_g(p['model_startup_deg'])} deg; stable: measured "
+                f"{_g(p['measured_stable_deg'])} deg, model {_g(p['model_stable_deg'])} deg "
+                f"(RMS over {len(self.headings)} run(s))")
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready form (NaN as null; no traces)."""
+        return {
+            "model": self.model_name,
+            "runs": [{"name": n, "start_temperature_c": _json(t)}
+                     for n, t in zip(self.run_names, self.start_temperatures_c)],
+            "settings": {k: _json(v) for k, v in self.settings.items()},
+            "residual": "measured - model",
+            "channels": {k: {"summary": self.summaries[k].to_dict(),
+                             "runs": [cr.to_dict() for cr in self.per_run[k]]}
+                         for k in self.summaries},
+            "heading": {"runs": [h.to_dict() for h in self.headings],
+                        "pooled": {k: _json(v) for k, v in self.heading_pooled.items()},
+                        "sentence": self.heading_sentence()},
+            "sentences": self.sentences(),
+        }
+
+
+# --------------------------------------------------------------------------------------------
+# Small helpers
+
+
+def _json(v):
+    if v is None or isinstance(v, (bool, str)):
+        return v
+    if isinstance(v, (int, np.integer)):
+        return int(v)
+    try:
+        f = float(v)
+    except (TypeError, ValueError):
+        return v
+    return f if math.isfinite(f) else None
+
+
+def _g(v: float, digits: int = 3) -> str:
+    return "nan" if v is None or not math.isfinite(v) else f"{v:.{digits}g}"
+
+
+def _fmt_value(v: float, unit: str) -> str:
+    """A value with its unit; specific forces in micro-g."""
+    if unit == "g":
+        return f"{_g(v * 1e6, 3)} ug"
+    return f"{_g(v, 3)} {unit}"
+
+
+def _rms(x: np.ndarray) -> float:
+    return float(np.sqrt(np.mean(x * x))) if x.size else math.nan
+
+
+def noise_free(inst: Instrument) -> Instrument:
+    """The instrument without gyro, accelerometer and thermometer noise or quantisation: its
+    simulated channels are the model's expectation (aux channels are left as they are)."""
+    g = replace(inst.gyro, arw_deg_per_rth_h=0.0, bias_instability_dph=0.0,
+                rrw_deg_per_h_per_rth_h=0.0)
+    a = replace(inst.accelerometers, noise_ug_per_rth_hz=0.0)
+    th = {k: replace(v, noise_c=0.0, quantum_c=0.0) for k, v in inst.thermometers.items()}
+    return replace(inst, gyro=g, accelerometers=a, thermometers=th)
+
+
+def _check_run(run: Run) -> None:
+    for col in _BASE_COLUMNS + tuple(c.column for c in CHANNELS):
+        if col not in run.columns:
+            what = next((c.label for c in CHANNELS if c.column == col), "turntable motion")
+            raise MeasurementError(
+                f"run '{run.name}' has no column '{col}', which the comparison needs "
+                f"({what})", file=run.path, column=col)
+
+
+def _worst_window(t: np.ndarray, r: np.ndarray, window_s: float) -> tuple[float, float]:
+    """Start time and RMS of the window [t_i, t_i + window_s) with the largest RMS, over
+    windows that lie within the record and hold at least half as many points as the
+    fullest window."""
+    if t.size == 0:
+        return math.nan, math.nan
+    c2 = np.concatenate([[0.0], np.cumsum(r * r)])
+    stop = np.searchsorted(t, t + window_s, side="left")
+    count = stop - np.arange(t.size)
+    inside = t + window_s <= t[-1] + (t[1] - t[0] if t.size > 1 else 0.0) + 1e-9
+    ok = inside & (count >= 0.5 * count.max())
+    if not ok.any():
+        return float(t[0]), _rms(r)
+    ms = np.where(ok, (c2[stop] - c2[:-1]) / np.maximum(count, 1), -np.inf)
+    i = int(np.argmax(ms))
+    return float(t[i]), float(np.sqrt(ms[i]))
+
+
+def _stats(t, r, f2, mask, window_s) -> ResidualStats:
+    tt, rr, ff = t[mask], r[mask], f2[mask]
+    n = int(rr.size)
+    if n == 0:
+        return ResidualStats(0, math.nan, math.nan, math.nan, math.nan, math.nan, math.nan)
+    ws, wr = _worst_window(tt, rr, window_s)
+    return ResidualStats(n=n, rms=_rms(rr), bias=float(np.mean(rr)), std=float(np.std(rr)),
+                         floor_rms=float(np.sqrt(np.mean(ff))), worst_start_s=ws,
+                         worst_rms=wr)
+
+
+def _position_test(values: np.ndarray, cycles) -> PositionTest:
+    """Position dependence of a per-sample residual (module docstring).
+
+    The dwell means m_j of consecutive complete cycles (period P dwells) lose their slow
+    trend by a centred moving average over one cycle (weights 1/P, or [1/2, 1, ..., 1, 1/2]/P
+    for even P, as in classical seasonal decomposition), which holds every position once and
+    removes a linear trend exactly; the detrended means are then averaged by turntable angle,
+    with the standard error of each mean from their scatter.
+    """
+    if not cycles:
+        return PositionTest((), (), (), 0)
+    dwells = [d for c in cycles for d in c.dwells]
+    period = len(cycles[0].dwells)
+    m = np.full(len(dwells), np.nan)
+    for j, d in enumerate(dwells):
+        v = values[d.start:d.stop]
+        v = v[np.isfinite(v)]
+        if v.size:
+            m[j] = v.mean()
+    theta = np.round(np.mod([d.theta_deg for d in dwells], 360.0), 1)
+    if period % 2:
+        w = np.full(period, 1.0 / period)
+    else:
+        w = np.concatenate([[0.5], np.ones(period - 1), [0.5]]) / period
+    h = (w.size - 1) // 2
+    if len(dwells) < w.size + 2:
+        angles = tuple(float(a) for a in np.unique(theta))
+        return PositionTest(angles, (math.nan,) * len(angles), (math.nan,) * len(angles),
+                            len(cycles))
+    trend = np.convolve(m, w, mode="valid")          # trend of dwells h .. n-h-1
+    contrast = m[h:len(m) - h] - trend
+    th = theta[h:len(m) - h]
+    angles, bias, se = [], [], []
+    for a in np.unique(theta):
+        c = contrast[(th == a) & np.isfinite(contrast)]
+        angles.append(float(a))
+        bias.append(float(c.mean()) if c.size else math.nan)
+        se.append(float(c.std(ddof=1) / math.sqrt(c.size)) if c.size > 1 else math.nan)
+    return PositionTest(tuple(angles), tuple(bias), tuple(se), len(cycles))
+
+
+# --------------------------------------------------------------------------------------------
+# One run
+
+
+def _run_seed(seed, k: int, role: int):
+    base = tuple(seed) if isinstance(seed, (tuple, list)) else (int(seed),)
+    return (*base, k, SEED_SALT, role)
+
+
+def _channel_run(spec, run, t, pos, measured, model, f2, rest, cycles, per_sample_residual,
+                 cfg) -> ChannelRun:
+    r = measured - model
+    stages = {
+        "startup": _stats(t, r, f2, rest & (t < cfg["startup_end_s"]), cfg["window_s"]),
+        "stable": _stats(t, r, f2, rest & (t >= cfg["stable_start_s"]), cfg["window_s"]),
+        "all": _stats(t, r, f2, rest, cfg["window_s"]),
+    }
+    angles = np.round(np.mod(pos, 360.0), 1)
+    positions = {}
+    for a in np.unique(angles[rest]):
+        positions[float(a)] = _stats(t, r, f2, rest & (angles == a), cfg["window_s"])
+    keep = rest
+    return ChannelRun(
+        channel=spec.key, run_name=run.name,
+        start_temperature_c=float(run.meta.start_temperature_c),
+        time_s=t[keep], position_deg=pos[keep], measured=measured[keep], model=model[keep],
+        floor_sq=f2[keep], stages=stages, positions=positions,
+        position_test=_position_test(per_sample_residual, cycles))
+
+
+def _compare_run(inst: Instrument, clean: Instrument, run: Run, k: int, cfg) -> tuple[
+        dict[str, ChannelRun], RunHeading]:
+    seed = cfg["seed"]
+    sim_a = simulate_run(inst, conditions_from_run(run, seed=_run_seed(seed, k, 0)))
+    sim_b = simulate_run(inst, conditions_from_run(run, seed=_run_seed(seed, k, 1)))
+    expect = simulate_run(clean, conditions_from_run(run, seed=_run_seed(seed, k, 2))).run
+
+    t = np.asarray(run["time_s"], dtype=float)
+    pos = np.asarray(run["position_deg"], dtype=float)
+    rest = np.asarray(run["moving"], dtype=float) == 0.0
+    nf_meas = north_find(run)
+    nf_model = north_find(sim_a.run)
+    cycles = list(nf_meas.cycles)
+    out: dict[str, ChannelRun] = {}
+
+    for spec in CHANNELS:
+        if spec.kind == "thermometer":
+            th = inst.thermometers[_THERMOMETER_OF[spec.column]]
+            meas = np.asarray(run[spec.column], dtype=float)
+            mod = np.asarray(expect[spec.column], dtype=float)
+            f2 = np.full(t.shape, th.noise_c ** 2 + th.quantum_c ** 2 / 12.0)
+            ok = rest & np.isfinite(meas)
+            out[spec.key] = _channel_run(spec, run, t, pos, meas, mod, f2, ok, cycles,
+                                         np.where(ok, meas - mod, np.nan), cfg)
+        elif spec.kind == "gyro":
+            d_meas = separate_drift(run)
+            d_a = separate_drift(sim_a.run).drift_dph
+            d_b = separate_drift(sim_b.run).drift_dph
+            meas, mod = d_meas.drift_dph, d_a
+            ok = ~d_meas.interpolated
+            out[spec.key] = _channel_run(spec, run, t, pos, meas, mod, (d_a - d_b) ** 2, ok,
+                                         cycles, np.where(ok, meas - mod, np.nan), cfg)
+        else:  # accelerometer: dwell means
+            meas_s = np.asarray(run[spec.column], dtype=float)
+            mod_s = np.asarray(expect[spec.column], dtype=float)
+            dwells = [d for c in cycles for d in c.dwells]
+            tm, pm, mm, om, f2 = [], [], [], [], []
+            diffs = []
+            for d in dwells:
+                seg = meas_s[d.start:d.stop]
+                ok = np.isfinite(seg)
+                if ok.sum() < 2:
+                    continue
+                tm.append(0.5 * (d.t_start_s + d.t_end_s))
+                pm.append(d.theta_deg)
+                mm.append(seg[ok].mean())
+                om.append(mod_s[d.start:d.stop][ok].mean())
+                f2.append(ok.sum())
+                diffs.append(np.diff(seg[ok]))
+            n_pts = np.asarray(f2, dtype=float)
+            dd = np.concatenate(diffs) if diffs else np.array([])
+            sigma2 = float(np.var(dd) / 2.0) if dd.size > 1 else math.nan
+            tm_a = np.asarray(tm, dtype=float)
+            mask = np.ones(tm_a.shape, dtype=bool)
+            out[spec.key] = _channel_run(
+                spec, run, tm_a, np.asarray(pm, dtype=float), np.asarray(mm, dtype=float),
+                np.asarray(om, dtype=float), sigma2 / np.maximum(n_pts, 1), mask, cycles,
+                np.where(rest, meas_s - mod_s, np.nan), cfg)
+
+    def stage(nf):
+        s = heading_rmse(nf, startup_end_s=cfg["startup_end_s"],
+                         stable_start_s=cfg["stable_start_s"])
+        return s.startup_deg, s.stable_deg
+
+    (mu, ms), (pu, ps) = stage(nf_meas), stage(nf_model)
+    heading = RunHeading(run.name, float(run.meta.start_temperature_c), mu, ms, pu, ps)
+    return out, heading
+
+
+# --------------------------------------------------------------------------------------------
+# Over the runs: statistics and words
+
+
+def _corr(x: np.ndarray, y: np.ndarray) -> float:
+    ok = np.isfinite(x) & np.isfinite(y)
+    x, y = x[ok], y[ok]
+    if x.size < 3 or np.ptp(x) == 0 or np.ptp(y) == 0:
+        return math.nan
+    return float(np.corrcoef(x, y)[0, 1])
+
+
+_STAGE_WORDS = {"startup": "start-up stage", "stable": "stable stage", "all": "whole runs"}
+
+
+def _ratio(rms: float, floor: float) -> float:
+    if not (math.isfinite(rms) and math.isfinite(floor)):
+        return math.nan
+    return rms / floor if floor > 0 else (math.inf if rms > 0 else 1.0)
+
+
+def _summarise(spec: ChannelSpec, runs: Sequence[ChannelRun]) -> ChannelSummary:
+    stages = {}
+    for s in STAGES:
+        num = sum(cr.stages[s].n * cr.stages[s].rms ** 2 for cr in runs if cr.stages[s].n)
+        fl = sum(cr.stages[s].n * cr.stages[s].floor_rms ** 2 for cr in runs if cr.stages[s].n)
+        n = sum(cr.stages[s].n for cr in runs)
+        stages[s] = ((math.sqrt(num / n), math.sqrt(fl / n)) if n else (math.nan, math.nan))
+    rms, floor = stages["all"]
+    ratios = {s: _ratio(*stages[s]) for s in STAGES}
+    ratio = ratios["all"]
+    worst = max(("startup", "stable"), key=lambda s: ratios[s] if math.isfinite(ratios[s])
+                else -1.0)
+    consistent = bool(max(v for v in ratios.values() if math.isfinite(v)) <= CONSISTENT_RATIO
+                      if any(math.isfinite(v) for v in ratios.values()) else True)
+
+    # when: excess energy in the first N minutes, pooled over the runs
+    duration = max((float(cr.time_s[-1]) for cr in runs if cr.time_s.size), default=0.0)
+    total = sum(float(np.sum(cr.residual ** 2 - cr.floor_sq)) for cr in runs)
+    early: dict[float, float] = {}
+    span = None
+    for n_min in EARLY_SPANS_MIN:
+        part = sum(float(np.sum((cr.residual ** 2 - cr.floor_sq)[cr.time_s < 60.0 * n_min]))
+                   for cr in runs)
+        early[n_min] = float(np.clip(part / total, 0.0, 1.0)) if total > 0 else math.nan
+        if (span is None and total > 0 and early[n_min] >= 0.5
+                and 60.0 * n_min <= duration / 3.0):
+            span = n_min
+
+    # T0: correlation of the per-run excess RMS
+    t0 = np.array([cr.start_temperature_c for cr in runs], dtype=float)
+    exc = np.array([math.sqrt(max(cr.stages["all"].rms ** 2 - cr.stages["all"].floor_rms ** 2,
+                                  0.0)) for cr in runs])
+    c_abs, c_t0 = _corr(np.abs(t0 - T_REF_C), exc), _corr(t0, exc)
+    variation = float(np.std(exc) / np.mean(exc)) if np.mean(exc) > 0 else 0.0
+
+    # positions: pooled spread / standard error
+    spreads = np.array([cr.position_test.spread for cr in runs], dtype=float)
+    uncs = np.array([cr.position_test.uncertainty for cr in runs], dtype=float)
+    ok = np.isfinite(spreads) & np.isfinite(uncs) & (uncs > 0)
+    pos_ratio = (float(np.sqrt(np.mean(spreads[ok] ** 2)) / np.sqrt(np.mean(uncs[ok] ** 2)))
+                 if ok.any() else math.nan)
+    pos_spread = float(np.sqrt(np.mean(spreads[ok] ** 2))) if ok.any() else math.nan
+
+    head = (f"{spec.label} ({spec.key}) residual {_fmt_value(rms, spec.unit)} RMS, "
+            f"{ratio:.1f}x the noise floor ({_fmt_value(floor, spec.unit)})")
+    if math.isfinite(ratios[worst]) and ratios[worst] > max(ratio, CONSISTENT_RATIO):
+        head += (f"; {_STAGE_WORDS[worst]} {_fmt_value(stages[worst][0], spec.unit)} RMS, "
+                 f"{ratios[worst]:.1f}x its floor")
+    if consistent:
+        sentence = head + ": consistent with noise."
+    else:
+        parts = []
+        if span is not None:
+            parts.append(f"concentrated in the first {span:g} min after power-on "
+                         f"({100 * early[span]:.0f}% of the excess residual energy in "
+                         f"{100 * 60 * span / duration:.0f}% of the time)")
+        elif total > 0:
+            last = EARLY_SPANS_MIN[-1]
+            parts.append(f"spread over the run ({100 * early[last]:.0f}% of the excess "
+                         f"residual energy in the first {last:g} min)")
+        n_runs = int(np.isfinite(exc).sum())
+        if variation >= T0_VARIATION and math.isfinite(c_abs) and c_abs >= T0_CORRELATION \
+                and c_abs >= abs(c_t0):
+            parts.append(f"growing with |T0 - 25 C| (correlation {c_abs:.2f} over "
+                         f"{n_runs} runs)")
+        elif variation >= T0_VARIATION and math.isfinite(c_t0) and abs(c_t0) >= T0_CORRELATION:
+            parts.append(f"{'growing' if c_t0 > 0 else 'falling'} with T0 (correlation "
+                         f"{c_t0:.2f} over {n_runs} runs)")
+        elif variation >= T0_VARIATION and math.isfinite(c_abs) and c_abs <= -T0_CORRELATION:
+            parts.append(f"largest near 25 C (correlation with |T0 - 25 C| {c_abs:.2f} over "
+                         f"{n_runs} runs)")
+        elif math.isfinite(c_abs):
+            parts.append(f"not scaling with T0 (correlation with |T0 - 25 C| {c_abs:.2f}, "
+                         f"with T0 {c_t0:.2f})")
+        if math.isfinite(pos_ratio) and pos_ratio >= POSITION_RATIO:
+            parts.append(f"following the turntable positions (per-position bias spread "
+                         f"{_fmt_value(pos_spread, spec.unit)}, {pos_ratio:.1f}x its "
+                         f"uncertainty)")
+        elif math.isfinite(pos_ratio):
+            parts.append(f"not following the turntable positions (per-position bias spread "
+                         f"{pos_ratio:.1f}x its uncertainty)")
+        sentence = head + ", " + ", ".join(parts) + "."
+    return ChannelSummary(
+        channel=spec.key, unit=spec.unit, stages=stages, ratio=float(ratio),
+        stage_ratios=ratios,
+        consistent=consistent, early_fraction=early, early_span_min=span, corr_abs_t0=c_abs,
+        corr_t0=c_t0, t0_variation=variation, position_ratio=pos_ratio, sentence=sentence)
+
+
+def compare(inst: Instrument, runs: Sequence[Run], *, seed=0, startup_end_s: float = 3600.0,
+            stable_start_s: float = 5400.0, window_s: float = 600.0) -> Comparison:
+    """Set the model ``inst`` beside every measured run, channel by channel.
+
+    Each run is replayed on its own (time base, motion, T0, latitude, heading, chamber), so
+    runs with different latitudes or schedules can be compared in one set.
+
+    Parameters
+    ----------
+    inst : Instrument
+        The model (e.g. a fitted one).
+    runs : sequence of Run
+        The measured runs; each needs ``time_s``, ``position_deg``, ``moving``, ``gyro_dph``,
+        ``acc_x_g``, ``acc_y_g`` and the three thermometer columns, and a true heading.
+    seed : int or tuple of int
+        Root of the model's noise; run k uses ``(seed, k, SEED_SALT, role)``.
+    startup_end_s, stable_start_s : float
+        Start-up stage t < startup_end_s; stable stage t >= stable_start_s [s]. The heading
+        RMSE uses :func:`nfs.northfind.heading_rmse` with the same bounds.
+    window_s : float
+        Length of the window of the worst residual [s].
+
+    Returns
+    -------
+    Comparison
+
+    Raises
+    ------
+    NfsError
+        No runs, a run missing a needed column (the message names run and column), a run
+        without a true heading or without a complete north-finding cycle.
+    """
+    runs = list(runs)
+    if not runs:
+        raise NfsError("compare needs at least one run")
+    if not window_s > 0:
+        raise NfsError(f"window_s must be > 0, got {window_s}")
+    for run in runs:
+        _check_run(run)
+    cfg = {"seed": seed, "startup_end_s": float(startup_end_s),
+           "stable_start_s": float(stable_start_s), "window_s": float(window_s)}
+    clean = noise_free(inst)
+    per_run: dict[str, list[ChannelRun]] = {c.key: [] for c in CHANNELS}
+    headings = []
+    for k, run in enumerate(runs):
+        chans, heading = _compare_run(inst, clean, run, k, cfg)
+        for key, cr in chans.items():
+            per_run[key].append(cr)
+        headings.append(heading)
+    summaries = {c.key: _summarise(c, per_run[c.key]) for c in CHANNELS}
+    settings = dict(cfg)
+    settings["seed"] = str(seed)
+    return Comparison(
+        model_name=inst.name, run_names=tuple(r.name for r in runs),
+        start_temperatures_c=tuple(float(r.meta.start_temperature_c) for r in runs),
+        settings=settings, per_run={k: tuple(v) for k, v in per_run.items()},
+        summaries=summaries, headings=tuple(headings))
+
+
+# --------------------------------------------------------------------------------------------
+# Report: Markdown, JSON and figures
+
+
+def _safe(name: str) -> str:
+    return re.sub(r"[^A-Za-z0-9_.+-]+", "_", name)
+
+
+def _png(fig) -> bytes:
+    import io
+    buf = io.BytesIO()
+    # Metadata pinned so that the same comparison gives the same PNG bytes.
+    fig.savefig(buf, format="png", metadata={"Software": None})
+    return buf.getvalue()
+
+
+def _scale(unit: str) -> tuple[float, str]:
+    return (1e6, "ug") if unit == "g" else (1.0, unit)
+
+
+def plot_overlay(comparison: Comparison, i_run: int):
+    """Measured against model for the gyro drift and the FOG thermometer of run ``i_run``
+    (a matplotlib Figure, made without pyplot)."""
+    from matplotlib.figure import Figure
+    fig = Figure(figsize=(8.0, 6.0), dpi=100)
+    for j, key in enumerate(("gyro_drift_dph", "temp_fog_c")):
+        cr = comparison.per_run[key][i_run]
+        ax = fig.add_subplot(2, 1, j + 1)
+        t_min = cr.time_s / 60.0
+        ax.plot(t_min, cr.measured, ".", ms=1.0, color="0.3", label="measured")
+        ax.plot(t_min, cr.model, "-", lw=1.2, color="tab:red", label="model")
+        ax.set_ylabel(f"{_BY_KEY[key].label} [{_BY_KEY[key].unit}]")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=8)
+    ax.set_xlabel("time after power-on [min]")
+    fig.suptitle(f"{comparison.run_names[i_run]} (T0 = "
+                 f"{comparison.start_temperatures_c[i_run]:g} C): measured vs model")
+    fig.tight_layout()
+    return fig
+
+
+def plot_residuals(comparison: Comparison, i_run: int):
+    """Residual (measured - model) over time of every channel of run ``i_run``, with the
+    +-noise-floor band."""
+    from matplotlib.figure import Figure
+    fig = Figure(figsize=(8.0, 10.0), dpi=100)
+    for j, spec in enumerate(CHANNELS):
+        cr = comparison.per_run[spec.key][i_run]
+        k, unit = _scale(spec.unit)
+        ax = fig.add_subplot(len(CHANNELS), 1, j + 1)
+        t_min = cr.time_s / 60.0
+        fl = k * cr.stages["all"].floor_rms   # the run's floor RMS (the gyro's is a draw)
+        ax.axhspan(-fl, fl, color="0.85", lw=0, label="+-noise floor")
+        style = {"accelerometer": (".-", 3.0), "gyro": ("-", 0.0)}.get(spec.kind, (".", 0.5))
+        ax.plot(t_min, k * cr.residual, style[0], lw=0.8, ms=style[1], color="tab:blue",
+                label="residual")
+        ax.axhline(0.0, color="k", lw=0.5)
+        ax.set_ylabel(f"{spec.key}\n[{unit}]", fontsize=8)
+        ax.grid(alpha=0.3)
+    ax.set_xlabel("time after power-on [min]")
+    fig.suptitle(f"{comparison.run_names[i_run]}: residual measured - model")
+    fig.tight_layout()
+    return fig
+
+
+def plot_rms_vs_t0(comparison: Comparison):
+    """Per-run residual RMS by stage against the start temperature, one panel per channel,
+    with the noise floor."""
+    from matplotlib.figure import Figure
+    fig = Figure(figsize=(10.0, 8.0), dpi=100)
+    t0 = np.asarray(comparison.start_temperatures_c, dtype=float)
+    order = np.argsort(t0)
+    for j, spec in enumerate(CHANNELS):
+        k, unit = _scale(spec.unit)
+        ax = fig.add_subplot(3, 2, j + 1)
+        runs = comparison.per_run[spec.key]
+        for stage, marker in (("startup", "o"), ("stable", "s"), ("all", "^")):
+            v = np.array([cr.stages[stage].rms for cr in runs])
+            ax.plot(t0[order], k * v[order], marker + "-", ms=4, lw=0.8, label=stage)
+        fl = np.array([cr.stages["all"].floor_rms for cr in runs])
+        ax.plot(t0[order], k * fl[order], "k--", lw=1.0, label="floor")
+        ax.set_title(spec.key, fontsize=9)
+        ax.set_ylabel(f"RMS [{unit}]", fontsize=8)
+        ax.set_xlabel("T0 [C]", fontsize=8)
+        ax.grid(alpha=0.3)
+        if j == 0:
+            ax.legend(fontsize=7)
+    fig.suptitle("residual RMS vs start temperature")
+    fig.tight_layout()
+    return fig
+
+
+def _md_table(head: list[str], rows: list[list[str]]) -> str:
+    lines = ["| " + " | ".join(head) + " |",
+             "|" + "|".join(["---"] + ["---:"] * (len(head) - 1)) + "|"]
+    lines += ["| " + " | ".join(r) + " |" for r in rows]
+    return "\n".join(lines) + "\n"
+
+
+def _v(v: float, unit: str) -> str:
+    k, _ = _scale(unit)
+    return _g(v * k if v is not None and math.isfinite(v) else math.nan, 3)
+
+
+def to_markdown(comparison: Comparison, figures: dict[str, list[str]] | None = None) -> str:
+    """The Markdown report: summary, where it fails, heading, per-run tables, figures."""
+    c = comparison
+    out = [f"# Model '{c.model_name}' against {len(c.run_names)} run(s)", ""]
+    s = c.settings
+    out += [f"Residual = measured - model. Start-up stage t < {s['startup_end_s']:g} s, stable "
+            f"stage t >= {s['stable_start_s']:g} s, worst window {s['window_s']:g} s, model "
+            f"seed {s['seed']}. Accelerometer values in ug (dwell means); gyro drift after "
+            "wavelet separation on both sides; noise floors as in "
+            "`nfs.diagnose.compare`.", "", "## Where it fails", ""]
+    out += [f"- {x}" for x in c.sentences()] + [f"- {c.heading_sentence()}", ""]
+    out += ["## Summary", ""]
+    rows = []
+    for spec in CHANNELS:
+        sm = c.summaries[spec.key]
+        _, unit = _scale(spec.unit)
+        row = [spec.key, unit]
+        for st in STAGES:
+            rms, fl = sm.stages[st]
+            row += [_v(rms, spec.unit), _v(fl, spec.unit)]
+        row += [f"{sm.ratio:.2f}", "noise" if sm.consistent else "FAILS"]
+        rows.append(row)
+    out.append(_md_table(["channel", "unit", "start-up RMS", "floor", "stable RMS", "floor",
+                          "all RMS", "floor", "ratio", "verdict"], rows))
+    out += ["## Heading RMSE [deg]", ""]
+    rows = [[h.run_name, f"{h.start_temperature_c:g}", _g(h.measured_startup_deg, 4),
+             _g(h.model_startup_deg, 4), _g(h.measured_stable_deg, 4),
+             _g(h.model_stable_deg, 4)] for h in c.headings]
+    p = c.heading_pooled
+    rows.append(["RMS over runs", "", _g(p["measured_startup_deg"], 4),
+                 _g(p["model_startup_deg"], 4), _g(p["measured_stable_deg"], 4),
+                 _g(p["model_stable_deg"], 4)])
+    out.append(_md_table(["run", "T0 [C]", "start-up measured", "start-up model",
+                          "stable measured", "stable model"], rows))
+    out += ["## Per channel and run", ""]
+    for spec in CHANNELS:
+        _, unit = _scale(spec.unit)
+        out += [f"### {spec.key} [{unit}]", ""]
+        rows = []
+        for cr in c.per_run[spec.key]:
+            for st in STAGES:
+                x = cr.stages[st]
+                rows.append([cr.run_name, f"{cr.start_temperature_c:g}", st, _v(x.rms, spec.unit),
+                             _v(x.bias, spec.unit), _v(x.std, spec.unit),
+                             _v(x.floor_rms, spec.unit), _g(x.worst_start_s, 4),
+                             _v(x.worst_rms, spec.unit)])
+        out.append(_md_table(["run", "T0 [C]", "stage", "RMS", "bias", "std", "floor",
+                              "worst window start [s]", "worst window RMS"], rows))
+        rows = []
+        for cr in c.per_run[spec.key]:
+            pt = cr.position_test
+            for a, x in cr.positions.items():
+                i = pt.theta_deg.index(a) if a in pt.theta_deg else None
+                rows.append([cr.run_name, f"{a:g}", _v(x.rms, spec.unit), _v(x.bias, spec.unit),
+                             _v(pt.bias[i], spec.unit) if i is not None else "",
+                             _v(pt.stderr[i], spec.unit) if i is not None else ""])
+        out += ["By turntable position (detrended bias: dwell means minus the centred "
+                "one-cycle moving average):", ""]
+        out.append(_md_table(["run", "theta [deg]", "RMS", "bias", "detrended bias",
+                              "its std. error"], rows))
+    if figures:
+        out += ["## Figures", ""]
+        for title, paths in figures.items():
+            out += [f"### {title}", ""] + [f"![{Path(q).stem}]({q})" for q in paths] + [""]
+    return "\n".join(out) + "\n"
+
+
+def write_report(comparison: Comparison, out_dir: str | Path) -> list[Path]:
+    """Write ``report.md``, ``comparison.json`` and the figures (PNG) into ``out_dir``, every
+    file atomically. Returns the paths written."""
+    out = Path(out_dir)
+    (out / "figures").mkdir(parents=True, exist_ok=True)
+    written: list[Path] = []
+    figures: dict[str, list[str]] = {"Measured vs model": [], "Residuals over time": [],
+                                     "Residual RMS vs start temperature": []}
+
+    def save(fig, rel: str, group: str) -> None:
+        path = out / rel
+        atomic_write_bytes(path, _png(fig))
+        written.append(path)
+        figures[group].append(rel)
+
+    for i, name in enumerate(comparison.run_names):
+        stem = f"{i:02d}_{_safe(name)}"
+        save(plot_overlay(comparison, i), f"figures/overlay_{stem}.png", "Measured vs model")
+        save(plot_residuals(comparison, i), f"figures/residuals_{stem}.png",
+             "Residuals over time")
+    save(plot_rms_vs_t0(comparison), "figures/rms_vs_t0.png",
+         "Residual RMS vs start temperature")
+    js = out / "comparison.json"
+    atomic_write_text(js, json.dumps(comparison.to_dict(), indent=2, allow_nan=False) + "\n")
+    md = out / "report.md"
+    atomic_write_text(md, to_markdown(comparison, figures))
+    return [md, js, *written]

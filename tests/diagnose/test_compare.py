@@ -1,0 +1,158 @@
+"""Tests of nfs.diagnose.compare: the model set beside measured runs, channel by channel.
+
+"Measured" runs are simulated (nfs.experiment.simulate_run) from the default scenario at a
+few start temperatures, 2.5 h at 1 Hz; the model is the default instrument.  Oracles:
+- the null hypothesis: runs made by the model itself (other noise) must be consistent with
+  noise on every channel, since the floor is built to be the residual's null distribution;
+- a known hidden effect (the effect registry's functions, effects.md) whose signature is
+  known in closed form: a turn-on transient a exp(-t/tau) lives in the first minutes, a
+  Shupe-Mohr term k_p (T - 25) dT/dt grows with |T0 - 25 C|, a magnetic bias m cos(A - D)
+  follows the turntable positions.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+
+import numpy as np
+import pytest
+
+from nfs.diagnose.compare import (CHANNELS, CONSISTENT_RATIO, Comparison, compare,
+                                  write_report)
+from nfs.effects import make_effect
+from nfs.errors import NfsError
+from nfs.experiment import simulate_run
+from nfs.io.measurement import Run
+from nfs.io.scenario import load_scenario
+
+TEMPS = (-32.0, -5.0, 17.0, 43.0, 54.0)
+
+
+@pytest.fixture(scope="module")
+def scenario():
+    return load_scenario()
+
+
+def _runs(scenario, inst, seed, temps=TEMPS):
+    sc = dataclasses.replace(scenario, start_temperatures_c=temps, seed=seed)
+    return [simulate_run(inst, c).run for c in sc.conditions()]
+
+
+def _swap(inst, name, **params):
+    """inst with its effect ``name`` replaced (or added) with ``params``."""
+    effects = [e for e in inst.effects if e.name != name] + [make_effect(name, params)]
+    return inst.with_effects(effects)
+
+
+@pytest.fixture(scope="module")
+def null_comparison(scenario) -> Comparison:
+    return compare(scenario.instrument, _runs(scenario, scenario.instrument, seed=101), seed=7)
+
+
+def test_self_generated_runs_are_consistent_with_noise(null_comparison):
+    # Oracle: under the null hypothesis the residual and the floor have one distribution.
+    c = null_comparison
+    for spec in CHANNELS:
+        s = c.summaries[spec.key]
+        assert s.consistent, s.sentence
+        assert "consistent with noise" in s.sentence
+        for stage, ratio in s.stage_ratios.items():
+            assert ratio <= CONSISTENT_RATIO, (spec.key, stage, ratio)
+        assert 0.6 < s.ratio < CONSISTENT_RATIO, (spec.key, s.ratio)
+
+
+def test_self_generated_heading_rmse_is_predicted(null_comparison):
+    # Oracle: the same model with other noise predicts the same heading RMSE within the
+    # scatter of a few runs (a factor 1.5 either way).
+    p = null_comparison.heading_pooled
+    for stage in ("startup", "stable"):
+        m, f = p[f"measured_{stage}_deg"], p[f"model_{stage}_deg"]
+        assert math.isfinite(m) and math.isfinite(f)
+        assert 1 / 1.5 < m / f < 1.5, (stage, m, f)
+
+
+def test_turn_on_transient_concentrates_in_the_first_minutes(scenario):
+    # Oracle: a exp(-t/tau) with a = 0.05 deg/h, tau = 300 s (default 0.008 deg/h, 120 s)
+    # holds 1 - exp(-2 * 600 / 300) = 98% of its energy in the first 10 min.
+    truth = _swap(scenario.instrument, "turn_on_transient", a=0.05, tau=300.0)
+    c = compare(scenario.instrument, _runs(scenario, truth, seed=202), seed=7)
+    g = c.summaries["gyro_drift_dph"]
+    assert not g.consistent
+    assert g.stage_ratios["startup"] > 2.0, g.stage_ratios
+    assert g.early_span_min is not None and g.early_span_min <= 10.0
+    assert "concentrated in the first" in g.sentence and "after power-on" in g.sentence
+    assert "growing with" not in g.sentence
+    assert "following the turntable positions" not in g.sentence.replace("not following", "")
+    # the thermometers and accelerometers do not see a gyro effect
+    for key in ("temp_fog_c", "acc_x_g", "acc_y_g"):
+        assert c.summaries[key].consistent, c.summaries[key].sentence
+    # the worst window of the gyro residual is the first one in every run
+    for cr in c.per_run["gyro_drift_dph"]:
+        assert cr.stages["all"].worst_start_s < 300.0
+
+
+def test_shupe_product_grows_with_distance_from_25c(scenario):
+    # Oracle: k_p (T - 25) dT/dt, k_p 0.03 instead of 0.006: the residual scales with
+    # T0 - 25 times a warm-up rate that itself grows with |T0 - 25| (the TEC power).
+    truth = _swap(scenario.instrument, "shupe_product", k_p=0.03)
+    c = compare(scenario.instrument, _runs(scenario, truth, seed=303), seed=7)
+    g = c.summaries["gyro_drift_dph"]
+    assert g.ratio > 3.0
+    assert "growing with |T0 - 25 C|" in g.sentence, g.sentence
+    assert g.corr_abs_t0 > 0.8
+
+
+def test_magnetic_bias_follows_the_positions(scenario):
+    # Oracle: m cos(A - D_mag) with m = 0.01 deg/h is constant in time and in T0 and
+    # changes sign between opposite positions.
+    truth = scenario.instrument.with_effects(
+        list(scenario.instrument.effects) + [make_effect("magnetic", {"m": 0.01,
+                                                                      "D_mag": 30.0})])
+    c = compare(scenario.instrument, _runs(scenario, truth, seed=404), seed=7)
+    g = c.summaries["gyro_drift_dph"]
+    assert not g.consistent
+    assert g.position_ratio > 3.0
+    assert "following the turntable positions" in g.sentence.replace("not following", "")
+    assert "concentrated in the first" not in g.sentence
+
+
+def test_report_files_and_json_round_trip(null_comparison, tmp_path):
+    # Oracle: the files exist, PNGs start with the PNG signature, JSON parses back equal.
+    paths = write_report(null_comparison, tmp_path / "report")
+    names = {p.name for p in paths}
+    assert {"report.md", "comparison.json", "rms_vs_t0.png"} <= names
+    assert sum(n.startswith("overlay_") for n in names) == len(TEMPS)
+    assert sum(n.startswith("residuals_") for n in names) == len(TEMPS)
+    for p in paths:
+        assert p.is_file() and p.stat().st_size > 0
+        if p.suffix == ".png":
+            assert p.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    d = json.loads((tmp_path / "report" / "comparison.json").read_text())
+    assert d == json.loads(json.dumps(null_comparison.to_dict()))
+    assert set(d["channels"]) == {c.key for c in CHANNELS}
+    assert d["sentences"] == null_comparison.sentences()
+    md = (tmp_path / "report" / "report.md").read_text()
+    assert "consistent with noise" in md and "figures/rms_vs_t0.png" in md
+
+
+def test_missing_channel_names_run_and_channel(scenario):
+    runs = _runs(scenario, scenario.instrument, seed=5, temps=(17.0, 43.0))
+    cols = {k: v for k, v in runs[1].columns.items() if k != "temp_fog_c"}
+    bad = Run(name="chamber_run_7", columns=cols, meta=runs[1].meta)
+    with pytest.raises(NfsError) as exc:
+        compare(scenario.instrument, [runs[0], bad])
+    msg = str(exc.value)
+    assert "chamber_run_7" in msg and "temp_fog_c" in msg and "\n" not in msg
+
+
+def test_runs_with_different_latitudes_and_schedules(scenario):
+    # Oracle: each run is replayed on its own, so a mixed set is still consistent with noise.
+    a = dataclasses.replace(scenario, start_temperatures_c=(17.0,), seed=9, duration_s=5400.0)
+    b = dataclasses.replace(a, latitude_deg=45.0, seed=10,
+                            schedule=dataclasses.replace(scenario.schedule, dwell_s=100.0))
+    runs = [simulate_run(scenario.instrument, s.conditions()[0]).run for s in (a, b)]
+    c = compare(scenario.instrument, runs, startup_end_s=1800.0, stable_start_s=3600.0)
+    assert c.summaries["gyro_drift_dph"].ratio < CONSISTENT_RATIO
+    assert np.isfinite(c.headings[1].measured_stable_deg)
