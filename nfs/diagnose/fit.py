@@ -51,7 +51,7 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any, Iterable, Sequence
 
@@ -69,7 +69,7 @@ from ..instrument import Instrument
 from ..io.atomic import atomic_write_text
 from ..io.measurement import Run
 from ..sensors import axis_elevation_deg, thermometer_reading
-from .params import (_all_paths, expand_paths, fit_bounds, get_param, list_params,
+from .params import (_all_paths, expand_paths, fit_bounds, get_param,
                      set_params)
 
 __all__ = ["StageReport", "FitResult", "fit_model", "default_free", "write_fitted_model",
