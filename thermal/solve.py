@@ -347,9 +347,6 @@ def simulate(network: Network, time_s: np.ndarray, *,
         _check_power_array(extra, t, names, "power_w")
         x[:, n:2 * n] = extra
 
-    a, b = network.matrices()
-    steps, cls = _step_classes(t)
-    mats = [step_matrices(a, b, h) for h in steps]
     inputs = np.empty((n_t, 1 + n))     # u_k = [T_amb,k, P_1,k, ..., P_n,k], equation (2)
     inputs[:, 0] = amb
     if law is None and len(mats) == 1:
