@@ -5,6 +5,8 @@
     nfs northfind DATA... [--json FILE]              north-find measured or simulated runs
     nfs train DATA... --method M -o MODEL            train a drift compensator
     nfs compensate DATA... --model MODEL -o DIR      apply it
+    nfs fit DATA... [--model M] -o FITTED.toml       calibrate a model to measured runs
+    nfs compare DATA... --model M -o DIR             the model beside the runs
     nfs preset [NAME]                                print a built-in instrument preset
     nfs effects                                      list the registered physical effects
 """
@@ -201,6 +203,46 @@ def _j(v):
     return v if math.isfinite(v) else None
 
 
+def _load_model(name_or_path):
+    from .instrument import load_instrument
+    return load_instrument(name_or_path)
+
+
+def _cmd_fit(args) -> int:
+    from .diagnose import fit_model, write_fitted_model
+    from .io.measurement import read_runs
+    inst = _load_model(args.model)
+    runs = read_runs(args.data)
+    if not args.quiet:
+        print(f"fitting {inst.name} to {len(runs)} run(s)...", file=sys.stderr)
+    res = fit_model(inst, runs, free=args.free, stages=tuple(args.stages),
+                    decimate_s=args.decimate_s)
+    write_fitted_model(res, args.output)
+    print(res.summary())
+    print(f"wrote {args.output}")
+    return 0
+
+
+def _cmd_compare(args) -> int:
+    from .diagnose import compare, write_report
+    from .io.atomic import atomic_write_text
+    from .io.measurement import read_runs
+    inst = _load_model(args.model)
+    runs = read_runs(args.data)
+    if not args.quiet:
+        print(f"simulating {inst.name} beside {len(runs)} run(s)...", file=sys.stderr)
+    c = compare(inst, runs, seed=args.seed, startup_end_s=args.startup_end_s,
+                stable_start_s=args.stable_start_s)
+    paths = write_report(c, args.output)
+    for line in c.sentences():
+        print(f"- {line}")
+    if args.json:
+        atomic_write_text(args.json, json.dumps(c.to_dict(), indent=1) + "\n")
+    if not args.quiet:
+        print("wrote " + ", ".join(str(p) for p in paths[:3]) + " ...", file=sys.stderr)
+    return 0
+
+
 def _cmd_preset(args) -> int:
     from .instrument import preset_names, preset_path
     if args.name is None:
@@ -304,6 +346,41 @@ def build_parser() -> argparse.ArgumentParser:
     n.add_argument("--stable-start-s", type=float, default=5400.0,
                    help="stable stage: cycles starting after this time (default 5400)")
     n.set_defaults(func=_cmd_northfind)
+
+    fi = sub.add_parser("fit", help="calibrate a model to measured runs",
+                        description="Calibrate a model's free parameters to runs by bounded "
+                                    "least squares: thermal parameters against the three "
+                                    "thermometers, then drift and sensor coefficients against "
+                                    "the gyro (and accelerometer) channels. Writes the fitted "
+                                    "model as an instrument TOML with each value's error.")
+    fi.add_argument("data", nargs="+", help="NAME.csv files, NAME.toml files or folders")
+    fi.add_argument("--model", default="default",
+                    help="instrument preset name or TOML file (default: default)")
+    fi.add_argument("-o", "--output", required=True, help="fitted model TOML to write")
+    fi.add_argument("--free", nargs="+", default=None,
+                    help="free parameter paths or patterns (default: see nfs.diagnose.fit)")
+    fi.add_argument("--stages", nargs="+", default=["thermal", "drift"],
+                    choices=["thermal", "drift"])
+    fi.add_argument("--decimate-s", type=float, default=10.0,
+                    help="time step of the fit [s] (default 10)")
+    fi.add_argument("-q", "--quiet", action="store_true")
+    fi.set_defaults(func=_cmd_fit)
+
+    cm = sub.add_parser("compare", help="a model beside measured runs, channel by channel",
+                        description="Simulate the model with each run's own schedule, start "
+                                    "temperature and heading, set it beside the measurement "
+                                    "per channel, stage and position, and say where it fails; "
+                                    "writes report.md, comparison.json and figures.")
+    cm.add_argument("data", nargs="+", help="NAME.csv files, NAME.toml files or folders")
+    cm.add_argument("--model", default="default",
+                    help="instrument preset name or TOML file (default: default)")
+    cm.add_argument("-o", "--output", required=True, help="report folder")
+    cm.add_argument("--json", default=None, help="also write the comparison JSON here")
+    cm.add_argument("--seed", type=int, default=0, help="seed of the model's noise")
+    cm.add_argument("--startup-end-s", type=float, default=3600.0)
+    cm.add_argument("--stable-start-s", type=float, default=5400.0)
+    cm.add_argument("-q", "--quiet", action="store_true")
+    cm.set_defaults(func=_cmd_compare)
 
     pr = sub.add_parser("preset", help="print a built-in instrument preset (TOML)",
                         description="Print a built-in instrument preset to copy and edit; "

@@ -1,1 +1,16 @@
-"""Model against measurements: fit a model to runs, compare, diagnose the missing effect."""
+"""Model against measurements: fit a model to runs, compare, diagnose the missing effect.
+
+- :mod:`~nfs.diagnose.params`: named parameter paths into an instrument (what is free);
+- :mod:`~nfs.diagnose.fit`: two-stage bounded least-squares calibration (thermal, drift);
+- :mod:`~nfs.diagnose.compare`: the model beside measured runs, channel by channel, with
+  "where it fails" in words and figures.
+"""
+
+from .compare import Comparison, compare, write_report
+from .fit import FitResult, default_free, fit_model, write_fitted_model
+from .params import (ParameterError, default_bounds, expand_paths, get_param, list_params,
+                     set_params)
+
+__all__ = ["Comparison", "compare", "write_report", "FitResult", "default_free", "fit_model",
+           "write_fitted_model", "ParameterError", "default_bounds", "expand_paths",
+           "get_param", "list_params", "set_params"]

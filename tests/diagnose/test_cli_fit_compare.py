@@ -1,0 +1,55 @@
+"""nfs fit and nfs compare from the command line: outputs and one-line errors."""
+
+import json
+
+from nfs.cli import main
+
+SCEN = """
+name = "fc"
+seed = 3
+start_temperatures_c = [-20.0, 5.0, 40.0]
+duration_s = 3900.0
+latitude_deg = 30.0
+true_heading_deg = 40.0
+[schedule]
+positions_deg = [0.0, 90.0, 180.0, 270.0]
+dwell_s = 150.0
+move_s = 10.0
+"""
+
+
+def run_cli(capsys, *argv):
+    code = main(list(argv))
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def test_fit_then_compare(tmp_path, capsys):
+    (tmp_path / "s.toml").write_text(SCEN)
+    assert run_cli(capsys, "simulate", str(tmp_path / "s.toml"), "-o", str(tmp_path / "runs"),
+                   "-q")[0] == 0
+    fitted = tmp_path / "fitted.toml"
+    code, out, err = run_cli(capsys, "fit", str(tmp_path / "runs"), "-o", str(fitted), "-q")
+    assert code == 0, err
+    assert "thermal.nodes.housing.capacity_j_per_k" in out and fitted.exists()
+    code, out, err = run_cli(capsys, "compare", str(tmp_path / "runs"), "--model", str(fitted),
+                             "-o", str(tmp_path / "rep"), "--json", str(tmp_path / "c.json"),
+                             "-q")
+    assert code == 0, err
+    # Oracle: the model fitted to runs it could have made itself explains them to the noise.
+    assert out.count("consistent with noise") == 6, out
+    assert (tmp_path / "rep" / "report.md").exists()
+    json.loads((tmp_path / "c.json").read_text())
+
+
+def test_fit_bad_path_and_model(tmp_path, capsys):
+    (tmp_path / "s.toml").write_text(SCEN)
+    run_cli(capsys, "simulate", str(tmp_path / "s.toml"), "-o", str(tmp_path / "runs"), "-q")
+    code, _, err = run_cli(capsys, "fit", str(tmp_path / "runs"), "-o",
+                           str(tmp_path / "f.toml"), "--free", "thermal.nodes.attic.power_w",
+                           "-q")
+    assert code == 2 and "attic" in err and len(err.strip().splitlines()) == 1
+    assert not (tmp_path / "f.toml").exists()
+    code, _, err = run_cli(capsys, "compare", str(tmp_path / "runs"), "--model",
+                           str(tmp_path / "missing.toml"), "-o", str(tmp_path / "rep"))
+    assert code == 2 and "missing.toml" in err
