@@ -73,7 +73,7 @@ from .params import (_all_paths, expand_paths, fit_bounds, get_param,
                      set_params)
 
 __all__ = ["StageReport", "FitResult", "fit_model", "default_free", "write_fitted_model",
-           "STAGES", "DEFAULT_DECIMATE_S"]
+           "model_drift_dph", "STAGES", "DEFAULT_DECIMATE_S"]
 
 #: The stages of :func:`fit_model`, in order.
 STAGES = ("thermal", "drift")
@@ -528,21 +528,40 @@ def _block(rd: _DriftRun, x: np.ndarray) -> np.ndarray:
             / rd.counts[rd.keep])
 
 
-def _drift_models(inst: Instrument, rd: _DriftRun, ctx) -> dict[str, np.ndarray]:
-    """Window means of the model's drift and accelerometer channels."""
-    n = rd.projection.size
+def _sensor_models(inst: Instrument, ctx) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+    """Full-rate model gyro error (bias + effects + (K - 1) projection) and accelerometer
+    errors (bias + effects) per axis, on the samples of ``ctx``."""
+    n = ctx.earth_rate_dph.size
     acc = {"x": np.full(n, inst.accelerometers.bias_x_g),
            "y": np.full(n, inst.accelerometers.bias_y_g)}
     g = inst.gyro
     gyro = np.full(n, g.bias_dph)
     if g.scale_factor != 1.0:
-        gyro = gyro + (g.scale_factor - 1.0) * rd.projection
+        gyro = gyro + (g.scale_factor - 1.0) * ctx.earth_rate_dph
     for e in inst.effects:
         if e.spec.kind == "gyro":
             gyro = gyro + e.spec.function(ctx, **e.params)
         elif e.spec.kind == "accelerometer":
             ax = e.params.get("axis")
             acc[ax] = acc[ax] + e.spec.function(ctx, **e.params)
+    return gyro, acc
+
+
+def model_drift_dph(inst: Instrument, ctx, latitude_deg: float) -> np.ndarray:
+    """The model drift the drift stage fits, at every sample of ``ctx`` [deg/h].
+
+    b + sum of the gyro effect terms + (K - 1) projection - Omega_ie sin L (b_x + x
+    accelerometer terms), evaluated on an :class:`~nfs.effects.EffectContext` whose
+    ``earth_rate_dph`` is the run's Earth-rate projection (module docstring, **drift**).
+    Subtracting it from ``gyro_dph`` gives the model-compensated rate.
+    """
+    gyro, acc = _sensor_models(inst, ctx)
+    return gyro - OMEGA_IE_DPH * math.sin(math.radians(latitude_deg)) * acc["x"]
+
+
+def _drift_models(inst: Instrument, rd: _DriftRun, ctx) -> dict[str, np.ndarray]:
+    """Window means of the model's drift and accelerometer channels."""
+    gyro, acc = _sensor_models(inst, ctx)
     lat = math.radians(rd.cond.latitude_deg)
     drift = gyro - OMEGA_IE_DPH * math.sin(lat) * acc["x"]
     out = {"drift_dph": _block(rd, drift)}

@@ -149,3 +149,18 @@ def test_bad_input(scenario, runs):
         fit_model(inst, runs[:1], ["effects.shupe_gradient.kr"])
     with pytest.raises(NfsError, match="stage"):
         fit_model(inst, runs[:1], stages=("thermals",))
+
+
+def test_model_drift_dph_is_the_simulators_drift(scenario):
+    # Oracle: simulate_run's own terms. The model drift on the simulator's context equals
+    # bias + sum of the gyro terms - Omega_ie sin L (b_x + x accelerometer terms), exactly.
+    from nfs.constants import OMEGA_IE_DPH
+    from nfs.diagnose.fit import model_drift_dph
+    inst = scenario.instrument
+    cond = replace(scenario.conditions()[0], duration_s=600.0)
+    sim = simulate_run(inst, cond)
+    acc_x = inst.accelerometers.bias_x_g + sim.acc_terms_g["acc_bias_temperature:x"]
+    want = (inst.gyro.bias_dph + sum(sim.gyro_terms_dph.values())
+            - OMEGA_IE_DPH * math.sin(math.radians(cond.latitude_deg)) * acc_x)
+    got = model_drift_dph(inst, sim.context, cond.latitude_deg)
+    np.testing.assert_allclose(got, want, rtol=0, atol=1e-12)
