@@ -7,6 +7,7 @@
     nfs compensate DATA... --model MODEL -o DIR      apply it
     nfs fit DATA... [--model M] -o FITTED.toml       calibrate a model to measured runs
     nfs compare DATA... --model M -o DIR             the model beside the runs
+    nfs diagnose DATA... --model M [--apply NAME]    the missing effect, ranked
     nfs preset [NAME]                                print a built-in instrument preset
     nfs effects                                      list the registered physical effects
 """
@@ -243,6 +244,46 @@ def _cmd_compare(args) -> int:
     return 0
 
 
+def _cmd_diagnose(args) -> int:
+    from .diagnose import apply_candidate, diagnose
+    from .io.atomic import atomic_write_text
+    from .io.measurement import read_runs
+    inst = _load_model(args.model)
+    runs = read_runs(args.data)
+    if args.apply:
+        name, _, target = args.apply.partition(":")
+        if args.output is None:
+            raise NfsError("--apply needs -o FILE for the new model")
+        new, fit, report = apply_candidate(inst, runs, name, target or None)
+        from .diagnose import write_fitted_model
+        write_fitted_model(fit, args.output)
+        print(f"added {args.apply}; refitted:")
+        print(fit.summary())
+        for ch, after in report.get("rms_after", {}).items():
+            before = report.get("rms_before", {}).get(ch, math.nan)
+            print(f"- {ch}: residual RMS {before:.4g} -> {after:.4g}")
+        hb, ha = report.get("heading_rmse_before_deg"), report.get("heading_rmse_after_deg")
+        if hb is not None and ha is not None:
+            print(f"- start-up heading RMSE {hb:.4f} -> {ha:.4f} deg")
+        print(f"wrote {args.output}")
+        return 0
+    if not args.quiet:
+        print(f"diagnosing {inst.name} on {len(runs)} run(s)...", file=sys.stderr)
+    d = diagnose(inst, runs, random_state=args.seed)
+    print("| rank | effect | target | significant | CV RMS before | after | coefficient |")
+    print("|---:|---|---|---|---:|---:|---|")
+    for i, sc in enumerate(d.ranking[:args.top], 1):
+        row = sc.to_dict()
+        coef = ", ".join(f"{k} = {v:.3g}" for k, v in (row.get("coefficient") or {}).items())
+        print(f"| {i} | {row['effect']} | {row['target'] or ''} | "
+              f"{'yes' if row['significant'] else 'no'} | {row['cv_rms_before']:.4g} | "
+              f"{row['cv_rms_after']:.4g} | {coef} |")
+    print(d.verdict)
+    if args.json:
+        atomic_write_text(args.json, json.dumps(d.to_dict(), indent=1, default=_j) + "\n")
+    return 0
+
+
 def _cmd_preset(args) -> int:
     from .instrument import preset_names, preset_path
     if args.name is None:
@@ -381,6 +422,25 @@ def build_parser() -> argparse.ArgumentParser:
     cm.add_argument("--stable-start-s", type=float, default=5400.0)
     cm.add_argument("-q", "--quiet", action="store_true")
     cm.set_defaults(func=_cmd_compare)
+
+    dg = sub.add_parser("diagnose", help="which physical effect the model is missing",
+                        description="Try every registered effect the model lacks (on each of "
+                                    "its possible targets), refit, and rank them by the drop "
+                                    "of the leave-one-run-out drift residual; mark the "
+                                    "significant ones; report what stays unexplained. With "
+                                    "--apply NAME[:TARGET], add that effect, refit and write "
+                                    "the new model.")
+    dg.add_argument("data", nargs="+", help="NAME.csv files, NAME.toml files or folders")
+    dg.add_argument("--model", default="default",
+                    help="instrument preset name or TOML file (default: default)")
+    dg.add_argument("--json", default=None, help="write the ranking as JSON")
+    dg.add_argument("--apply", default=None, metavar="NAME[:TARGET]",
+                    help="add this effect, refit and write the model to -o")
+    dg.add_argument("-o", "--output", default=None, help="new model TOML (with --apply)")
+    dg.add_argument("--top", type=int, default=10, help="rows of the printed ranking")
+    dg.add_argument("--seed", type=int, default=0, help="seed of the run bootstrap")
+    dg.add_argument("-q", "--quiet", action="store_true")
+    dg.set_defaults(func=_cmd_diagnose)
 
     pr = sub.add_parser("preset", help="print a built-in instrument preset (TOML)",
                         description="Print a built-in instrument preset to copy and edit; "

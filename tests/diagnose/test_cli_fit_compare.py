@@ -53,3 +53,23 @@ def test_fit_bad_path_and_model(tmp_path, capsys):
     code, _, err = run_cli(capsys, "compare", str(tmp_path / "runs"), "--model",
                            str(tmp_path / "missing.toml"), "-o", str(tmp_path / "rep"))
     assert code == 2 and "missing.toml" in err
+
+
+def test_diagnose_cli(tmp_path, capsys):
+    (tmp_path / "s.toml").write_text(SCEN)
+    run_cli(capsys, "simulate", str(tmp_path / "s.toml"), "-o", str(tmp_path / "runs"), "-q")
+    code, out, err = run_cli(capsys, "diagnose", str(tmp_path / "runs"), "--json",
+                             str(tmp_path / "d.json"), "-q")
+    assert code == 0, err
+    doc = json.loads((tmp_path / "d.json").read_text())
+    assert {"ranking", "unexplained"} <= set(doc) and doc["ranking"]
+    assert {"effect", "target", "significant", "cv_rms_before", "cv_rms_after"} <= \
+        set(doc["ranking"][0])
+    code, out, err = run_cli(capsys, "diagnose", str(tmp_path / "runs"), "--apply",
+                             "magnetic", "-o", str(tmp_path / "m2.toml"))
+    assert code == 0, err
+    assert "effects.magnetic.m" in out and (tmp_path / "m2.toml").exists()
+    code, _, err = run_cli(capsys, "diagnose", str(tmp_path / "runs"), "--apply",
+                           "magnetc", "-o", str(tmp_path / "x.toml"))
+    assert code == 2 and "unknown effect 'magnetc'" in err
+    assert not (tmp_path / "x.toml").exists()
