@@ -305,6 +305,16 @@ def _cmd_effects(args) -> int:
     return 0
 
 
+def _runs(p: argparse.ArgumentParser) -> None:
+    p.add_argument("data", nargs="+", help="NAME.csv files, NAME.toml files or folders")
+
+
+def _runs_and_model(p: argparse.ArgumentParser) -> None:
+    _runs(p)
+    p.add_argument("--model", default="default",
+                   help="instrument preset name or TOML file (default: default)")
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(
         prog="nfs",
@@ -337,7 +347,7 @@ def build_parser() -> argparse.ArgumentParser:
                         description="Train a compensator (features of the three thermometers "
                                     "-> wavelet-separated gyro drift) on runs with a known "
                                     "heading, and save it with its feature list and versions.")
-    tr.add_argument("data", nargs="+", help="NAME.csv files, NAME.toml files or folders")
+    _runs(tr)
     tr.add_argument("--method", default="ssa-svr",
                     help="ls, stepwise, bp, rbf, lssvm, ir-lssvm, svr-grid, pso-svr, gwo-svr, "
                          "ssa-svr (default), hho-rvr, tpe-svr")
@@ -359,7 +369,7 @@ def build_parser() -> argparse.ArgumentParser:
                                     "trained model, subtract it from gyro_dph and write the "
                                     "compensated runs (gyro_uncompensated_dph and "
                                     "drift_model_dph are kept as extra columns).")
-    co.add_argument("data", nargs="+", help="NAME.csv files, NAME.toml files or folders")
+    _runs(co)
     co.add_argument("--model", required=True, help="model file written by nfs train")
     co.add_argument("-o", "--output", required=True, help="output folder")
     co.set_defaults(func=_cmd_compensate)
@@ -377,7 +387,7 @@ def build_parser() -> argparse.ArgumentParser:
     n = sub.add_parser("northfind", help="north-find measured or simulated runs",
                        description="North-find runs in nfs-measurement/1 format (files or "
                                    "folders) and print heading and RMSE per run.")
-    n.add_argument("data", nargs="+", help="NAME.csv files, NAME.toml files or folders")
+    _runs(n)
     n.add_argument("--json", default=None, help="write per-cycle results as JSON")
     n.add_argument("--no-tilt", action="store_true", help="no tilt correction")
     n.add_argument("--settle-s", type=float, default=0.0,
@@ -394,9 +404,7 @@ def build_parser() -> argparse.ArgumentParser:
                                     "thermometers, then drift and sensor coefficients against "
                                     "the gyro (and accelerometer) channels. Writes the fitted "
                                     "model as an instrument TOML with each value's error.")
-    fi.add_argument("data", nargs="+", help="NAME.csv files, NAME.toml files or folders")
-    fi.add_argument("--model", default="default",
-                    help="instrument preset name or TOML file (default: default)")
+    _runs_and_model(fi)
     fi.add_argument("-o", "--output", required=True, help="fitted model TOML to write")
     fi.add_argument("--free", nargs="+", default=None,
                     help="free parameter paths or patterns (default: see nfs.diagnose.fit)")
@@ -412,9 +420,7 @@ def build_parser() -> argparse.ArgumentParser:
                                     "temperature and heading, set it beside the measurement "
                                     "per channel, stage and position, and say where it fails; "
                                     "writes report.md, comparison.json and figures.")
-    cm.add_argument("data", nargs="+", help="NAME.csv files, NAME.toml files or folders")
-    cm.add_argument("--model", default="default",
-                    help="instrument preset name or TOML file (default: default)")
+    _runs_and_model(cm)
     cm.add_argument("-o", "--output", required=True, help="report folder")
     cm.add_argument("--json", default=None, help="also write the comparison JSON here")
     cm.add_argument("--seed", type=int, default=0, help="seed of the model's noise")
@@ -430,9 +436,7 @@ def build_parser() -> argparse.ArgumentParser:
                                     "significant ones; report what stays unexplained. With "
                                     "--apply NAME[:TARGET], add that effect, refit and write "
                                     "the new model.")
-    dg.add_argument("data", nargs="+", help="NAME.csv files, NAME.toml files or folders")
-    dg.add_argument("--model", default="default",
-                    help="instrument preset name or TOML file (default: default)")
+    _runs_and_model(dg)
     dg.add_argument("--json", default=None, help="write the ranking as JSON")
     dg.add_argument("--apply", default=None, metavar="NAME[:TARGET]",
                     help="add this effect, refit and write the model to -o")

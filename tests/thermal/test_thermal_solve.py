@@ -247,7 +247,7 @@ def test_single_sample():
     (dict(power_w=lambda t, temp: [0.0, math.inf if t > 0 else 0.0]),
      "not finite at t = 1.0 s, node 'b'"),
 ])
-def test_bad_input_raises_thermal_error(kwargs, message):
+def test_bad_input_raises_thermal_exception(kwargs, message):
     args = dict(time_s=[0.0, 1.0, 2.0], ambient_c=0.0, initial_c=0.0)
     args.update(kwargs)
     time_s = args.pop("time_s")
