@@ -49,9 +49,9 @@ from nfs.compensate.tuners import TUNERS, TuneResult
 START_TEMPERATURES_C = (-32, -16, -5, 17, 28, 43, 54)  # seed 004 Table 3
 # Search ranges and validation score: those of the SSA-SVR row of `nfs table`
 # (nfs.compensate.methods: the bounded box, and the residual's STD within the held-out run).
-from nfs.compensate.methods import SVR_SPACE, get_method, neg_residual_std  # noqa: E402
+from nfs.compensate.methods import svr_space, get_method, neg_residual_std  # noqa: E402
 
-RANGES = {name: (r.low, r.high) for name, r in SVR_SPACE().items()}
+RANGES = {name: (r.low, r.high) for name, r in svr_space().items()}
 SCORING = neg_residual_std
 TIME_FACTOR = 10.0  # grid allowed 10x SSA's time
 

@@ -27,7 +27,7 @@ from .sensors import (Schedule, axis_elevation_deg, earth_rate_along_axis_dph,
                       thermometer_reading, turntable_motion)
 
 __all__ = ["RunConditions", "SimulationResult", "simulate_run", "effect_context",
-           "conditions_from_run",
+           "conditions_from_run", "thermal_power",
            "ScenarioResult", "run_scenario", "northfind_runs", "stage_errors", "floor_deg",
            "uncompensated_table"]
 
@@ -143,8 +143,14 @@ def _streams(seed) -> dict[str, np.random.Generator]:
     return {n: np.random.default_rng(s) for n, s in zip(names, seq.spawn(len(names)))}
 
 
-def _thermal_power(inst: Instrument, time_s: np.ndarray, moving: np.ndarray):
-    """Split the thermal effects into a precomputed array part and a per-sample law."""
+def thermal_power(inst: Instrument, time_s: np.ndarray, moving: np.ndarray):
+    """The heat input of the thermal effects: (power, terms, stateful).
+
+    ``power`` is an array (n_samples, n_nodes) when no effect depends on the state, else a
+    per-sample law ``power(t_s, temperature_c)`` for :func:`thermal.simulate`; ``terms``
+    holds each state-free effect's power by label; ``stateful`` lists the state-dependent
+    effects (effect, node index, params) to evaluate on the solution afterwards.
+    """
     names = inst.network.node_names
     n = len(names)
     fixed = np.zeros((len(time_s), n))
@@ -226,7 +232,7 @@ def simulate_run(inst: Instrument, cond: RunConditions) -> SimulationResult:
     elev_y = axis_elevation_deg(azimuth + 90.0, tilt.tilt_north_deg, tilt.tilt_east_deg)
 
     # 1. thermal network
-    power, thermal_terms, stateful = _thermal_power(inst, t, moving)
+    power, thermal_terms, stateful = thermal_power(inst, t, moving)
     ambient = cond.start_temperature_c if cond.chamber_c is None else cond.chamber_c(t)
     th = thermal.simulate(inst.network, t, ambient_c=ambient,
                           initial_c=cond.start_temperature_c, power_w=power)

@@ -62,12 +62,6 @@ class DriftCompensator:
     versions: dict = field(default_factory=dict)
     """Library versions at training time."""
 
-    @property
-    def input_channels(self) -> list[str]:
-        """The measurement columns the features need."""
-        from .features import feature_columns
-        return sorted({c for name in self.feature_names for c in feature_columns(name)})
-
     def predict_drift(self, run: Run, *, stride_s: float | None = None) -> np.ndarray:
         """Predicted drift at every sample of ``run`` [deg/h].
 

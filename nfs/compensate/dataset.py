@@ -55,8 +55,7 @@ class DriftDataset:
 
 def drift_dataset(runs: Sequence, features, *, decimate_s: float = 30.0,
                   cutoff_period_s: float = 512.0, wavelet: str = "db4", rule: str = "visu",
-                  rate_window_s: float = 121.0, max_time_s: float | None = None
-                  ) -> DriftDataset:
+                  rate_window_s: float = 121.0) -> DriftDataset:
     """Build the training set of ``runs`` (each needs ``true_heading_deg``).
 
     Parameters
@@ -72,8 +71,6 @@ def drift_dataset(runs: Sequence, features, *, decimate_s: float = 30.0,
         Wavelet family and threshold rule of the separation.
     rate_window_s : float
         Window of the temperature-rate features [s].
-    max_time_s : float, optional
-        Keep only samples before this time since power-on [s] (e.g. the start-up stage).
     """
     if not runs:
         raise NfsError("no runs to train on")
@@ -92,8 +89,6 @@ def drift_dataset(runs: Sequence, features, *, decimate_s: float = 30.0,
         keep = np.zeros(t.size, dtype=bool)
         keep[::step] = True
         keep &= ~np.asarray(sep.moving, dtype=bool)
-        if max_time_s is not None:
-            keep &= t < max_time_s
         keep &= np.all(np.isfinite(X), axis=1) & np.isfinite(sep.drift_dph)
         Xs.append(X[keep])
         ys.append(np.asarray(sep.drift_dph)[keep])

@@ -29,7 +29,7 @@ from typing import Any, Callable
 
 from ..errors import NfsError
 
-__all__ = ["MethodSpec", "METHODS", "TABLE_METHODS", "get_method", "SVR_SPACE", "RVR_SPACE",
+__all__ = ["MethodSpec", "METHODS", "TABLE_METHODS", "get_method", "svr_space", "rvr_space",
            "neg_residual_std"]
 
 
@@ -52,7 +52,8 @@ class MethodSpec:
     fit costs O(n^3) (LSSVM, RVR); stated in the table notes."""
 
 
-def _space_svr():
+def svr_space():
+    """The search box of the tuned SVR rows (C, sigma, epsilon)."""
     from .search import Real
     # Bounded box (seed 004 Table 1 found C 1.05, sigma 0.95 on standardised inputs).
     # epsilon is in units of std(y): below ~0.02 nearly every sample becomes a support
@@ -62,20 +63,19 @@ def _space_svr():
             "epsilon": Real(0.02, 0.5, log=True)}
 
 
-def _space_rvr():
+def rvr_space():
+    """The search box of HHO-RVR (sigma)."""
     from .search import Real
     return {"sigma": Real(0.5, 30.0, log=True)}
 
 
-SVR_SPACE = _space_svr
-RVR_SPACE = _space_rvr
 
 
 def _tuned_svr(method: str):
     def build(*, budget: int, random_state: int, n_jobs: int | None):
         from .kernels import SVRRegressor
         from .search import MetaheuristicSearchCV
-        return MetaheuristicSearchCV(SVRRegressor(), _space_svr(), method=method,
+        return MetaheuristicSearchCV(SVRRegressor(), svr_space(), method=method,
                                      budget=budget, random_state=random_state, n_jobs=n_jobs,
                                      scoring=neg_residual_std)
     return build
@@ -86,7 +86,7 @@ def _hho_rvr(*, budget: int, random_state: int, n_jobs: int | None):
     from .search import MetaheuristicSearchCV
     # max_iter 40 / tol 0.01: the evidence updates have settled the prediction long before
     # the last bases are pruned; the full 300 sweeps cost 5x for little change in the score.
-    return MetaheuristicSearchCV(RVRRegressor(max_iter=40, tol=1e-2), _space_rvr(),
+    return MetaheuristicSearchCV(RVRRegressor(max_iter=40, tol=1e-2), rvr_space(),
                                  method="hho", budget=budget,
                                  random_state=random_state, n_jobs=n_jobs,
                                  scoring=neg_residual_std)

@@ -124,10 +124,12 @@ class CompensationStudy:
             f"{s.train_seed}, T0 = {', '.join(f'{t:g}' for t in temps)} C), features "
             f"{', '.join(self.dataset.feature_names)}, drift by wavelet separation "
             f"(cutoff {s.cutoff_period_s:g} s), training samples every {s.decimate_s:g} s.",
-            f"Tuned rows (SVR (grid), PSO-SVR, GWO-SVR, SSA-SVR, HHO-RVR): {s.budget} "
-            "evaluations each of the leave-one-start-temperature-out validation error (the "
-            "residual's standard deviation within the held-out run).",
         )
+        tuned = [get_method(m).name for m in s.methods if get_method(m).tuned]
+        if tuned:
+            notes += (f"Tuned rows ({', '.join(tuned)}): {s.budget} evaluations each of the "
+                      "leave-one-start-temperature-out validation error (the residual's "
+                      "standard deviation within the held-out run).",)
         return base.with_rows(rows, notes)
 
     def drift_rows(self) -> list[DriftRow]:

@@ -64,7 +64,7 @@ from thermal.solve import step_matrices
 from ..constants import OMEGA_IE_DPH
 from ..effects.thermometer import THERMOMETERS
 from ..errors import InputError, NfsError
-from ..experiment import _thermal_power, conditions_from_run, effect_context
+from ..experiment import thermal_power, conditions_from_run, effect_context
 from ..instrument import Instrument
 from ..io.atomic import atomic_write_text
 from ..io.measurement import Run
@@ -340,7 +340,7 @@ def _simulate_knots(inst: Instrument, data: list[_ThermalRun]) -> list[_Knots]:
         if np.allclose(dt, h, rtol=1e-9, atol=0.0):
             groups.setdefault(round(h, 9), []).append(i)
         else:
-            power, _, _ = _thermal_power(inst, rd.t_knot, rd.moving_knot)
+            power, _, _ = thermal_power(inst, rd.t_knot, rd.moving_knot)
             th = thermal.simulate(net, rd.t_knot, ambient_c=rd.ambient_knot,
                                   initial_c=rd.t0_c, power_w=power)
             out[i] = _Knots(names, th.temperature_c, th.rate_c_per_s)
@@ -515,7 +515,7 @@ def _drift_context(inst: Instrument, rd: _DriftRun):
     cond = rd.cond
     t = cond.time_s
     _, moving = cond.turntable(t)
-    power, _, _ = _thermal_power(inst, t, moving)
+    power, _, _ = thermal_power(inst, t, moving)
     ambient = cond.start_temperature_c if cond.chamber_c is None else cond.chamber_c(t)
     th = thermal.simulate(inst.network, t, ambient_c=ambient,
                           initial_c=cond.start_temperature_c, power_w=power)

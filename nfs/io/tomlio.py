@@ -50,6 +50,20 @@ def check_keys(tbl: dict[str, Any], allowed: Iterable[str], prefix: str, file: A
             raise ScenarioError("required key is missing", file=file, key=_join(prefix, key))
 
 
+_MISSING = object()
+
+
+def _lookup(tbl: dict[str, Any], key: str, prefix: str, file: Any, default: Any):
+    """(dotted name, value); the value is _MISSING when the key is absent and a default is
+    given; ScenarioError when a required key (default ``...``) is absent."""
+    name = _join(prefix, key)
+    if key in tbl:
+        return name, tbl[key]
+    if default is ...:
+        raise ScenarioError("required key is missing", file=file, key=name)
+    return name, _MISSING
+
+
 def table(tbl: dict[str, Any], key: str, prefix: str, file: Any,
           default: dict | None = None) -> dict[str, Any]:
     """A sub-table (ScenarioError if the value is not a table)."""
@@ -67,12 +81,9 @@ def number(tbl: dict[str, Any], key: str, prefix: str, file: Any, default: Any =
            *, minimum: float | None = None, positive: bool = False,
            maximum: float | None = None) -> float:
     """A finite number, optionally bounded; ScenarioError naming the dotted key otherwise."""
-    name = _join(prefix, key)
-    if key not in tbl:
-        if default is ...:
-            raise ScenarioError("required key is missing", file=file, key=name)
+    name, value = _lookup(tbl, key, prefix, file, default)
+    if value is _MISSING:
         return default
-    value = tbl[key]
     if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
         raise ScenarioError(f"must be a finite number, got {value!r}", file=file, key=name)
     value = float(value)
@@ -88,12 +99,9 @@ def number(tbl: dict[str, Any], key: str, prefix: str, file: Any, default: Any =
 def string(tbl: dict[str, Any], key: str, prefix: str, file: Any, default: Any = ...,
            choices: Iterable[str] | None = None) -> str:
     """A string, optionally one of ``choices``."""
-    name = _join(prefix, key)
-    if key not in tbl:
-        if default is ...:
-            raise ScenarioError("required key is missing", file=file, key=name)
+    name, value = _lookup(tbl, key, prefix, file, default)
+    if value is _MISSING:
         return default
-    value = tbl[key]
     if not isinstance(value, str):
         raise ScenarioError(f"must be a string, got {value!r}", file=file, key=name)
     if choices is not None and value not in list(choices):
@@ -104,12 +112,9 @@ def string(tbl: dict[str, Any], key: str, prefix: str, file: Any, default: Any =
 def number_list(tbl: dict[str, Any], key: str, prefix: str, file: Any, default: Any = ...,
                 *, nonempty: bool = True) -> tuple[float, ...]:
     """A list of finite numbers (non-empty unless told otherwise)."""
-    name = _join(prefix, key)
-    if key not in tbl:
-        if default is ...:
-            raise ScenarioError("required key is missing", file=file, key=name)
+    name, value = _lookup(tbl, key, prefix, file, default)
+    if value is _MISSING:
         return default
-    value = tbl[key]
     if not isinstance(value, list) or not all(
             isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
             for v in value):
