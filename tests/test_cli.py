@@ -8,7 +8,6 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from nfs.cli import main
 from nfs.io.scenario import default_scenario_path
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -27,11 +26,6 @@ move_s = 10.0
 """
 
 
-def run_cli(capsys, *argv):
-    code = main(list(argv))
-    out, err = capsys.readouterr()
-    return code, out, err
-
 
 def one_line_error(code, err):
     assert code == 2
@@ -46,10 +40,10 @@ def test_scenarios_folder_holds_the_builtin_default():
         default_scenario_path().read_text()
 
 
-def test_table_simulate_northfind(tmp_path, capsys):
+def test_table_simulate_northfind(tmp_path, cli):
     scen = tmp_path / "small.toml"
     scen.write_text(SMALL)
-    code, out, err = run_cli(capsys, "table", str(scen), "-o", str(tmp_path / "tab"),
+    code, out, err = cli("table", str(scen), "-o", str(tmp_path / "tab"),
                              "--json", str(tmp_path / "h.json"), "--no-compensation")
     assert code == 0
     assert out.splitlines()[0] == "| method | -20 | 40 | mean |"
@@ -62,9 +56,9 @@ def test_table_simulate_northfind(tmp_path, capsys):
     assert before["mean_deg"] == pytest.approx(np.mean(before["rmse_deg"]), rel=1e-6)
     assert "simulating" in err                      # progress on stderr
 
-    code, out, _ = run_cli(capsys, "simulate", str(scen), "-o", str(tmp_path / "runs"), "-q")
+    code, out, _ = cli("simulate", str(scen), "-o", str(tmp_path / "runs"), "-q")
     assert code == 0 and len(list((tmp_path / "runs").glob("*.csv"))) == 2
-    code, out, _ = run_cli(capsys, "northfind", str(tmp_path / "runs"),
+    code, out, _ = cli("northfind", str(tmp_path / "runs"),
                            "--json", str(tmp_path / "nf.json"))
     assert code == 0
     nf = json.loads((tmp_path / "nf.json").read_text())
@@ -75,12 +69,12 @@ def test_table_simulate_northfind(tmp_path, capsys):
     assert by_t0[40.0] == pytest.approx(before["rmse_deg"][1], abs=1e-8)
 
 
-def test_preset_and_effects(capsys):
-    code, out, _ = run_cli(capsys, "preset")
+def test_preset_and_effects(cli):
+    code, out, _ = cli("preset")
     assert code == 0 and "default" in out.split()
-    code, out, _ = run_cli(capsys, "preset", "default")
+    code, out, _ = cli("preset", "default")
     assert code == 0 and "[thermal.nodes.housing]" in out
-    code, out, _ = run_cli(capsys, "effects")
+    code, out, _ = cli("effects")
     assert code == 0 and "shupe_product (gyro)" in out
 
 
@@ -103,7 +97,7 @@ def test_preset_and_effects(capsys):
     (lambda s: s + "[[effects]]\nname = 'shupe_rate'\n", ["needs parameter 'k_s'"]),
     (lambda s: s + "[schedule\n", ["TOML syntax error"]),
 ])
-def test_bad_scenario(tmp_path, capsys, edit, expect):
+def test_bad_scenario(tmp_path, cli, edit, expect):
     from nfs.instrument import preset_path
     text = preset_path("default").read_text()
     (tmp_path / "inst.toml").write_text(text.replace(
@@ -115,7 +109,7 @@ def test_bad_scenario(tmp_path, capsys, edit, expect):
     out_dir = tmp_path / "out"
     for cmd in (["simulate", str(scen), "-o", str(out_dir)],
                 ["table", str(scen), "-o", str(out_dir), "--no-compensation"]):
-        code, out, err = run_cli(capsys, *cmd)
+        code, out, err = cli(*cmd)
         line = one_line_error(code, err)
         assert "bad.toml" in line or "inst" in line
         for e in expect:
@@ -123,8 +117,8 @@ def test_bad_scenario(tmp_path, capsys, edit, expect):
         assert not out_dir.exists()       # nothing written, nothing half-written
 
 
-def test_missing_scenario_file(capsys, tmp_path):
-    code, _, err = run_cli(capsys, "table", str(tmp_path / "nope.toml"))
+def test_missing_scenario_file(cli, tmp_path):
+    code, _, err = cli("table", str(tmp_path / "nope.toml"))
     assert "nope.toml: file not found" in one_line_error(code, err)
 
 
@@ -146,14 +140,14 @@ GOOD_TOML = 'format = "nfs-measurement/1"\nlatitude_deg = 30.0\nstart_temperatur
     (lambda s: s.replace("8,180,0,1.0,0.0", "8,180,0,1.0,2.5"), None, ["acc_x_g", "row 10"]),
     (None, lambda s: s.replace("latitude_deg = 30.0\n", ""), ["latitude_deg"]),
 ])
-def test_bad_measurement(tmp_path, capsys, csv_edit, toml_edit, expect):
+def test_bad_measurement(tmp_path, cli, csv_edit, toml_edit, expect):
     csv = GOOD_CSV if csv_edit is None else csv_edit(GOOD_CSV)
     toml = GOOD_TOML if toml_edit is None else toml_edit(GOOD_TOML)
     (tmp_path / "run.csv").write_text(csv)
     (tmp_path / "run.toml").write_text(toml)
     js = tmp_path / "out.json"
     js.write_text("previous")
-    code, _, err = run_cli(capsys, "northfind", str(tmp_path), "--json", str(js))
+    code, _, err = cli("northfind", str(tmp_path), "--json", str(js))
     line = one_line_error(code, err)
     assert "run.csv" in line or "run.toml" in line
     for e in expect:

@@ -5,7 +5,6 @@ import json
 import numpy as np
 import pytest
 
-from nfs.cli import main
 
 SCEN = """
 name = "comp"
@@ -27,17 +26,12 @@ n_jobs = 1
 """
 
 
-def run_cli(capsys, *argv):
-    code = main(list(argv))
-    out, err = capsys.readouterr()
-    return code, out, err
 
-
-def test_table_with_compensation_writes_every_output(tmp_path, capsys):
+def test_table_with_compensation_writes_every_output(tmp_path, cli):
     scen = tmp_path / "s.toml"
     scen.write_text(SCEN)
     out_dir = tmp_path / "out"
-    code, out, err = run_cli(capsys, "table", str(scen), "-o", str(out_dir), "-q")
+    code, out, err = cli("table", str(scen), "-o", str(out_dir), "-q")
     assert code == 0, err
     methods = [l.split("|")[1].strip() for l in out.splitlines()[2:] if l.startswith("| ")]
     assert methods == ["before", "LS", "SSA-SVR", "stable", "floor"]
@@ -52,19 +46,19 @@ def test_table_with_compensation_writes_every_output(tmp_path, capsys):
     assert "Beside seed 004" in report and "6 evaluations" in report
 
 
-def test_train_and_compensate_round_trip(tmp_path, capsys):
+def test_train_and_compensate_round_trip(tmp_path, cli):
     scen = tmp_path / "s.toml"
     scen.write_text(SCEN)
-    assert run_cli(capsys, "simulate", str(scen), "-o", str(tmp_path / "train"), "-q",
+    assert cli("simulate", str(scen), "-o", str(tmp_path / "train"), "-q",
                    "--seed", "1")[0] == 0
-    assert run_cli(capsys, "simulate", str(scen), "-o", str(tmp_path / "test"), "-q",
+    assert cli("simulate", str(scen), "-o", str(tmp_path / "test"), "-q",
                    "--seed", "2")[0] == 0
     model = tmp_path / "m.joblib"
-    code, out, err = run_cli(capsys, "train", str(tmp_path / "train"), "--method", "ls",
+    code, out, err = cli("train", str(tmp_path / "train"), "--method", "ls",
                              "-o", str(model), "-q")
     assert code == 0, err
     assert "LS trained on 3 run(s)" in out
-    code, out, err = run_cli(capsys, "compensate", str(tmp_path / "test"), "--model",
+    code, out, err = cli("compensate", str(tmp_path / "test"), "--model",
                              str(model), "-o", str(tmp_path / "comp"))
     assert code == 0, err
     from nfs.io.measurement import read_runs
@@ -75,16 +69,16 @@ def test_train_and_compensate_round_trip(tmp_path, capsys):
         np.testing.assert_array_equal(c["gyro_uncompensated_dph"], r["gyro_dph"])
         np.testing.assert_allclose(c["gyro_dph"], r["gyro_dph"] - c["drift_model_dph"],
                                    atol=1e-12)
-    code, out, _ = run_cli(capsys, "northfind", str(tmp_path / "comp"))
+    code, out, _ = cli("northfind", str(tmp_path / "comp"))
     assert code == 0 and out.count("| comp_T") == 3
 
 
-def test_compensate_refuses_runs_without_its_channels(tmp_path, capsys):
+def test_compensate_refuses_runs_without_its_channels(tmp_path, cli):
     scen = tmp_path / "s.toml"
     scen.write_text(SCEN)
-    run_cli(capsys, "simulate", str(scen), "-o", str(tmp_path / "runs"), "-q")
+    cli("simulate", str(scen), "-o", str(tmp_path / "runs"), "-q")
     model = tmp_path / "m.joblib"
-    code, _, err = run_cli(capsys, "train", str(tmp_path / "runs"), "--method", "ls",
+    code, _, err = cli("train", str(tmp_path / "runs"), "--method", "ls",
                            "--features", "T_fog", "aux_tec_power_w", "-o", str(model), "-q")
     assert code == 0, err
     # strip the aux channel from one run
@@ -94,7 +88,7 @@ def test_compensate_refuses_runs_without_its_channels(tmp_path, capsys):
     run = read_run(victim)
     cols = {k: v for k, v in run.columns.items() if k != "aux_tec_power_w"}
     write_run(dataclasses.replace(run, columns=cols), tmp_path / "bad")
-    code, _, err = run_cli(capsys, "compensate", str(tmp_path / "bad"), "--model", str(model),
+    code, _, err = cli("compensate", str(tmp_path / "bad"), "--model", str(model),
                            "-o", str(tmp_path / "out"))
     assert code == 2 and "has no column 'aux_tec_power_w'" in err and "Traceback" not in err
     assert not (tmp_path / "out").exists()
@@ -104,10 +98,10 @@ def test_compensate_refuses_runs_without_its_channels(tmp_path, capsys):
     (["train", "RUNS", "--method", "magic", "-o", "m.joblib"], "unknown compensation method"),
     (["compensate", "RUNS", "--model", "nope.joblib", "-o", "out"], "model file not found"),
 ])
-def test_bad_compensation_input(tmp_path, capsys, argv, msg):
+def test_bad_compensation_input(tmp_path, cli, argv, msg):
     scen = tmp_path / "s.toml"
     scen.write_text(SCEN)
-    run_cli(capsys, "simulate", str(scen), "-o", str(tmp_path / "runs"), "-q")
+    cli("simulate", str(scen), "-o", str(tmp_path / "runs"), "-q")
     argv = [a.replace("RUNS", str(tmp_path / "runs")) for a in argv]
-    code, _, err = run_cli(capsys, *argv)
+    code, _, err = cli(*argv)
     assert code == 2 and msg in err and len(err.strip().splitlines()) == 1

@@ -2,7 +2,6 @@
 
 import json
 
-from nfs.cli import main
 
 SCEN = """
 name = "fc"
@@ -18,21 +17,16 @@ move_s = 10.0
 """
 
 
-def run_cli(capsys, *argv):
-    code = main(list(argv))
-    out, err = capsys.readouterr()
-    return code, out, err
 
-
-def test_fit_then_compare(tmp_path, capsys):
+def test_fit_then_compare(tmp_path, cli):
     (tmp_path / "s.toml").write_text(SCEN)
-    assert run_cli(capsys, "simulate", str(tmp_path / "s.toml"), "-o", str(tmp_path / "runs"),
+    assert cli("simulate", str(tmp_path / "s.toml"), "-o", str(tmp_path / "runs"),
                    "-q")[0] == 0
     fitted = tmp_path / "fitted.toml"
-    code, out, err = run_cli(capsys, "fit", str(tmp_path / "runs"), "-o", str(fitted), "-q")
+    code, out, err = cli("fit", str(tmp_path / "runs"), "-o", str(fitted), "-q")
     assert code == 0, err
     assert "thermal.nodes.housing.capacity_j_per_k" in out and fitted.exists()
-    code, out, err = run_cli(capsys, "compare", str(tmp_path / "runs"), "--model", str(fitted),
+    code, out, err = cli("compare", str(tmp_path / "runs"), "--model", str(fitted),
                              "-o", str(tmp_path / "rep"), "--json", str(tmp_path / "c.json"),
                              "-q")
     assert code == 0, err
@@ -42,34 +36,34 @@ def test_fit_then_compare(tmp_path, capsys):
     json.loads((tmp_path / "c.json").read_text())
 
 
-def test_fit_bad_path_and_model(tmp_path, capsys):
+def test_fit_bad_path_and_model(tmp_path, cli):
     (tmp_path / "s.toml").write_text(SCEN)
-    run_cli(capsys, "simulate", str(tmp_path / "s.toml"), "-o", str(tmp_path / "runs"), "-q")
-    code, _, err = run_cli(capsys, "fit", str(tmp_path / "runs"), "-o",
+    cli("simulate", str(tmp_path / "s.toml"), "-o", str(tmp_path / "runs"), "-q")
+    code, _, err = cli("fit", str(tmp_path / "runs"), "-o",
                            str(tmp_path / "f.toml"), "--free", "thermal.nodes.attic.power_w",
                            "-q")
     assert code == 2 and "attic" in err and len(err.strip().splitlines()) == 1
     assert not (tmp_path / "f.toml").exists()
-    code, _, err = run_cli(capsys, "compare", str(tmp_path / "runs"), "--model",
+    code, _, err = cli("compare", str(tmp_path / "runs"), "--model",
                            str(tmp_path / "missing.toml"), "-o", str(tmp_path / "rep"))
     assert code == 2 and "missing.toml" in err
 
 
-def test_diagnose_cli(tmp_path, capsys):
+def test_diagnose_cli(tmp_path, cli):
     (tmp_path / "s.toml").write_text(SCEN)
-    run_cli(capsys, "simulate", str(tmp_path / "s.toml"), "-o", str(tmp_path / "runs"), "-q")
-    code, out, err = run_cli(capsys, "diagnose", str(tmp_path / "runs"), "--json",
+    cli("simulate", str(tmp_path / "s.toml"), "-o", str(tmp_path / "runs"), "-q")
+    code, out, err = cli("diagnose", str(tmp_path / "runs"), "--json",
                              str(tmp_path / "d.json"), "-q")
     assert code == 0, err
     doc = json.loads((tmp_path / "d.json").read_text())
     assert {"ranking", "unexplained"} <= set(doc) and doc["ranking"]
     assert {"effect", "target", "significant", "cv_rms_before", "cv_rms_after"} <= \
         set(doc["ranking"][0])
-    code, out, err = run_cli(capsys, "diagnose", str(tmp_path / "runs"), "--apply",
+    code, out, err = cli("diagnose", str(tmp_path / "runs"), "--apply",
                              "magnetic", "-o", str(tmp_path / "m2.toml"))
     assert code == 0, err
     assert "effects.magnetic.m" in out and (tmp_path / "m2.toml").exists()
-    code, _, err = run_cli(capsys, "diagnose", str(tmp_path / "runs"), "--apply",
+    code, _, err = cli("diagnose", str(tmp_path / "runs"), "--apply",
                            "magnetc", "-o", str(tmp_path / "x.toml"))
     assert code == 2 and "unknown effect 'magnetc'" in err
     assert not (tmp_path / "x.toml").exists()
