@@ -67,8 +67,9 @@ from ..instrument import Instrument
 from ..io.measurement import Run
 from ..northfind import heading_rmse, north_find
 from .fit import (DEFAULT_DECIMATE_S, FitResult, _block, _drift_context, _prepare_drift,
-                  default_free, fit_model, model_drift_dph)
-from .params import set_params
+                  _prepare_thermal, _thermal_residual_parts, default_free, fit_model,
+                  model_drift_dph)
+from .params import fit_bounds, get_param, set_params
 
 __all__ = ["Candidate", "CandidateScore", "Diagnosis", "candidates", "diagnose",
            "apply_candidate", "SHAPE_GRID", "CV_DROP", "MIN_INCLUSION", "HEADING_TOP"]
@@ -120,6 +121,11 @@ class Candidate:
     def label(self) -> str:
         return self.effect if self.target is None else f"{self.effect}:{self.target}"
 
+    @property
+    def channel(self) -> str:
+        """Where it is scored: ``drift_dph`` or ``thermometers`` (the three, in K)."""
+        return "drift_dph" if self.kind in _FAST_KINDS else "thermometers"
+
 
 def _split_params(spec: EffectSpec) -> tuple[list[str], list[str], list[str]]:
     coefs, shapes, missing = [], [], []
@@ -144,7 +150,8 @@ def _targets(spec: EffectSpec, inst: Instrument, runs: Sequence[Run]) -> list[st
     if t is None:
         return [None]
     if t == "node":
-        return [None] + list(inst.network.node_names)
+        par = spec.parameter(t)
+        return ([None] if not par.required else []) + list(inst.network.node_names)
     if t == "axis":
         return ["x", "y"]
     if t == "thermometer":
@@ -176,10 +183,10 @@ def candidates(inst: Instrument, runs: Sequence[Run]) -> list[Candidate]:
                 continue
             reason = ""
             if spec.kind not in _FAST_KINDS:
-                reason = (f"{spec.kind} effect: needs the thermal stage; "
-                          f"try apply_candidate / nfs diagnose --apply {name}"
-                          + (f":{target}" if target else ""))
-            elif spec.kind == "accelerometer" and target != "x":
+                # linearised at zero (module docstring): time constants become coefficients
+                coefs, shapes = coefs + [s for s in shapes
+                                         if spec.parameter(s).unit == "s"], []
+            if spec.kind == "accelerometer" and target != "x":
                 reason = "acts on acc_y_g only, which does not enter the drift"
             elif missing:
                 reason = "no start value for " + ", ".join(missing)
@@ -265,11 +272,12 @@ def _prepare(inst: Instrument, runs: Sequence[Run], decimate_s: float) -> tuple[
     return out, paths
 
 
-def _grams(preps: list[_Prep], Zs: list[np.ndarray]):
+def _grams(ys: list[np.ndarray], Zs: list[np.ndarray]):
+    """Per-run Gram matrices of the design ``Zs`` and the targets ``ys``."""
     G = np.array([Z.T @ Z for Z in Zs])
-    h = np.array([Z.T @ p.y for Z, p in zip(Zs, preps)])
-    yy = np.array([p.y @ p.y for p in preps])
-    n = np.array([p.y.size for p in preps], dtype=float)
+    h = np.array([Z.T @ y for Z, y in zip(Zs, ys)])
+    yy = np.array([y @ y for y in ys])
+    n = np.array([y.size for y in ys], dtype=float)
     return G, h, yy, n
 
 
@@ -340,6 +348,12 @@ class CandidateScore:
     """Start-up heading RMSE with the baseline model's compensation [deg] (None: not run)."""
     heading_rmse_after_deg: float | None = None
     """The same with the candidate added [deg]."""
+    explained_by: str | None = None
+    """Label of the top significant candidate when that one explains this one too (its CV
+    drop over the model plus the top candidate is below :data:`CV_DROP`)."""
+    channel: str = "drift_dph"
+    """Residual the CV RMS is taken on: ``drift_dph`` (window means, deg/h) or
+    ``thermometers`` (the three thermometers at the knots, K)."""
 
     @property
     def cv_drop(self) -> float:
@@ -349,7 +363,9 @@ class CandidateScore:
     def to_dict(self) -> dict[str, Any]:
         return {"effect": self.effect, "target": self.target, "significant": self.significant,
                 "cv_rms_before": self.cv_rms_before, "cv_rms_after": self.cv_rms_after,
-                "cv_drop": self.cv_drop, "correlation": self.correlation,
+                "cv_drop": self.cv_drop, "channel": self.channel,
+                "explained_by": self.explained_by,
+                "correlation": self.correlation,
                 "coefficient": dict(self.coefficient),
                 "interval": {k: list(v) for k, v in self.interval.items()},
                 "wald_p": self.wald_p, "inclusion_frequency": self.inclusion_frequency,
@@ -383,9 +399,16 @@ class Diagnosis:
         if not sig:
             return ("no candidate is significant: the missing effect (if any) is not in the "
                     "library; see 'unexplained'")
-        return "significant: " + ", ".join(
-            (s.effect if s.target is None else f"{s.effect}:{s.target}")
-            + f" (CV RMS -{100 * s.cv_drop:.0f} %)" for s in sig)
+        def name(s):
+            return s.effect if s.target is None else f"{s.effect}:{s.target}"
+        own = [s for s in sig if s.explained_by is None]
+        out = "significant: " + ", ".join(f"{name(s)} (CV RMS -{100 * s.cv_drop:.0f} % on "
+                                          f"{s.channel})" for s in own)
+        by = [s for s in sig if s.explained_by is not None]
+        if by:
+            out += (f"; also significant alone but explained by {by[0].explained_by}: "
+                    + ", ".join(name(s) for s in by))
+        return out
 
     def to_dict(self) -> dict[str, Any]:
         return {"ranking": [s.to_dict() for s in self.ranking],
@@ -456,39 +479,34 @@ def _fit_shapes(c: Candidate, preps, bare) -> tuple[dict[str, float], list[np.nd
     return x0, resid(x0)[1]
 
 
-def _score(c: Candidate, preps: list[_Prep], bare: Instrument, base_grams, beta_model,
-           e_base: np.ndarray, rng: np.random.Generator, n_boot: int, alpha: float) -> tuple[
-               CandidateScore, dict[str, float], np.ndarray]:
-    shapes, cols = _fit_shapes(c, preps, bare)
-    Zs = [np.hstack([p.X, cc]) for p, cc in zip(preps, cols)]
-    G, h, yy, n = _grams(preps, Zs)
-    pm = preps[0].X.shape[1]
+def _score_columns(c: Candidate, names: Sequence[str], ys: list[np.ndarray],
+                   Xs: list[np.ndarray], cols: list[np.ndarray], base_grams,
+                   e_base: np.ndarray, rng: np.random.Generator, n_boot: int, alpha: float,
+                   shape_se=None) -> tuple[CandidateScore, np.ndarray]:
+    """Score candidate columns ``cols`` (coefficients ``names``) added to the model's ``Xs``.
+
+    ``shape_se(beta_c, Zs, s2)`` -> (values, standard errors) of the shape parameters.
+    Returns the score and the joint coefficients (model's, then the candidate's).
+    """
+    Zs = [np.hstack([X, cc]) for X, cc in zip(Xs, cols)]
+    G, h, yy, n = _grams(ys, Zs)
+    pm = Xs[0].shape[1]
     idx = slice(pm, G.shape[1])
-    w1 = np.ones(len(preps))
+    w1 = np.ones(len(ys))
     cv_before = _cv_rms(*base_grams)
     cv_after = _cv_rms(G, h, yy, n)
     beta, cov, stat, s2 = _wald(G, h, yy, n, w1, idx)
     k = idx.stop - idx.start
     wald_p = float(chi2.sf(stat, k))
-    coef = dict(zip(c.coefficients, map(float, beta[idx])))
-    se = dict(zip(c.coefficients, np.sqrt(np.maximum(np.diag(cov)[idx], 0.0))))
-    # shape parameters: stderr from the Jacobian of the fitted contribution (finite difference)
-    if c.shapes:
-        contrib0 = np.concatenate([cc @ beta[idx] for cc in cols])
-        J = [np.vstack(Zs)]
-        for s in c.shapes:
-            hstep = 1e-4 * max(abs(shapes[s]), 1.0)
-            cols_s = _cand_columns(c, {**shapes, s: shapes[s] + hstep}, preps, bare)
-            J.append(((np.concatenate([cc @ beta[idx] for cc in cols_s]) - contrib0)
-                      / hstep)[:, None])
-        J = np.hstack(J)
-        cov_full = np.linalg.pinv(J.T @ J) * float(s2)
-        for i, s in enumerate(c.shapes):
-            se[s] = float(math.sqrt(max(cov_full[G.shape[1] + i, G.shape[1] + i], 0.0)))
-            coef[s] = float(shapes[s])
+    coef = dict(zip(names, map(float, beta[idx])))
+    se = dict(zip(names, np.sqrt(np.maximum(np.diag(cov)[idx], 0.0))))
+    if shape_se is not None:
+        values, errors = shape_se(beta[idx], Zs, float(s2))
+        coef.update(values)
+        se.update(errors)
     interval = {p: (coef[p] - 1.96 * se[p], coef[p] + 1.96 * se[p]) for p in coef}
     # partial correlation: the candidate's fitted signature with the model's columns projected out
-    X = np.vstack([p.X for p in preps])
+    X = np.vstack(Xs)
     sig = np.concatenate([cc @ beta[idx] for cc in cols])
     sig_perp = sig - X @ np.linalg.lstsq(X, sig, rcond=None)[0]
     den = float(np.linalg.norm(sig_perp) * np.linalg.norm(e_base))
@@ -498,8 +516,7 @@ def _score(c: Candidate, preps: list[_Prep], bare: Instrument, base_grams, beta_
     hits = 0
     Gb, hb, yyb, nb = base_grams
     for _ in range(n_boot):
-        w = np.bincount(rng.integers(0, len(preps), len(preps)),
-                        minlength=len(preps)).astype(float)
+        w = np.bincount(rng.integers(0, len(ys), len(ys)), minlength=len(ys)).astype(float)
         if np.count_nonzero(w) < 2:
             continue
         ok_cv = _cv_rms(G, h, yy, n, w) < _cv_rms(Gb, hb, yyb, nb, w)
@@ -511,8 +528,39 @@ def _score(c: Candidate, preps: list[_Prep], bare: Instrument, base_grams, beta_
     score = CandidateScore(effect=c.effect, target=c.target, significant=significant,
                            cv_rms_before=cv_before, cv_rms_after=cv_after, correlation=corr,
                            coefficient=coef, interval=interval, wald_p=wald_p,
-                           inclusion_frequency=incl)
-    return score, shapes, beta
+                           inclusion_frequency=incl, channel=c.channel)
+    return score, beta
+
+
+def _score(c: Candidate, preps: list[_Prep], bare: Instrument, base_grams,
+           e_base: np.ndarray, rng: np.random.Generator, n_boot: int, alpha: float) -> tuple[
+               CandidateScore, dict[str, float], np.ndarray, list[np.ndarray]]:
+    """Score a gyro or accelerometer candidate on the drift window means.
+
+    Returns (score, shape parameters, joint coefficients, the candidate's columns per run).
+    """
+    shapes, cols = _fit_shapes(c, preps, bare)
+
+    def shape_se(beta_c, Zs, s2):
+        # standard errors from the Jacobian of the fitted contribution (finite differences)
+        contrib0 = np.concatenate([cc @ beta_c for cc in cols])
+        J = [np.vstack(Zs)]
+        for s in c.shapes:
+            hstep = 1e-4 * max(abs(shapes[s]), 1.0)
+            cols_s = _cand_columns(c, {**shapes, s: shapes[s] + hstep}, preps, bare)
+            J.append(((np.concatenate([cc @ beta_c for cc in cols_s]) - contrib0)
+                      / hstep)[:, None])
+        J = np.hstack(J)
+        cov_full = np.linalg.pinv(J.T @ J) * s2
+        m = Zs[0].shape[1]
+        errors = {s: float(math.sqrt(max(cov_full[m + i, m + i], 0.0)))
+                  for i, s in enumerate(c.shapes)}
+        return {s: float(shapes[s]) for s in c.shapes}, errors
+
+    score, beta = _score_columns(c, c.coefficients, [p.y for p in preps],
+                                 [p.X for p in preps], cols, base_grams, e_base, rng, n_boot,
+                                 alpha, shape_se if c.shapes else None)
+    return score, shapes, beta, cols
 
 
 # ---------------------------------------------------------------------------------------------
@@ -593,8 +641,12 @@ def _unexplained(preps: list[_Prep], e_parts: list[np.ndarray], decimate_s: floa
             if col in run.columns:
                 series[col] = _block(rd, np.asarray(run[col], dtype=float))
         pos = np.radians(np.asarray(run["position_deg"], dtype=float))
-        series["cos_position"] = _block(rd, np.cos(pos))
-        series["sin_position"] = _block(rd, np.sin(pos))
+        for k in (1, 2):  # first and second harmonics of the turntable position
+            suffix = "" if k == 1 else "_2"
+            for f, fn in (("cos", np.cos), ("sin", np.sin)):
+                v = fn(k * pos)
+                v[np.abs(v) < 1e-9] = 0.0  # sin(pi) = 1e-16 is not a signal
+                series[f"{f}{suffix}_position"] = _block(rd, v)
         for col in run.columns:
             if col.startswith("aux_"):
                 series[col] = _block(rd, np.asarray(run[col], dtype=float))
@@ -610,6 +662,129 @@ def _unexplained(preps: list[_Prep], e_parts: list[np.ndarray], decimate_s: floa
     rows.sort(key=lambda d: -d["max_abs_r"])
     return {"ljung_box": _ljung_box(e_parts), "cross_correlation": rows,
             "residual_rms_dph": float(np.sqrt(np.mean(np.concatenate(e_parts) ** 2)))}
+
+
+# ---------------------------------------------------------------------------------------------
+# Thermal and thermometer candidates: linearised thermometer residual
+
+#: Finite-difference step of a thermal candidate's parameter, started at 0, by unit.
+_THERMAL_STEP = {"W": 0.05, "W/K": 0.005, "s": 5.0}
+#: A thermal candidate whose column keeps less than this fraction of its norm after the
+#: model's own columns are projected out is the same physics as a model parameter.
+_SAME_SIGNATURE = 1e-3
+
+
+@dataclass
+class _ThermalSet:
+    data: list[Any]            # fit._ThermalRun per run
+    paths: list[str]           # the model's free thermal parameters
+    values: np.ndarray
+    base: list[np.ndarray]     # model minus measured, three thermometers stacked, per run
+    X: list[np.ndarray]        # d model / d parameter, per run
+
+
+def _thermal_resid(model: Instrument, data) -> list[np.ndarray]:
+    parts = _thermal_residual_parts(model, data)
+    return [np.concatenate([parts[c][i] for c in parts]) for i in range(len(data))]
+
+
+def _thermal_set(inst: Instrument, runs: Sequence[Run], decimate_s: float) -> _ThermalSet:
+    """The thermometer residual of the model and its Jacobian in the free thermal parameters
+    (:func:`~nfs.diagnose.fit.default_free`, thermal stage), by forward differences."""
+    data = [_prepare_thermal(r, decimate_s) for r in runs]
+    paths = default_free(inst, ("thermal",))
+    values = np.array([get_param(inst, p) for p in paths])
+    base = _thermal_resid(inst, data)
+    cols: list[list[np.ndarray]] = [[] for _ in runs]
+    for p, v in zip(paths, values):
+        h = 1e-3 * abs(v) if v else 1e-2
+        moved = _thermal_resid(set_params(inst, {p: v + h}), data)
+        for i, (m, b0) in enumerate(zip(moved, base)):
+            cols[i].append((m - b0) / h)
+    X = [np.column_stack(c) if c else np.zeros((b0.size, 0)) for c, b0 in zip(cols, base)]
+    return _ThermalSet(data, paths, values, base, X)
+
+
+def _thermal_cand_columns(c: Candidate, inst: Instrument, ts: _ThermalSet
+                          ) -> list[np.ndarray]:
+    """d model / d coefficient at 0 of a thermal or thermometer candidate, per run."""
+    spec = get_effect(c.effect)
+    cols: list[list[np.ndarray]] = [[] for _ in ts.data]
+    for name in c.coefficients:
+        h = _THERMAL_STEP.get(spec.parameter(name).unit, 1e-3)
+        e = _effect(c, {k: (h if k == name else 0.0) for k in c.coefficients})
+        moved = _thermal_resid(inst.with_effects(list(inst.effects) + [e]), ts.data)
+        for i, (m, b0) in enumerate(zip(moved, ts.base)):
+            cols[i].append((m - b0) / h)
+    return [np.column_stack(cc) for cc in cols]
+
+
+def _same_signature(cols: list[np.ndarray], ts: _ThermalSet) -> str:
+    """The model parameter a candidate duplicates ('' when it adds a new direction)."""
+    X, Z = np.vstack(ts.X), np.vstack(cols)
+    if X.shape[1] == 0:
+        return ""
+    rest = Z - X @ np.linalg.lstsq(X, Z, rcond=None)[0]
+    if np.linalg.norm(rest) > _SAME_SIGNATURE * np.linalg.norm(Z):
+        return ""
+    r = [abs(float(x @ Z[:, 0])) / (np.linalg.norm(x) * np.linalg.norm(Z[:, 0]) or 1.0)
+         for x in X.T]
+    return ts.paths[int(np.argmax(r))]
+
+
+def _thermal_instrument(inst: Instrument, ts: _ThermalSet, beta_m: np.ndarray,
+                        c: Candidate | None = None, beta_c: np.ndarray | None = None
+                        ) -> Instrument:
+    """The Gauss-Newton step of the linearised thermal fit, within the fit bounds."""
+    x = ts.values + beta_m
+    new = {}
+    for p, v in zip(ts.paths, x):
+        lo, hi = fit_bounds(inst, p)
+        new[p] = float(np.clip(v, lo, hi))
+    out = set_params(inst, new)
+    if c is not None:
+        out = out.with_effects(list(out.effects)
+                               + [_effect(c, dict(zip(c.coefficients, map(float, beta_c))))])
+    return out
+
+
+def _drift_heading(model: Instrument, runs: Sequence[Run], decimate_s: float) -> float:
+    """Start-up heading RMSE with the drift coefficients of ``model`` refitted (linear)."""
+    preps, _ = _prepare(model, runs, decimate_s)
+    G, h, _, _ = _grams([p.y for p in preps], [p.X for p in preps])
+    beta = _solve(G.sum(0), h.sum(0))
+    return _startup_heading_rmse(preps, [p.offset_full + p.X_full @ beta for p in preps])
+
+
+def _explained_by_top(ranking: list[CandidateScore], scored, ys_d, Xs_d, thermal
+                      ) -> list[CandidateScore]:
+    """Mark the significant candidates that the top significant one explains.
+
+    One effect usually makes several targets significant at once (a coil-temperature term on
+    the coil, the housing and the board: their temperatures move together).  Each significant
+    candidate scored on the same channel as the top one is refitted with the top one in the
+    model; when its own CV drop over model + top is below :data:`CV_DROP`, it adds nothing
+    the top one does not explain and gets ``explained_by`` = the top's label.
+    """
+    sig = [i for i, s in enumerate(ranking) if s.significant]
+    if len(sig) < 2:
+        return ranking
+    cols = {(s[0].effect, s[0].target): s[4] for s in scored}
+    top = ranking[sig[0]]
+    label = top.effect if top.target is None else f"{top.effect}:{top.target}"
+    ys, Xs = (ys_d, Xs_d) if top.channel == "drift_dph" else thermal
+    top_cols = cols[(top.effect, top.target)]
+    X_top = [np.hstack([X, t]) for X, t in zip(Xs, top_cols)]
+    cv_top = _cv_rms(*_grams(ys, X_top))
+    out = list(ranking)
+    for i in sig[1:]:
+        s = ranking[i]
+        if s.channel != top.channel:
+            continue
+        Z = [np.hstack([X, c]) for X, c in zip(X_top, cols[(s.effect, s.target)])]
+        if _cv_rms(*_grams(ys, Z)) > (1.0 - CV_DROP) * cv_top:
+            out[i] = replace(s, explained_by=label)
+    return out
 
 
 # ---------------------------------------------------------------------------------------------
@@ -632,7 +807,7 @@ def diagnose(inst: Instrument, runs: Sequence[Run], *, n_boot: int = 20, alpha: 
     baseline = fit_model(inst, runs, free=paths, stages=("drift",), decimate_s=decimate_s)
     preps, paths = _prepare(inst, runs, decimate_s)
     bare = _bare(inst)
-    base_grams = _grams(preps, [p.X for p in preps])
+    base_grams = _grams([p.y for p in preps], [p.X for p in preps])
     beta_model = _solve(base_grams[0].sum(0), base_grams[1].sum(0))
     e_parts = [p.y - p.X @ beta_model for p in preps]
     e_base = np.concatenate(e_parts)
@@ -640,23 +815,54 @@ def diagnose(inst: Instrument, runs: Sequence[Run], *, n_boot: int = 20, alpha: 
     cands = candidates(inst, runs)
     scored = []
     for c in cands:
-        if c.tried:
-            scored.append((c, *_score(c, preps, bare, base_grams, beta_model, e_base, rng,
-                                      n_boot, alpha)))
-    scored.sort(key=lambda s: s[1].cv_rms_after / s[1].cv_rms_before)
+        if c.tried and c.channel == "drift_dph":
+            scored.append((c, *_score(c, preps, bare, base_grams, e_base, rng, n_boot, alpha)))
     base_full = [p.offset_full + p.X_full @ beta_model for p in preps]
     h_before = _startup_heading_rmse(preps, base_full) if scored else math.nan
+    not_tried = [c for c in cands if not c.tried]
+    thermal_cands = [c for c in cands if c.tried and c.channel == "thermometers"]
+    ts = _thermal_set(inst, runs, decimate_s) if thermal_cands else None
+    if ts is not None:
+        ys_t = [-b0 for b0 in ts.base]
+        grams_t = _grams(ys_t, ts.X)
+        beta_t = _solve(grams_t[0].sum(0), grams_t[1].sum(0))
+        e_t = np.concatenate([y - X @ beta_t for y, X in zip(ys_t, ts.X)])
+        h_before_t = None
+        for c in thermal_cands:
+            cols = _thermal_cand_columns(c, inst, ts)
+            dup = _same_signature(cols, ts)
+            if dup:
+                not_tried.append(replace(c, tried=False, reason=(
+                    f"same thermometer signature as the model's free {dup}")))
+                continue
+            score, beta = _score_columns(c, c.coefficients, ys_t, ts.X, cols, grams_t, e_t,
+                                         rng, n_boot, alpha)
+            scored.append((c, score, {}, beta, cols))
+    scored.sort(key=lambda s: s[1].cv_rms_after / s[1].cv_rms_before)
     ranking = []
-    for i, (c, s, shapes, beta) in enumerate(scored):
+    for i, (c, s, shapes, beta, _) in enumerate(scored):
         if i < HEADING_TOP or s.significant:
-            pm = preps[0].X.shape[1]
-            full = _cand_columns(c, shapes, preps, bare, full=True)
-            model_full = [p.offset_full + p.X_full @ beta[:pm] + f @ beta[pm:]
-                          for p, f in zip(preps, full)]
-            s = replace(s, heading_rmse_before_deg=h_before,
-                        heading_rmse_after_deg=_startup_heading_rmse(preps, model_full))
+            if c.channel == "drift_dph":
+                pm = preps[0].X.shape[1]
+                full = _cand_columns(c, shapes, preps, bare, full=True)
+                model_full = [p.offset_full + p.X_full @ beta[:pm] + f @ beta[pm:]
+                              for p, f in zip(preps, full)]
+                s = replace(s, heading_rmse_before_deg=h_before,
+                            heading_rmse_after_deg=_startup_heading_rmse(preps, model_full))
+            else:
+                # the linearised thermal refit (one Gauss-Newton step) then the drift refit,
+                # beside the same step without the candidate
+                if h_before_t is None:
+                    h_before_t = _drift_heading(_thermal_instrument(inst, ts, beta_t), runs,
+                                                decimate_s)
+                pm = len(ts.paths)
+                new = _thermal_instrument(inst, ts, beta[:pm], c, beta[pm:])
+                s = replace(s, heading_rmse_before_deg=h_before_t,
+                            heading_rmse_after_deg=_drift_heading(new, runs, decimate_s))
         ranking.append(s)
-    return Diagnosis(ranking=tuple(ranking), not_tried=tuple(c for c in cands if not c.tried),
+    ranking = _explained_by_top(ranking, scored, [p.y for p in preps], [p.X for p in preps],
+                                (ys_t, ts.X) if ts is not None else None)
+    return Diagnosis(ranking=tuple(ranking), not_tried=tuple(not_tried),
                      unexplained=_unexplained(preps, e_parts, decimate_s), baseline=baseline,
                      time_s=time.perf_counter() - t0)
 

@@ -1,16 +1,31 @@
 """Tests of nfs.diagnose.diagnose: name the effect a model lacks, add it, watch the error fall.
 
 "Measured" runs: the default scenario's 7 start temperatures, 2.5 h at 1 Hz, simulated
-(nfs.experiment.simulate_run) from an instrument with ONE effect the model lacks; the model
-is the default instrument (load_instrument("default")), with that effect removed when the
-default has it.  Oracle: the generating instrument (we know which effect is hidden and its
-value); the noise floor of the drift channel is the residual RMS of the 10 s window means
-when the true instrument's own drift coefficients are fitted (about 0.0064 deg/h: ARW
-0.0003 deg/sqrt(h) gives 0.0057 deg/h on a 10 s mean, plus bias instability).  Hidden
-strengths relative to that floor (RMS of the hidden term over the runs / floor):
-shupe_product k_p = 0.02 (default 0.006) ~7x; magnetic m = 0.01 deg/h, D_mag = 30 deg ~1.1x
-(m / sqrt(2) = 0.007 deg/h, constant in time, so its CV drop is clear); turn_on_transient
-a = 0.05 deg/h, tau = 300 s ~1x over 2.5 h (98 % of it in the first 10 min).
+(nfs.experiment.simulate_run) with noise from an instrument with ONE effect the model lacks;
+the model is the default instrument (load_instrument("default")), with that effect removed
+when the default has it.  Six effects of the library are hidden in turn, each with two noise
+seeds (11, 12; a third, 13, in the slow set).  Oracle: the generating instrument (we know
+which effect is hidden, on which target, and its value).
+
+Strengths relative to the noise floor.  Drift channel: the floor is the residual RMS of the
+10 s window means when the true instrument's own drift coefficients are fitted, about
+0.0065 deg/h (ARW 0.0003 deg/sqrt(h) gives 0.0057 deg/h on a 10 s mean, plus bias
+instability); the number is the model's excess RMS over the floor, sqrt(rms^2 - floor^2),
+divided by the floor, measured with seed 11:
+
+- shupe_product k_p = 0.02 (default 0.006): ~1.2x
+- turn_on_transient a = 0.1 deg/h, tau = 120 s: ~0.9x over 2.5 h (all of it in the first
+  10 min, where it is ~10x)
+- magnetic m = 0.01 deg/h, D_mag = 30 deg: ~0.6x (constant in time, follows the position)
+- aux_linear k = 0.02 deg/h/W on aux_tec_power_w (1.2-4 W): ~1.3x
+- polarization_ripple A_p = 0.005 deg/h, T_p = 5 K: ~0.6x
+- heat_source 1 W at coil_inner (a thermal effect): thermometer channels, floor 0.0206 K
+  (noise 0.01 K and the 0.0625 K quantum), after the model's own thermal fit ~0.4x
+
+Candidates the data cannot tell apart from the hidden one (the board's warm-up and the
+turn-on transient; every node's temperature for a coil-temperature term) come out
+significant too; the test asks that the hidden one is the top significant candidate and
+that the top one explains the others (``explained_by``).
 """
 
 from __future__ import annotations
@@ -18,7 +33,9 @@ from __future__ import annotations
 import dataclasses
 import json
 import math
+from dataclasses import replace
 
+import numpy as np
 import pytest
 
 from nfs.diagnose.diagnose import (CV_DROP, apply_candidate, candidates, diagnose)
@@ -26,19 +43,30 @@ from nfs.diagnose.fit import fit_model
 from nfs.effects import make_effect
 from nfs.errors import NfsError
 from nfs.experiment import simulate_run
-from nfs.instrument import load_instrument
+from nfs.instrument import instrument_from_dict, load_instrument, preset_path
 from nfs.io.scenario import load_scenario
+from nfs.io.tomlio import load_toml
 
+#: hidden effect -> (parameters, expected target)
 HIDDEN = {
-    "shupe_product": {"k_p": 0.02},
-    "turn_on_transient": {"a": 0.05, "tau": 300.0},
-    "magnetic": {"m": 0.01, "D_mag": 30.0},
+    "shupe_product": ({"k_p": 0.02}, None),
+    "turn_on_transient": ({"a": 0.1, "tau": 120.0}, None),
+    "magnetic": ({"m": 0.01, "D_mag": 30.0}, None),
+    "aux_linear": ({"channel": "aux_tec_power_w", "k": 0.02}, "aux_tec_power_w"),
+    "polarization_ripple": ({"A_p": 0.005, "T_p": 5.0}, None),
+    "heat_source": ({"node": "coil_inner", "power": 1.0}, "coil_inner"),
 }
+THERMAL = ("heat_source",)
+SEEDS = (11, 12)
+
+
+def _scenario(seed):
+    return dataclasses.replace(load_scenario(), duration_s=9000.0, seed=seed)
 
 
 @pytest.fixture(scope="module")
 def scenario():
-    return dataclasses.replace(load_scenario(), duration_s=9000.0, seed=11)
+    return _scenario(11)
 
 
 @pytest.fixture(scope="module")
@@ -51,20 +79,34 @@ def _without(inst, name):
 
 
 def _case(scenario, default, name):
+    """(model, truth, runs); a thermal hidden effect gets the model's thermal fit first,
+    as a user runs `nfs fit` before `nfs diagnose`."""
     model = _without(default, name)
-    truth = model.with_effects(list(model.effects) + [make_effect(name, HIDDEN[name])])
+    truth = model.with_effects(list(model.effects) + [make_effect(name, HIDDEN[name][0])])
     runs = [simulate_run(truth, c).run for c in scenario.conditions()]
+    if name in THERMAL:
+        model = fit_model(model, runs, stages=("thermal",)).instrument
     return model, truth, runs
 
 
-@pytest.fixture(scope="module")
-def cases(scenario, default):
-    return {name: _case(scenario, default, name) for name in HIDDEN}
+_CACHE: dict = {}
+
+
+def _diagnosed(name, seed):
+    if (name, seed) not in _CACHE:
+        model, truth, runs = _case(_scenario(seed), load_instrument("default"), name)
+        _CACHE[name, seed] = (model, truth, runs, diagnose(model, runs))
+    return _CACHE[name, seed]
 
 
 @pytest.fixture(scope="module")
-def diagnoses(cases):
-    return {name: diagnose(model, runs) for name, (model, truth, runs) in cases.items()}
+def cases():
+    return {name: _diagnosed(name, 11)[:3] for name in HIDDEN}
+
+
+@pytest.fixture(scope="module")
+def diagnoses():
+    return {name: _diagnosed(name, 11)[3] for name in HIDDEN}
 
 
 def _floor(truth, runs):
@@ -80,40 +122,62 @@ def test_candidates_lists_targets_and_skips_model_effects(default, cases):
     assert "shupe_product:housing" in labels and "shupe_product" not in labels
     assert "aux_linear:aux_tec_power_w" in labels
     assert {"thermometer_lag:fog", "heat_source:board"} <= labels
+    assert "heat_source" not in labels  # its node has no default
     by = {c.label: c for c in cs}
-    assert not by["heat_source:board"].tried and "thermal" in by["heat_source:board"].reason
+    assert by["heat_source:board"].tried and by["heat_source:board"].channel == "thermometers"
+    assert by["thermometer_lag:fog"].coefficients == ("tau",)  # linearised at 0
     assert by["magnetic"].shapes == ("D_mag",) and by["magnetic"].coefficients == ("m",)
 
 
-@pytest.mark.parametrize("name", ["shupe_product", "magnetic"])
-def test_hidden_effect_is_top_significant_candidate(diagnoses, name):
-    # Oracle: the generating instrument has exactly this effect on its default target.
-    d = diagnoses[name]
+def _check_top(d, name):
+    params, target = HIDDEN[name]
     top = d.ranking[0]
-    assert (top.effect, top.target) == (name, None), [(s.effect, s.target) for s in
-                                                      d.ranking[:3]]
+    assert (top.effect, top.target) == (name, target), [
+        (s.effect, s.target, round(s.cv_drop, 4)) for s in d.ranking[:4]]
     assert top.significant and top.inclusion_frequency >= 0.8
     assert top.cv_rms_after < (1 - CV_DROP) * top.cv_rms_before
-    # the fitted coefficient's interval holds the true value
-    for p, v in HIDDEN[name].items():
-        if p in top.interval and p != "tau":
+    assert top.explained_by is None
+    # one effect, one explanation: every other significant candidate on the same channel
+    # is explained by the hidden one
+    others = [s for s in d.significant[1:] if s.channel == top.channel]
+    assert all(s.explained_by for s in others), [
+        (s.effect, s.target) for s in others if not s.explained_by]
+    assert d.verdict.startswith(f"significant: {top.effect}")
+    # the fitted coefficients' intervals hold the true values (10 % slack for the
+    # optimism of intervals on autocorrelated windows)
+    for p, v in params.items():
+        if p in top.interval and isinstance(v, float) and p not in ("tau", "T_p", "D_mag"):
             lo, hi = top.interval[p]
             assert lo - 0.1 * abs(v) <= v <= hi + 0.1 * abs(v), (p, v, top.interval[p])
-    assert top.heading_rmse_after_deg <= top.heading_rmse_before_deg
+    assert top.heading_rmse_after_deg <= top.heading_rmse_before_deg * 1.001
+    return top
 
 
-def test_turn_on_transient_is_among_the_top_significant(diagnoses):
-    # Oracle: the hidden a exp(-t/300 s).  Over 2.5 h runs it is nearly collinear with the
-    # warm-up of the board node (tau ~5 min: shupe_rate:board, bias_temperature:board fit
-    # within 1 % of the same CV RMS), so the test asks for the top 3 and a significant score,
-    # not the first place (see the report: a known identifiability limit).
-    d = diagnoses["turn_on_transient"]
-    top3 = [(s.effect, s.target) for s in d.ranking[:3]]
-    assert ("turn_on_transient", None) in top3, top3
-    s = next(s for s in d.ranking if s.effect == "turn_on_transient")
-    assert s.cv_rms_after < (1 - CV_DROP) * s.cv_rms_before
-    assert s.cv_rms_after <= 1.01 * d.ranking[0].cv_rms_after
-    assert abs(s.coefficient["a"] - 0.05) < 0.015
+@pytest.mark.parametrize("name", list(HIDDEN))
+@pytest.mark.parametrize("seed", SEEDS)
+def test_hidden_effect_is_top_significant_candidate(name, seed):
+    _check_top(_diagnosed(name, seed)[3], name)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", list(HIDDEN))
+def test_hidden_effect_is_top_third_seed(name):
+    _check_top(_diagnosed(name, 13)[3], name)
+
+
+def test_turn_on_transient_coefficients(diagnoses):
+    s = diagnoses["turn_on_transient"].ranking[0]
+    assert abs(s.coefficient["a"] - 0.1) < 0.02 and 80.0 < s.coefficient["tau"] < 200.0
+
+
+def test_thermal_candidate_scored_on_thermometers(diagnoses):
+    d = diagnoses["heat_source"]
+    top = d.ranking[0]
+    assert top.channel == "thermometers"
+    assert abs(top.coefficient["power"] - 1.0) < 0.15
+    # a heat source at a node whose power the model already fits has the same signature
+    why = {f"{c.effect}:{c.target}": c.reason for c in d.not_tried}
+    assert "board.power_w" in why["heat_source:board"]
 
 
 def test_no_hidden_effect_no_significant_candidate(scenario, default):
@@ -126,17 +190,67 @@ def test_no_hidden_effect_no_significant_candidate(scenario, default):
     assert max(s.cv_drop for s in d.ranking) < CV_DROP
 
 
-@pytest.mark.parametrize("name", ["shupe_product", "magnetic", "turn_on_transient"])
+def test_effect_outside_the_library(scenario, default):
+    # Oracle: a quadrantal error 0.01 cos(2A) deg/h (A the turntable position; e.g. an
+    # elliptic bearing), added to the measured rate.  No registered effect has a second
+    # harmonic of the position (magnetic is the first), so no candidate may be significant,
+    # and the residual's strongest cross-correlation is with cos(2A).
+    runs = []
+    for c in scenario.conditions():
+        r = simulate_run(default, c).run
+        a = np.radians(np.asarray(r["position_deg"], dtype=float))
+        cols = dict(r.columns)
+        cols["gyro_dph"] = np.asarray(r["gyro_dph"], dtype=float) + 0.01 * np.cos(2 * a)
+        runs.append(replace(r, columns=cols))
+    d = diagnose(default, runs)
+    assert not d.significant, [(s.effect, s.target) for s in d.significant]
+    u = d.unexplained
+    assert u["ljung_box"]["p_value"] < 0.01
+    assert u["cross_correlation"][0]["channel"] == "cos_2_position"
+    assert u["cross_correlation"][0]["max_abs_r"] > 0.5
+
+
+def test_ranking_survives_a_model_with_another_node_count(scenario, default):
+    # Oracle: the data come from the default 7-node instrument with a hidden shupe_product;
+    # the model has 8 nodes (a mounting plate between the housing and the chamber), is
+    # thermally fitted to the runs, and must still name shupe_product.
+    truth = default.with_effects([e for e in default.effects if e.name != "shupe_product"]
+                                 + [make_effect("shupe_product", HIDDEN["shupe_product"][0])])
+    runs = [simulate_run(truth, c).run for c in scenario.conditions()]
+    d = load_toml(preset_path("default"))
+    d["thermal"]["nodes"]["mount"] = {"capacity_j_per_k": 1500.0, "power_w": 0.0}
+    links = [ln for ln in d["thermal"]["links"] if "chamber" not in ln["between"]]
+    links += [{"between": ["housing", "mount"], "conductance_w_per_k": 4.0},
+              {"between": ["mount", "chamber"], "conductance_w_per_k": 1.6}]
+    d["thermal"]["links"] = links
+    other = instrument_from_dict(d)
+    other = other.with_effects([e for e in other.effects if e.name != "shupe_product"])
+    assert len(other.network.node_names) == len(default.network.node_names) + 1
+    fitted = fit_model(other, runs, stages=("thermal",)).instrument
+    diag = diagnose(fitted, runs)
+    top = diag.ranking[0]
+    assert (top.effect, top.target) == ("shupe_product", None), [
+        (s.effect, s.target) for s in diag.ranking[:4]]
+    assert top.significant
+
+
+@pytest.mark.parametrize("name", list(HIDDEN))
 def test_apply_halves_the_excess_and_keeps_heading(cases, name):
-    # Oracle: the truth.  The excess of the drift residual over the noise floor,
-    # sqrt(rms^2 - floor^2), falls by at least half; heading RMSE does not get worse.
+    # Oracle: the truth.  The excess of the affected channel's residual over its noise
+    # floor, sqrt(rms^2 - floor^2), falls by at least half; heading RMSE does not get worse.
     model, truth, runs = cases[name]
-    new, res, rep = apply_candidate(model, runs, name)
+    params, target = HIDDEN[name]
+    new, res, rep = apply_candidate(model, runs, name, target)
     assert any(e.name == name for e in new.effects)
-    floor = _floor(truth, runs)
-    before, after = rep["rms_before"]["drift_dph"], rep["rms_after"]["drift_dph"]
+    if name in THERMAL:
+        floors = fit_model(truth, runs, free=[], stages=("thermal",)).rms_before
+        channel = max(floors, key=lambda ch: rep["rms_before"][ch] ** 2 - floors[ch] ** 2)
+        floor = floors[channel]
+    else:
+        channel, floor = "drift_dph", _floor(truth, runs)
+    before, after = rep["rms_before"][channel], rep["rms_after"][channel]
     excess = lambda r: math.sqrt(max(r * r - floor * floor, 0.0))  # noqa: E731
-    assert excess(after) <= 0.5 * excess(before), (before, after, floor)
+    assert excess(after) <= 0.5 * excess(before), (channel, before, after, floor)
     assert rep["heading_rmse_after_deg"] <= rep["heading_rmse_before_deg"] * 1.001
 
 
