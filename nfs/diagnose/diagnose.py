@@ -756,32 +756,46 @@ def _drift_heading(model: Instrument, runs: Sequence[Run], decimate_s: float) ->
     return _startup_heading_rmse(preps, [p.offset_full + p.X_full @ beta for p in preps])
 
 
-def _explained_by_top(ranking: list[CandidateScore], scored, ys_d, Xs_d, thermal
-                      ) -> list[CandidateScore]:
+def _explained_by_top(ranking: list[CandidateScore], scored, drift_design, thermal_design,
+                      bare: Instrument, after_thermal) -> list[CandidateScore]:
     """Mark the significant candidates that the top significant one explains.
 
     One effect usually makes several targets significant at once (a coil-temperature term on
-    the coil, the housing and the board: their temperatures move together).  Each significant
-    candidate scored on the same channel as the top one is refitted with the top one in the
-    model; when its own CV drop over model + top is below :data:`CV_DROP`, it adds nothing
-    the top one does not explain and gets ``explained_by`` = the top's label.
+    the coil, the housing and the board: their temperatures move together; a missing heat
+    source also shows in the drift as a temperature term on some node).  Each other
+    significant candidate is refitted with the top one in the model; when its own CV drop
+    over model + top is below :data:`CV_DROP`, it adds nothing the top one does not explain
+    and gets ``explained_by`` = the top's label.  A drift candidate under a thermal top one
+    is refitted on the drift of the thermal model with the top one added
+    (``after_thermal(candidate, joint coefficients)`` -> prepared runs).
     """
     sig = [i for i, s in enumerate(ranking) if s.significant]
     if len(sig) < 2:
         return ranking
-    cols = {(s[0].effect, s[0].target): s[4] for s in scored}
+    by = {(s[0].effect, s[0].target): s for s in scored}
     top = ranking[sig[0]]
     label = top.effect if top.target is None else f"{top.effect}:{top.target}"
-    ys, Xs = (ys_d, Xs_d) if top.channel == "drift_dph" else thermal
-    top_cols = cols[(top.effect, top.target)]
-    X_top = [np.hstack([X, t]) for X, t in zip(Xs, top_cols)]
-    cv_top = _cv_rms(*_grams(ys, X_top))
+    c_top, _, _, beta_top, cols_top = by[(top.effect, top.target)]
+    designs = {top.channel: (drift_design if top.channel == "drift_dph" else thermal_design,
+                             cols_top)}
+    if top.channel == "thermometers" and any(ranking[i].channel == "drift_dph"
+                                             for i in sig[1:]):
+        preps = after_thermal(c_top, beta_top)
+        designs["drift_dph"] = (([p.y for p in preps], [p.X for p in preps]), None)
+    else:
+        preps = None
     out = list(ranking)
     for i in sig[1:]:
         s = ranking[i]
-        if s.channel != top.channel:
+        if s.channel not in designs:
             continue
-        Z = [np.hstack([X, c]) for X, c in zip(X_top, cols[(s.effect, s.target)])]
+        (ys, Xs), top_cols = designs[s.channel]
+        X_top = Xs if top_cols is None else [np.hstack([X, t]) for X, t in zip(Xs, top_cols)]
+        c, _, shapes, _, cols = by[(s.effect, s.target)]
+        if top_cols is None:  # a drift candidate on the thermal top's drift
+            cols = _cand_columns(c, shapes, preps, bare)
+        cv_top = _cv_rms(*_grams(ys, X_top))
+        Z = [np.hstack([X, cc]) for X, cc in zip(X_top, cols)]
         if _cv_rms(*_grams(ys, Z)) > (1.0 - CV_DROP) * cv_top:
             out[i] = replace(s, explained_by=label)
     return out
@@ -838,7 +852,12 @@ def diagnose(inst: Instrument, runs: Sequence[Run], *, n_boot: int = 20, alpha: 
             score, beta = _score_columns(c, c.coefficients, ys_t, ts.X, cols, grams_t, e_t,
                                          rng, n_boot, alpha)
             scored.append((c, score, {}, beta, cols))
-    scored.sort(key=lambda s: s[1].cv_rms_after / s[1].cv_rms_before)
+    # Thermometers are upstream of the drift: a missing thermal effect moves the coil
+    # temperatures and also shows in the drift (as some node's temperature term), a missing
+    # gyro effect never shows in the thermometers.  Significant thermometer candidates rank
+    # first; within each group, by the relative drop of the CV RMS.
+    scored.sort(key=lambda s: (not (s[1].significant and s[1].channel == "thermometers"),
+                               s[1].cv_rms_after / s[1].cv_rms_before))
     ranking = []
     for i, (c, s, shapes, beta, _) in enumerate(scored):
         if i < HEADING_TOP or s.significant:
@@ -860,8 +879,14 @@ def diagnose(inst: Instrument, runs: Sequence[Run], *, n_boot: int = 20, alpha: 
                 s = replace(s, heading_rmse_before_deg=h_before_t,
                             heading_rmse_after_deg=_drift_heading(new, runs, decimate_s))
         ranking.append(s)
-    ranking = _explained_by_top(ranking, scored, [p.y for p in preps], [p.X for p in preps],
-                                (ys_t, ts.X) if ts is not None else None)
+
+    def after_thermal(c, beta):  # the drift of the thermal model with candidate c added
+        pm = len(ts.paths)
+        return _prepare(_thermal_instrument(inst, ts, beta[:pm], c, beta[pm:]), runs,
+                        decimate_s)[0]
+
+    ranking = _explained_by_top(ranking, scored, ([p.y for p in preps], [p.X for p in preps]),
+                                (ys_t, ts.X) if ts is not None else None, bare, after_thermal)
     return Diagnosis(ranking=tuple(ranking), not_tried=tuple(not_tried),
                      unexplained=_unexplained(preps, e_parts, decimate_s), baseline=baseline,
                      time_s=time.perf_counter() - t0)

@@ -132,8 +132,15 @@ def test_candidates_lists_targets_and_skips_model_effects(default, cases):
 def _check_top(d, name):
     params, target = HIDDEN[name]
     top = d.ranking[0]
-    assert (top.effect, top.target) == (name, target), [
-        (s.effect, s.target, round(s.cv_drop, 4)) for s in d.ranking[:4]]
+    assert top.effect == name, [(s.effect, s.target, round(s.cv_drop, 4))
+                                for s in d.ranking[:4]]
+    if top.target != target:
+        # the right effect on a target the data cannot tell from the true one (a ripple in
+        # the coil-inner temperature vs the coil mean: a phase shift): the true target is
+        # significant and explained by the top one
+        true = next(s for s in d.ranking if (s.effect, s.target) == (name, target))
+        assert true.significant and true.explained_by == f"{top.effect}:{top.target}", true
+        assert true.cv_rms_after <= 1.02 * top.cv_rms_after
     assert top.significant and top.inclusion_frequency >= 0.8
     assert top.cv_rms_after < (1 - CV_DROP) * top.cv_rms_before
     assert top.explained_by is None
