@@ -270,15 +270,20 @@ def _cmd_diagnose(args) -> int:
     if not args.quiet:
         print(f"diagnosing {inst.name} on {len(runs)} run(s)...", file=sys.stderr)
     d = diagnose(inst, runs, random_state=args.seed)
-    print("| rank | effect | target | significant | CV RMS before | after | coefficient |")
-    print("|---:|---|---|---|---:|---:|---|")
+    print("| rank | effect | target | channel | significant | CV RMS before | after | "
+          "coefficient |")
+    print("|---:|---|---|---|---|---:|---:|---|")
     for i, sc in enumerate(d.ranking[:args.top], 1):
         row = sc.to_dict()
         coef = ", ".join(f"{k} = {v:.3g}" for k, v in (row.get("coefficient") or {}).items())
-        print(f"| {i} | {row['effect']} | {row['target'] or ''} | "
-              f"{'yes' if row['significant'] else 'no'} | {row['cv_rms_before']:.4g} | "
-              f"{row['cv_rms_after']:.4g} | {coef} |")
+        sig = "yes" if row["significant"] else "no"
+        if row["explained_by"]:
+            sig += f" (explained by {row['explained_by']})"
+        print(f"| {i} | {row['effect']} | {row['target'] or ''} | {row['channel']} | {sig} | "
+              f"{row['cv_rms_before']:.4g} | {row['cv_rms_after']:.4g} | {coef} |")
     print(d.verdict)
+    if d.not_tried:
+        print(f"{len(d.not_tried)} candidate(s) not scored (reasons in --json 'not_tried')")
     if args.json:
         atomic_write_text(args.json, json.dumps(d.to_dict(), indent=1, default=_j) + "\n")
     return 0
@@ -432,7 +437,8 @@ def build_parser() -> argparse.ArgumentParser:
     dg = sub.add_parser("diagnose", help="which physical effect the model is missing",
                         description="Try every registered effect the model lacks (on each of "
                                     "its possible targets), refit, and rank them by the drop "
-                                    "of the leave-one-run-out drift residual; mark the "
+                                    "of the leave-one-run-out residual (drift, or the "
+                                    "thermometers for thermal effects); mark the "
                                     "significant ones; report what stays unexplained. With "
                                     "--apply NAME[:TARGET], add that effect, refit and write "
                                     "the new model.")

@@ -43,9 +43,27 @@ threshold: the held-out runs make a drop by chance small, and on runs made by th
 itself the largest drop over all candidates stays well below it
 (tests/diagnose/test_diagnose.py).
 
-Thermal-kind effects (``heat_source``, ``tec_power``, ``motor_heat``, ``thermometer_lag``)
-need the thermal stage and are not scored by :func:`diagnose` (listed under ``not_tried``);
-:func:`apply_candidate` adds them with a two-stage refit.
+Thermal and thermometer candidates (``heat_source``, ``motor_heat``, ``tec_power`` on each
+node, ``thermometer_lag`` on each thermometer) are scored the same way on the thermometer
+channel (``channel = "thermometers"``): the residual is the three thermometers at the knots
+of the thermal stage (:func:`nfs.diagnose.fit.fit_model`), the model's own columns are the
+Jacobian of the readings in its free thermal parameters (forward differences), and the
+candidate's columns are the derivatives of the readings in its parameters at 0 (a power
+step of 0.05 W, a TEC slope of 0.005 W/K, an extra lag of 5 s: ``thermometer_lag``'s tau is
+a coefficient of the linearised reading y - tau dy/dt).  This is one Gauss-Newton step of
+the thermal refit, accurate when the model's thermal part is already fitted (``nfs fit``).
+A candidate whose columns lie in the span of the model's (a heat source at a node whose
+power the model fits; a motor heating a powered node: the moves are a steady duty cycle)
+is listed under ``not_tried`` with the model parameter it duplicates.  Their heading RMSE
+is computed with the Gauss-Newton model and a linear drift refit, beside the same step
+without the candidate.
+
+Ranking: significant thermometer candidates first (thermometers are upstream of the drift:
+a missing thermal effect also shows in the drift, as some node's temperature term, while a
+missing gyro effect never shows in the thermometers), then by the relative CV drop.  Every
+other significant candidate is refitted with the top one in the model; if it then drops
+the CV RMS by less than :data:`CV_DROP` it is marked ``explained_by`` the top one (one
+effect makes several targets significant at once).
 """
 
 from __future__ import annotations
