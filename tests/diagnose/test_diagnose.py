@@ -241,6 +241,50 @@ def test_ranking_survives_a_model_with_another_node_count(scenario, default):
     assert top.significant
 
 
+def test_users_own_effect_is_a_candidate(scenario, default, monkeypatch):
+    # Oracle: a user's effect (a registered Python function, as in the simulator issue):
+    # a chamber fan's 20-min periodic disturbance c sin(2 pi t / P), c = 0.006 deg/h, hidden
+    # in the runs.  No built-in effect follows time this way; the user's is the top one.
+    import nfs.effects.registry as reg
+    from nfs.effects import Parameter, register_effect
+    monkeypatch.setattr(reg, "_REGISTRY", dict(reg._REGISTRY))  # restored after the test
+
+    @register_effect("user_fan", kind="gyro", parameters=[
+        Parameter("c", "deg/h", "amplitude"),
+        Parameter("period", "s", "fan cycle", default=1200.0)])
+    def user_fan(ctx, *, c, period=1200.0):
+        """c sin(2 pi t / period) [deg/h]: a chamber fan's periodic disturbance."""
+        return c * np.sin(2 * np.pi * ctx.time_s / period)
+
+    truth = default.with_effects(list(default.effects)
+                                 + [make_effect("user_fan", {"c": 0.006, "period": 1250.0})])
+    runs = [simulate_run(truth, c).run for c in scenario.conditions()]
+    d = diagnose(default, runs)
+    top = d.ranking[0]
+    assert (top.effect, top.significant) == ("user_fan", True), d.verdict
+    assert abs(top.coefficient["period"] - 1250.0) < 25.0
+    new, _, rep = apply_candidate(default, runs, "user_fan")
+    assert rep["rms_after"]["drift_dph"] < rep["rms_before"]["drift_dph"]
+
+
+def test_runs_with_different_latitudes_and_schedules(scenario, default):
+    # Oracle: each run is replayed with its own latitude and schedule; a hidden magnetic
+    # bias is still named when the runs mix 30/50 deg latitude and 150/200 s dwells.
+    from nfs.sensors import Schedule
+    truth = default.with_effects(list(default.effects)
+                                 + [make_effect("magnetic", HIDDEN["magnetic"][0])])
+    conds = []
+    for i, c in enumerate(scenario.conditions()):
+        if i % 2:
+            c = replace(c, latitude_deg=50.0,
+                        schedule=Schedule(c.schedule.positions_deg, 200.0, c.schedule.move_s))
+        conds.append(c)
+    runs = [simulate_run(truth, c).run for c in conds]
+    assert len({r.meta.latitude_deg for r in runs}) == 2
+    d = diagnose(default, runs)
+    assert (d.ranking[0].effect, d.ranking[0].significant) == ("magnetic", True), d.verdict
+
+
 @pytest.mark.parametrize("name", list(HIDDEN))
 def test_apply_halves_the_excess_and_keeps_heading(cases, name):
     # Oracle: the truth.  The excess of the affected channel's residual over its noise
