@@ -142,8 +142,9 @@ def train_compensator(method: str, runs: Sequence[Run] | DriftDataset, *,
     """Train a compensator of ``method`` (a key or name of :data:`~nfs.compensate.methods.METHODS`).
 
     ``runs`` are measurement runs with a known heading (or a prepared :class:`DriftDataset`).
-    Tuned methods search their hyperparameters with ``budget`` evaluations of a
-    leave-one-run-out validation error.
+    Tuned methods search their hyperparameters with ``budget`` evaluations of a validation
+    error that leaves one start temperature out (one run out when all share one T0;
+    :attr:`DriftDataset.validation_groups`).
     """
     from .methods import get_method
     spec = get_method(method)
@@ -151,14 +152,14 @@ def train_compensator(method: str, runs: Sequence[Run] | DriftDataset, *,
         runs, features, decimate_s=decimate_s, cutoff_period_s=cutoff_period_s,
         rate_window_s=rate_window_s)
     if spec.tuned and len(set(data.groups.tolist())) < 2:
-        raise NfsError(f"{spec.name} tunes by leave-one-run-out validation: it needs at least "
+        raise NfsError(f"{spec.name} tunes by leaving whole runs out: it needs at least "
                        "2 training runs")
     if spec.max_samples is not None and data.X.shape[0] > spec.max_samples:
         data = data.thinned(spec.max_samples)
     est = spec.build(budget=budget, random_state=random_state, n_jobs=n_jobs)
     t0 = time.perf_counter()
     if spec.tuned:
-        est.fit(data.X, data.y, groups=data.groups)
+        est.fit(data.X, data.y, groups=data.validation_groups)
     else:
         est.fit(data.X, data.y)
     dt = time.perf_counter() - t0

@@ -45,6 +45,22 @@ class DriftDataset:
     """T0 of each run."""
 
 
+    @property
+    def validation_groups(self) -> np.ndarray:
+        """Fold id of every sample for tuning: its run's start temperature.
+
+        Validation leaves one start temperature out (issue 3, part 4): with several
+        start-ups per temperature, leaving one run out would keep its twins (same T0, same
+        thermal history) in the training folds and reward hyperparameters that interpolate
+        between them instead of generalising across temperatures.  When every run has the
+        same start temperature, the runs themselves are the folds.
+        """
+        temps = np.asarray(self.start_temperatures_c, dtype=float)
+        uniq, per_run = np.unique(temps, return_inverse=True)
+        if uniq.size < 2:
+            return self.groups
+        return per_run[self.groups]
+
     def thinned(self, max_samples: int) -> "DriftDataset":
         """Every k-th sample, k = ceil(n / max_samples): at most ``max_samples`` samples."""
         k = -(-self.X.shape[0] // max_samples)
