@@ -34,7 +34,7 @@ class DriftDataset:
     y: np.ndarray
     """Separated drift [deg/h]."""
     groups: np.ndarray
-    """Run number of each sample (for leave-one-run-out validation)."""
+    """Run number of each sample (folds of whole runs; see :attr:`validation_groups`)."""
     time_s: np.ndarray
     """Time since power-on of each sample [s]."""
     feature_names: tuple[str, ...]
