@@ -13,14 +13,15 @@ Strengths relative to the noise floor.  Drift channel: the floor is the residual
 instability); the number is the model's excess RMS over the floor, sqrt(rms^2 - floor^2),
 divided by the floor, measured with seed 11:
 
-- shupe_product k_p = 0.02 (default 0.006): ~1.2x
-- turn_on_transient a = 0.1 deg/h, tau = 120 s: ~0.9x over 2.5 h (all of it in the first
-  10 min, where it is ~10x)
-- magnetic m = 0.01 deg/h, D_mag = 30 deg: ~0.6x (constant in time, follows the position)
-- aux_linear k = 0.02 deg/h/W on aux_tec_power_w (1.2-4 W): ~1.3x
-- polarization_ripple A_p = 0.005 deg/h, T_p = 5 K: ~0.6x
-- heat_source 1 W at coil_inner (a thermal effect): thermometer channels, floor 0.0206 K
-  (noise 0.01 K and the 0.0625 K quantum), after the model's own thermal fit ~0.4x
+- shupe_product k_p = 0.02 (default 0.006): 4.4x
+- turn_on_transient a = 0.1 deg/h, tau = 120 s: 1.05x over 2.5 h (all of it in the first
+  10 min)
+- magnetic m = 0.01 deg/h, D_mag = 30 deg: 1.07x (constant in time, follows the position)
+- aux_linear k = 0.02 deg/h/W on aux_tec_power_w (1.2-4 W): 0.65x
+- polarization_ripple A_p = 0.005 deg/h, T_p = 5 K: 0.52x
+- heat_source 1 W at coil_inner (a thermal effect), after the model's own thermal fit:
+  0.38x on the FOG thermometer (floor 0.0206 K: noise 0.01 K and the 0.0625 K quantum),
+  0.15x on the accelerometers' thermometers, 0.3x on the drift
 
 Candidates the data cannot tell apart from the hidden one (the board's warm-up and the
 turn-on transient; every node's temperature for a coil-temperature term) come out
