@@ -184,10 +184,12 @@ def _targets(spec: EffectSpec, inst: Instrument, runs: Sequence[Run]) -> list[st
 def candidates(inst: Instrument, runs: Sequence[Run]) -> list[Candidate]:
     """Every registered effect on every target that ``inst`` does not have.
 
-    Targets: ``node`` -> None (the effect's default, the coil) and every thermal node;
-    ``axis`` -> x, y; ``thermometer`` -> fog, acc_x, acc_y; ``channel`` -> every ``aux_*``
-    column present in all runs.  Candidates :func:`diagnose` cannot score (thermal kinds,
-    the y accelerometer, parameters without a start value) have ``tried = False``.
+    Targets: ``node`` -> every thermal node, and None (the effect's default node, e.g. the
+    coil mean) when the node parameter is optional; ``axis`` -> x, y; ``thermometer`` ->
+    fog, acc_x, acc_y; ``channel`` -> every ``aux_*`` column present in all runs.  Thermal
+    and thermometer candidates are linearised at zero: their time constants [s] become
+    coefficients (module docstring).  Candidates :func:`diagnose` cannot score (the y
+    accelerometer, parameters without a start value) have ``tried = False``.
     """
     present = {(e.name, e.target_value) for e in inst.effects}
     out = []
