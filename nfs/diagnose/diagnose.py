@@ -398,7 +398,7 @@ class Diagnosis:
     """The ranked candidates and what is left unexplained."""
 
     ranking: tuple[CandidateScore, ...]
-    """Scored candidates, best CV drop first."""
+    """Scored candidates: significant thermometer ones first, then by relative CV drop."""
     not_tried: tuple[Candidate, ...]
     """Candidates not scored, each with its reason."""
     unexplained: dict[str, Any]
