@@ -763,8 +763,10 @@ def _thermal_instrument(inst: Instrument, ts: _ThermalSet, beta_m: np.ndarray,
         new[p] = float(np.clip(v, lo, hi))
     out = set_params(inst, new)
     if c is not None:
-        out = out.with_effects(list(out.effects)
-                               + [_effect(c, dict(zip(c.coefficients, map(float, beta_c))))])
+        spec = get_effect(c.effect)
+        values = {k: float(b) if spec.parameter(k).unit != "s" else max(float(b), 0.0)
+                  for k, b in zip(c.coefficients, beta_c)}  # a lag cannot be negative
+        out = out.with_effects(list(out.effects) + [_effect(c, values)])
     return out
 
 

@@ -188,6 +188,20 @@ def test_thermal_candidate_scored_on_thermometers(diagnoses):
     assert "board.power_w" in why["heat_source:board"]
 
 
+def test_extra_thermometer_lag_is_the_thermometers_own_lag(scenario, default):
+    # Oracle: an extra first-order lag (tau = 60 s) on the FOG thermometer, which already
+    # lags 30 s.  Two lags in series read x - (30 + 60) dx/dt + O(d2x/dt2): to first order
+    # the model's own free lag_s, so the fit takes it up (lag_s -> ~90 s), nothing is left
+    # for the candidate, and diagnose must not call it significant.
+    truth = default.with_effects(list(default.effects) + [
+        make_effect("thermometer_lag", {"thermometer": "fog", "tau": 60.0})])
+    runs = [simulate_run(truth, c).run for c in scenario.conditions()]
+    fitted = fit_model(default, runs, stages=("thermal",))
+    assert abs(fitted.params["thermometers.fog.lag_s"] - 90.0) < 10.0
+    d = diagnose(fitted.instrument, runs)
+    assert not d.significant, d.verdict
+
+
 def test_no_hidden_effect_no_significant_candidate(scenario, default):
     # Oracle: runs made by the model itself (only noise is left to explain).
     runs = [simulate_run(default, c).run
