@@ -40,6 +40,18 @@ def test_scenarios_folder_holds_the_builtin_default():
         default_scenario_path().read_text()
 
 
+@pytest.mark.parametrize("path", sorted((ROOT / "scenarios").glob("*.toml")),
+                         ids=lambda p: p.name)
+def test_every_scenario_file_loads(path):
+    # Oracle: the file itself; the precise variant differs from the default only in its
+    # name, description and the number of start-ups.
+    from nfs.io.scenario import load_scenario
+    sc = load_scenario(path)
+    assert sc.start_temperatures_c == (-32.0, -16.0, -5.0, 17.0, 28.0, 43.0, 54.0)
+    if path.stem.endswith("precise"):
+        assert (sc.compensation.test_repeats, sc.compensation.train_repeats) == (30, 3)
+
+
 def test_table_simulate_northfind(tmp_path, cli):
     scen = tmp_path / "small.toml"
     scen.write_text(SMALL)
