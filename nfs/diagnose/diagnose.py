@@ -770,9 +770,9 @@ def _thermal_instrument(inst: Instrument, ts: _ThermalSet, beta_m: np.ndarray,
     return out
 
 
-def _drift_heading(model: Instrument, runs: Sequence[Run], decimate_s: float) -> float:
-    """Start-up heading RMSE with the drift coefficients of ``model`` refitted (linear)."""
-    preps, _ = _prepare(model, runs, decimate_s)
+def _drift_heading(preps: list[_Prep]) -> float:
+    """Start-up heading RMSE of prepared runs with the model's drift coefficients refitted
+    (linear)."""
     G, h, _, _ = _grams([p.y for p in preps], [p.X for p in preps])
     beta = _solve(G.sum(0), h.sum(0))
     return _startup_heading_rmse(preps, [p.offset_full + p.X_full @ beta for p in preps])
@@ -880,6 +880,16 @@ def diagnose(inst: Instrument, runs: Sequence[Run], *, n_boot: int = 20, alpha: 
     # first; within each group, by the relative drop of the CV RMS.
     scored.sort(key=lambda s: (not (s[1].significant and s[1].channel == "thermometers"),
                                s[1].cv_rms_after / s[1].cv_rms_before))
+    drift_of: dict[tuple[str, str | None], list[_Prep]] = {}
+
+    def after_thermal(c, beta):  # the drift of the GN thermal model with candidate c added
+        key = (c.effect, c.target)
+        if key not in drift_of:
+            pm = len(ts.paths)
+            drift_of[key] = _prepare(_thermal_instrument(inst, ts, beta[:pm], c, beta[pm:]),
+                                     runs, decimate_s)[0]
+        return drift_of[key]
+
     ranking = []
     for i, (c, s, shapes, beta, _) in enumerate(scored):
         if i < HEADING_TOP or s.significant:
@@ -894,18 +904,11 @@ def diagnose(inst: Instrument, runs: Sequence[Run], *, n_boot: int = 20, alpha: 
                 # the linearised thermal refit (one Gauss-Newton step) then the drift refit,
                 # beside the same step without the candidate
                 if h_before_t is None:
-                    h_before_t = _drift_heading(_thermal_instrument(inst, ts, beta_t), runs,
-                                                decimate_s)
-                pm = len(ts.paths)
-                new = _thermal_instrument(inst, ts, beta[:pm], c, beta[pm:])
+                    h_before_t = _drift_heading(_prepare(_thermal_instrument(inst, ts, beta_t),
+                                                         runs, decimate_s)[0])
                 s = replace(s, heading_rmse_before_deg=h_before_t,
-                            heading_rmse_after_deg=_drift_heading(new, runs, decimate_s))
+                            heading_rmse_after_deg=_drift_heading(after_thermal(c, beta)))
         ranking.append(s)
-
-    def after_thermal(c, beta):  # the drift of the thermal model with candidate c added
-        pm = len(ts.paths)
-        return _prepare(_thermal_instrument(inst, ts, beta[:pm], c, beta[pm:]), runs,
-                        decimate_s)[0]
 
     ranking = _explained_by_top(ranking, scored, ([p.y for p in preps], [p.X for p in preps]),
                                 (ys_t, ts.X) if ts is not None else None, bare, after_thermal)
