@@ -44,7 +44,6 @@ class DriftDataset:
     start_temperatures_c: tuple[float, ...]
     """T0 of each run."""
 
-
     @property
     def validation_groups(self) -> np.ndarray:
         """Fold id of every sample for tuning: its run's start temperature.
