@@ -31,15 +31,7 @@ _SEED_HIGH = np.iinfo(np.int32).max
 """Exclusive upper bound of the integer seeds drawn from a resolved random_state."""
 
 
-class _NeuralBase(RegressorMixin, BaseEstimator):
-    def __sklearn_tags__(self):
-        tags = super().__sklearn_tags__()
-        tags.input_tags.allow_nan = False
-        tags.input_tags.sparse = False
-        return tags
-
-
-class BPNetwork(_NeuralBase):
+class BPNetwork(RegressorMixin, BaseEstimator):
     """Back-propagation (multilayer perceptron) drift model, the "BP" comparator of seed 004.
 
     A feed-forward network with ``len(hidden_layer_sizes)`` hidden layers, trained by
@@ -164,7 +156,7 @@ _KMEANS_N_INIT = 4
 """k-means restarts of :class:`RBFNetwork` (fixed, so a random_state fixes the centres)."""
 
 
-class RBFNetwork(_NeuralBase):
+class RBFNetwork(RegressorMixin, BaseEstimator):
     """Gaussian radial-basis-function network, the drift model of seed 001 (section 3).
 
     One hidden layer of K Gaussian units and a linear output (seed 001 eqs. (15)-(16),

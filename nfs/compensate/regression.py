@@ -251,12 +251,6 @@ class _PolynomialModel(RegressorMixin, BaseEstimator):
             text += f" {sign} {abs(k):.{precision}g} {_term_name(row, names)}"
         return text
 
-    def __sklearn_tags__(self):
-        tags = super().__sklearn_tags__()
-        tags.input_tags.allow_nan = False
-        tags.input_tags.sparse = False
-        return tags
-
 
 # --------------------------------------------------------------------------------------
 # Cubic least squares
