@@ -702,6 +702,17 @@ def fit_model(inst: Instrument, runs: Sequence[Run], free: Iterable[str] | None 
     rms_after: dict[str, float] = {}
     warnings: list[str] = []
 
+    def stage(name: str, fun, base: Instrument, sp: list[str]) -> Instrument:
+        """Solve one stage from ``base`` over the free paths ``sp``; record its report."""
+        lb, ub = (np.array([bounds[p][i] for p in sp]) for i in (0, 1))
+        res, rep, se, un, at = _solve(name, fun, np.array([initial_params[p] for p in sp]),
+                                      lb, ub, max_nfev, sp)
+        stage_reports[name] = rep
+        stderr.update(se)
+        unident.update(un)
+        at_bound.extend(at)
+        return set_params(base, dict(zip(sp, res.x)))
+
     if "thermal" in stages:
         data = [_prepare_thermal(r, decimate_s) for r in runs]
         sp = by_stage["thermal"]
@@ -714,15 +725,8 @@ def fit_model(inst: Instrument, runs: Sequence[Run], free: Iterable[str] | None 
                 parts = _thermal_residual_parts(model, data)
                 return np.concatenate([a for arrs in parts.values() for a in arrs])
 
-            lb, ub = (np.array([bounds[p][i] for p in sp]) for i in (0, 1))
-            res, rep, se, un, at = _solve("thermal", fun, np.array([initial_params[p] for p in sp]),
-                                          lb, ub, max_nfev, sp)
-            current = set_params(base, dict(zip(sp, res.x)))
-            stage_reports["thermal"] = rep
-            stderr.update(se)
-            un.update(_tec_identifiability(current, data, sp))
-            unident.update(un)
-            at_bound += at
+            current = stage("thermal", fun, base, sp)
+            unident.update(_tec_identifiability(current, data, sp))
         rms_after.update(_rms(_thermal_residual_parts(current, data)))
 
     if "drift" in stages and by_stage["drift"]:
@@ -749,14 +753,7 @@ def fit_model(inst: Instrument, runs: Sequence[Run], free: Iterable[str] | None 
             return np.concatenate([a / weights[ch] for ch, arrs in parts.items() for a in arrs])
 
         rms_before.update(_rms(parts_of(base)))
-        lb, ub = (np.array([bounds[p][i] for p in sp]) for i in (0, 1))
-        res, rep, se, un, at = _solve("drift", fun, np.array([initial_params[p] for p in sp]),
-                                      lb, ub, max_nfev, sp)
-        current = set_params(base, dict(zip(sp, res.x)))
-        stage_reports["drift"] = rep
-        stderr.update(se)
-        unident.update(un)
-        at_bound += at
+        current = stage("drift", fun, base, sp)
         rms_after.update(_rms(parts_of(current)))
 
     params = {p: get_param(current, p) for p in paths}
