@@ -13,3 +13,22 @@ def cli(capsys):
         out, err = capsys.readouterr()
         return code, out, err
     return run
+
+
+def _scenario_text(name, seed, start_temperatures_c, duration_s, *, latitude_deg=30.0,
+                   true_heading_deg=40.0, extra=""):
+    temps = ", ".join(f"{t!r}" for t in start_temperatures_c)
+    return (f'\nname = "{name}"\nseed = {seed}\nstart_temperatures_c = [{temps}]\n'
+            f"duration_s = {duration_s!r}\nlatitude_deg = {latitude_deg!r}\n"
+            f"true_heading_deg = {true_heading_deg!r}\n[schedule]\n"
+            "positions_deg = [0.0, 90.0, 180.0, 270.0]\ndwell_s = 150.0\nmove_s = 10.0\n"
+            + extra)
+
+
+@pytest.fixture
+def scenario_text():
+    """Text of a small scenario file for the command-line tests:
+    ``scenario_text(name, seed, temps, duration_s, latitude_deg=30, true_heading_deg=40,
+    extra="")`` with the 4-position schedule (dwell 150 s, move 10 s); ``extra`` is appended
+    (e.g. a ``[compensation]`` table)."""
+    return _scenario_text

@@ -12,20 +12,6 @@ from nfs.io.scenario import default_scenario_path
 
 ROOT = Path(__file__).resolve().parents[1]
 
-SMALL = """
-name = "small"
-seed = 7
-start_temperatures_c = [-20.0, 40.0]
-duration_s = 1300.0
-latitude_deg = 35.0
-true_heading_deg = 80.0
-[schedule]
-positions_deg = [0.0, 90.0, 180.0, 270.0]
-dwell_s = 150.0
-move_s = 10.0
-"""
-
-
 
 def one_line_error(code, err):
     assert code == 2
@@ -52,9 +38,14 @@ def test_every_scenario_file_loads(path):
         assert (sc.compensation.test_repeats, sc.compensation.train_repeats) == (30, 3)
 
 
-def test_table_simulate_northfind(tmp_path, cli):
+def _small(scenario_text):
+    return scenario_text("small", 7, (-20.0, 40.0), 1300.0, latitude_deg=35.0,
+                         true_heading_deg=80.0)
+
+
+def test_table_simulate_northfind(tmp_path, cli, scenario_text):
     scen = tmp_path / "small.toml"
-    scen.write_text(SMALL)
+    scen.write_text(_small(scenario_text))
     code, out, err = cli("table", str(scen), "-o", str(tmp_path / "tab"),
                              "--json", str(tmp_path / "h.json"), "--no-compensation")
     assert code == 0
@@ -109,7 +100,7 @@ def test_preset_and_effects(cli):
     (lambda s: s + "[[effects]]\nname = 'shupe_rate'\n", ["needs parameter 'k_s'"]),
     (lambda s: s + "[schedule\n", ["TOML syntax error"]),
 ])
-def test_bad_scenario(tmp_path, cli, edit, expect):
+def test_bad_scenario(tmp_path, cli, edit, expect, scenario_text):
     from nfs.instrument import preset_path
     text = preset_path("default").read_text()
     (tmp_path / "inst.toml").write_text(text.replace(
@@ -117,7 +108,7 @@ def test_bad_scenario(tmp_path, cli, edit, expect):
     (tmp_path / "inst2.toml").write_text(text.replace(
         "conductance_w_per_k = 0.8", "conductance_w_per_k = -0.8"))
     scen = tmp_path / "bad.toml"
-    scen.write_text(edit(SMALL))
+    scen.write_text(edit(_small(scenario_text)))
     out_dir = tmp_path / "out"
     for cmd in (["simulate", str(scen), "-o", str(out_dir)],
                 ["table", str(scen), "-o", str(out_dir), "--no-compensation"]):

@@ -6,18 +6,7 @@ import numpy as np
 import pytest
 
 
-SCEN = """
-name = "comp"
-seed = 5
-start_temperatures_c = [-20.0, 10.0, 40.0]
-duration_s = 3900.0
-latitude_deg = 30.0
-true_heading_deg = 40.0
-[schedule]
-positions_deg = [0.0, 90.0, 180.0, 270.0]
-dwell_s = 150.0
-move_s = 10.0
-[compensation]
+COMPENSATION = """[compensation]
 methods = ["ls", "ssa-svr"]
 budget = 6
 train_seed = 9
@@ -26,10 +15,14 @@ n_jobs = 1
 """
 
 
+@pytest.fixture
+def scen_text(scenario_text):
+    return scenario_text("comp", 5, (-20.0, 10.0, 40.0), 3900.0, extra=COMPENSATION)
 
-def test_table_with_compensation_writes_every_output(tmp_path, cli):
+
+def test_table_with_compensation_writes_every_output(tmp_path, cli, scen_text):
     scen = tmp_path / "s.toml"
-    scen.write_text(SCEN)
+    scen.write_text(scen_text)
     out_dir = tmp_path / "out"
     code, out, err = cli("table", str(scen), "-o", str(out_dir), "-q")
     assert code == 0, err
@@ -46,9 +39,9 @@ def test_table_with_compensation_writes_every_output(tmp_path, cli):
     assert "Beside seed 004" in report and "6 evaluations" in report
 
 
-def test_train_and_compensate_round_trip(tmp_path, cli):
+def test_train_and_compensate_round_trip(tmp_path, cli, scen_text):
     scen = tmp_path / "s.toml"
-    scen.write_text(SCEN)
+    scen.write_text(scen_text)
     assert cli("simulate", str(scen), "-o", str(tmp_path / "train"), "-q",
                    "--seed", "1")[0] == 0
     assert cli("simulate", str(scen), "-o", str(tmp_path / "test"), "-q",
@@ -73,9 +66,9 @@ def test_train_and_compensate_round_trip(tmp_path, cli):
     assert code == 0 and out.count("| comp_T") == 3
 
 
-def test_compensate_refuses_runs_without_its_channels(tmp_path, cli):
+def test_compensate_refuses_runs_without_its_channels(tmp_path, cli, scen_text):
     scen = tmp_path / "s.toml"
-    scen.write_text(SCEN)
+    scen.write_text(scen_text)
     cli("simulate", str(scen), "-o", str(tmp_path / "runs"), "-q")
     model = tmp_path / "m.joblib"
     code, _, err = cli("train", str(tmp_path / "runs"), "--method", "ls",
@@ -98,9 +91,9 @@ def test_compensate_refuses_runs_without_its_channels(tmp_path, cli):
     (["train", "RUNS", "--method", "magic", "-o", "m.joblib"], "unknown compensation method"),
     (["compensate", "RUNS", "--model", "nope.joblib", "-o", "out"], "model file not found"),
 ])
-def test_bad_compensation_input(tmp_path, cli, argv, msg):
+def test_bad_compensation_input(tmp_path, cli, scen_text, argv, msg):
     scen = tmp_path / "s.toml"
-    scen.write_text(SCEN)
+    scen.write_text(scen_text)
     cli("simulate", str(scen), "-o", str(tmp_path / "runs"), "-q")
     argv = [a.replace("RUNS", str(tmp_path / "runs")) for a in argv]
     code, _, err = cli(*argv)

@@ -2,24 +2,16 @@
 
 import json
 
-
-SCEN = """
-name = "fc"
-seed = 3
-start_temperatures_c = [-20.0, 5.0, 40.0]
-duration_s = 3900.0
-latitude_deg = 30.0
-true_heading_deg = 40.0
-[schedule]
-positions_deg = [0.0, 90.0, 180.0, 270.0]
-dwell_s = 150.0
-move_s = 10.0
-"""
+import pytest
 
 
+@pytest.fixture
+def scen_text(scenario_text):
+    return scenario_text("fc", 3, (-20.0, 5.0, 40.0), 3900.0)
 
-def test_fit_then_compare(tmp_path, cli):
-    (tmp_path / "s.toml").write_text(SCEN)
+
+def test_fit_then_compare(tmp_path, cli, scen_text):
+    (tmp_path / "s.toml").write_text(scen_text)
     assert cli("simulate", str(tmp_path / "s.toml"), "-o", str(tmp_path / "runs"),
                    "-q")[0] == 0
     fitted = tmp_path / "fitted.toml"
@@ -36,8 +28,8 @@ def test_fit_then_compare(tmp_path, cli):
     json.loads((tmp_path / "c.json").read_text())
 
 
-def test_fit_bad_path_and_model(tmp_path, cli):
-    (tmp_path / "s.toml").write_text(SCEN)
+def test_fit_bad_path_and_model(tmp_path, cli, scen_text):
+    (tmp_path / "s.toml").write_text(scen_text)
     cli("simulate", str(tmp_path / "s.toml"), "-o", str(tmp_path / "runs"), "-q")
     code, _, err = cli("fit", str(tmp_path / "runs"), "-o",
                            str(tmp_path / "f.toml"), "--free", "thermal.nodes.attic.power_w",
@@ -49,8 +41,8 @@ def test_fit_bad_path_and_model(tmp_path, cli):
     assert code == 2 and "missing.toml" in err
 
 
-def test_diagnose_cli(tmp_path, cli):
-    (tmp_path / "s.toml").write_text(SCEN)
+def test_diagnose_cli(tmp_path, cli, scen_text):
+    (tmp_path / "s.toml").write_text(scen_text)
     cli("simulate", str(tmp_path / "s.toml"), "-o", str(tmp_path / "runs"), "-q")
     code, out, err = cli("diagnose", str(tmp_path / "runs"), "--json",
                              str(tmp_path / "d.json"), "-q")
