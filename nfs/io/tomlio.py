@@ -193,20 +193,18 @@ def dumps_toml(data: dict[str, Any], _prefix: str = "") -> str:
     for k, v in data.items():
         name = _join(_prefix, toml_key(k))
         if isinstance(v, dict):
+            tables, header = [v], f"[{name}]"
+        elif _is_table_array(v):
+            tables, header = v, f"[[{name}]]"
+        else:
+            continue
+        for table in tables:
             if lines:
                 lines.append("")
-            lines.append(f"[{name}]")
-            body = dumps_toml(v, name)
+            lines.append(header)
+            body = dumps_toml(table, name)
             if body:
                 lines.append(body)
-        elif _is_table_array(v):
-            for item in v:
-                if lines:
-                    lines.append("")
-                lines.append(f"[[{name}]]")
-                body = dumps_toml(item, name)
-                if body:
-                    lines.append(body)
     return "\n".join(lines).replace("\n\n\n", "\n\n")
 
 
