@@ -11,8 +11,9 @@ channel             residual r = measured - model
 ``temp_fog_c``,     thermometer reading minus the model's noise-free reading (sensed node
 ``temp_acc_x_c``,   temperature through the thermometer's lag and offset, without noise or
 ``temp_acc_y_c``    quantisation) [degC], every sample at rest
-``gyro_drift_dph``  separate_drift(measured).drift_dph - separate_drift(model run).drift_dph
-                    [deg/h]: the same wavelet separation on both sides, so its bias cancels
+``gyro_drift_dph``  separate_drift(measured).drift_dph - separate_drift(noise-free model
+                    run).drift_dph [deg/h]: the model's deterministic prediction through the
+                    same wavelet separation
 ``acc_x_g``,        dwell mean of the measured specific force minus the dwell mean of the
 ``acc_y_g``         model's noise-free one [g], one point per dwell
 ==================  ==========================================================================
@@ -24,11 +25,12 @@ Noise floor (what the residual would be if the model were right), per sample, sq
 - thermometers: noise_c^2 + quantum_c^2 / 12 of the model's thermometer (white noise plus
   uniform rounding error);
 - gyro drift: the model is simulated twice with independent noise (seeds ``(seed, k, SALT,
-  0)`` and ``(seed, k, SALT, 1)`` for run k) and the floor is the difference of the two
-  separated drifts.  A measured run and a correct model are two such independent realisations,
-  so this difference has the null distribution of the residual itself, including the bias
-  instability and ARW that leak through the denoiser (an estimate from the wavelet noise alone
-  would miss the bias instability, which no denoiser can tell from drift);
+  0)`` and ``(seed, k, SALT, 1)`` for run k); each separated drift d_a, d_b is the
+  deterministic prediction plus one realisation of the noise that leaks through the
+  denoiser, so (d_a - d_b)^2 / 2 estimates the variance of a measured run about the
+  prediction when the model is right, bias instability and ARW included (an estimate from
+  the wavelet noise alone would miss the bias instability, which no denoiser can tell from
+  drift);
 - accelerometers: sigma^2 / n for a dwell of n samples, sigma the per-sample noise estimated
   from the measured run itself (standard deviation of first differences within the dwells over
   sqrt(2)).
@@ -200,7 +202,8 @@ class ChannelRun:
     measured: np.ndarray
     """Measured value at each point."""
     model: np.ndarray
-    """Model value at each point."""
+    """The model's deterministic prediction at each point (its noise-free simulation; for the
+    gyro drift, through the same wavelet separation as the measurement)."""
     floor_sq: np.ndarray
     """Squared noise floor at each point (see the module docstring)."""
     stages: dict[str, ResidualStats]
@@ -528,10 +531,10 @@ def _compare_run(inst: Instrument, clean: Instrument, run: Run, k: int, cfg) -> 
             d_meas = separate_drift(run)
             d_a = separate_drift(sim_a.run).drift_dph
             d_b = separate_drift(sim_b.run).drift_dph
-            meas, mod = d_meas.drift_dph, d_a
+            meas, mod = d_meas.drift_dph, separate_drift(expect).drift_dph
             ok = ~d_meas.interpolated
-            out[spec.key] = _channel_run(spec, run, t, pos, meas, mod, (d_a - d_b) ** 2, ok,
-                                         cycles, np.where(ok, meas - mod, np.nan), cfg)
+            out[spec.key] = _channel_run(spec, run, t, pos, meas, mod, 0.5 * (d_a - d_b) ** 2,
+                                         ok, cycles, np.where(ok, meas - mod, np.nan), cfg)
         else:  # accelerometer: dwell means
             meas_s = np.asarray(run[spec.column], dtype=float)
             mod_s = np.asarray(expect[spec.column], dtype=float)
@@ -759,16 +762,23 @@ def _scale(unit: str) -> tuple[float, str]:
 
 
 def plot_overlay(comparison: Comparison, i_run: int):
-    """Measured against model for the gyro drift and the FOG thermometer of run ``i_run``
-    (a matplotlib Figure, made without pyplot)."""
+    """Measured against the model's deterministic prediction, with its +-1 sigma noise band,
+    for the gyro drift and the FOG thermometer of run ``i_run`` (a matplotlib Figure, made
+    without pyplot).  The band is the run's noise floor (module docstring): where the model is
+    right, about two thirds of the measured points fall inside it."""
     from matplotlib.figure import Figure
     fig = Figure(figsize=(8.0, 6.0), dpi=100)
     for j, key in enumerate(("gyro_drift_dph", "temp_fog_c")):
         cr = comparison.per_run[key][i_run]
         ax = fig.add_subplot(2, 1, j + 1)
         t_min = cr.time_s / 60.0
+        band = cr.stages["all"].floor_rms
+        unit = _BY_KEY[key].unit
+        ax.fill_between(t_min, cr.model - band, cr.model + band, color="tab:red", alpha=0.2,
+                        lw=0, label=f"model +-1 sigma noise ({_g(band)} {unit})")
         ax.plot(t_min, cr.measured, ".", ms=1.0, color="0.3", label="measured")
-        ax.plot(t_min, cr.model, "-", lw=1.2, color="tab:red", label="model")
+        ax.plot(t_min, cr.model, "-", lw=1.2, color="tab:red",
+                label="model (deterministic prediction)")
         ax.set_ylabel(f"{_BY_KEY[key].label} [{_BY_KEY[key].unit}]")
         ax.grid(alpha=0.3)
         ax.legend(fontsize=8)
