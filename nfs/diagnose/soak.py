@@ -1,0 +1,150 @@
+"""Thermometer offsets anchored by the soak before power-on.
+
+A start-up run begins with the unpowered instrument soaked in the chamber at T0 until uniform
+(physics.md section 1): at t = 0 every node, so every thermometer's sensed temperature, is at
+T0.  A thermometer's reading there is T0 + offset (+ noise, quantisation), so its offset is
+
+    offset = mean_{t < W} (reading - model reading without offset)                   [K]
+
+over the first W seconds (:data:`DEFAULT_WINDOW_S`), where the model reading (noise-free, no
+offset, through the thermometer's lag) carries the little warming the model predicts in that
+window (it starts at exactly T0).  Averaging over W = 60 s of 1 Hz readings beats down the
+white noise; the quantisation step (0.0625 K) is dithered by the noise and by the warming,
+and averaging over the runs (each at another T0) spreads the remaining rounding error.  A run
+whose estimate lies more than ``tolerance_k`` from 0 was most likely not soaked (or its T0 in
+the header is wrong): it is reported by name and left out of the anchor.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+from typing import Sequence
+
+import numpy as np
+
+import thermal
+
+from ..effects.thermometer import THERMOMETERS
+from ..errors import InputError
+from ..experiment import conditions_from_run, thermal_power
+from ..instrument import Instrument
+from ..io.measurement import Run
+from ..sensors import thermometer_reading
+
+__all__ = ["DEFAULT_WINDOW_S", "DEFAULT_SOAK_TOLERANCE_K", "SoakAnchor", "soak_offsets"]
+
+#: Length of the window after power-on whose readings anchor the offsets [s].
+DEFAULT_WINDOW_S = 60.0
+
+#: A run whose first readings sit further than this from T0 (after the model's warming) was
+#: not soaked [K].
+DEFAULT_SOAK_TOLERANCE_K = 2.0
+
+_RNG = np.random.default_rng(0)   # never drawn from: the model reading is noise-free
+
+
+@dataclass(frozen=True)
+class SoakAnchor:
+    """Thermometer offsets read from the first seconds of soaked runs."""
+
+    offset_c: dict[str, float]
+    """Offset of each thermometer (``fog``, ``acc_x``, ``acc_y``) [K], mean over the soaked
+    runs; absent when no run was soaked."""
+    stderr_c: dict[str, float]
+    """Standard error of each offset [K]: the scatter over runs / sqrt(runs), floored at the
+    quantisation and noise limit of the readings averaged."""
+    per_run: dict[str, dict[str, float]]
+    """{run name: {thermometer: offset estimate [K]}}, every run."""
+    unsoaked: tuple[str, ...]
+    """Runs whose first readings disagree with T0 by more than the tolerance."""
+    window_s: float
+    """The window after power-on averaged [s]."""
+    warnings: tuple[str, ...]
+    """One line per run that was not soaked."""
+
+
+def _model_readings(inst: Instrument, run: Run, n: int) -> dict[str, np.ndarray]:
+    """Noise-free, offset-free model readings of the first n samples of ``run``."""
+    cond = conditions_from_run(run)
+    t = cond.time_s[:n]
+    moving = np.asarray(run["moving"], dtype=float)[:n] > 0.5
+    power, _, _ = thermal_power(inst, t, moving)
+    ambient = cond.start_temperature_c if cond.chamber_c is None else cond.chamber_c(t)
+    th = thermal.simulate(inst.network, t, ambient_c=ambient,
+                          initial_c=cond.start_temperature_c, power_w=power)
+    out = {}
+    for name in THERMOMETERS:
+        model = replace(inst.thermometers[name], noise_c=0.0, quantum_c=0.0, offset_c=0.0)
+        transforms = [(lambda y, e=e: e.spec.function(y, t, **e.params))
+                      for e in inst.effects
+                      if e.spec.kind == "thermometer" and e.params.get("thermometer") == name]
+        sensed = model.sensed(th.temperature_c, tuple(th.node_names))
+        out[name] = thermometer_reading(sensed, t, model, _RNG, transforms)
+    return out
+
+
+def soak_offsets(inst: Instrument, runs: Sequence[Run], *, window_s: float = DEFAULT_WINDOW_S,
+                 tolerance_k: float = DEFAULT_SOAK_TOLERANCE_K) -> SoakAnchor:
+    """Each thermometer's offset from the first ``window_s`` of every run (module docstring).
+
+    Parameters
+    ----------
+    inst : Instrument
+        The model whose warming over the window is subtracted (the preset is good enough:
+        the window is short and the lag keeps the readings near T0).
+    runs : sequence of Run
+        Runs with ``time_s``, ``moving`` and the three thermometer columns.
+    window_s : float
+        Window after power-on [s] (> 0; at least one sample is used).
+    tolerance_k : float
+        A run whose estimate of any thermometer exceeds this in magnitude is reported as not
+        soaked and left out [K].
+
+    Returns
+    -------
+    SoakAnchor
+    """
+    if not window_s > 0:
+        raise InputError(f"soak window must be > 0 s, got {window_s}")
+    per_run: dict[str, dict[str, float]] = {}
+    n_used: dict[str, int] = {}
+    unsoaked, warnings = [], []
+    for run in runs:
+        t = np.asarray(run["time_s"], dtype=float)
+        n = max(1, int(np.count_nonzero(t - t[0] < window_s)))
+        model = _model_readings(inst, run, n)
+        est = {}
+        for name, col in THERMOMETERS.items():
+            y = np.asarray(run[col], dtype=float)[:n]
+            ok = np.isfinite(y)
+            est[name] = float(np.mean(y[ok] - model[name][ok])) if ok.any() else math.nan
+        per_run[run.name] = est
+        n_used[run.name] = n
+        bad = {k: v for k, v in est.items() if abs(v) > tolerance_k}
+        if bad:
+            unsoaked.append(run.name)
+            worst = max(bad, key=lambda k: abs(bad[k]))
+            warnings.append(
+                f"run '{run.name}' was not soaked at T0 = {run.meta.start_temperature_c:g} C: "
+                f"its {worst} thermometer starts {bad[worst]:+.2f} K from the model's soaked "
+                f"reading (tolerance {tolerance_k:g} K); left out of the offset anchor")
+    offset, stderr = {}, {}
+    soaked = [r for r in per_run if r not in unsoaked]
+    for name in THERMOMETERS:
+        vals = np.array([per_run[r][name] for r in soaked])
+        vals = vals[np.isfinite(vals)]
+        if not vals.size:
+            continue
+        m = inst.thermometers[name]
+        n_samples = float(np.mean([n_used[r] for r in soaked]))
+        # floor: the rounding error of a reading that sits still within one step is not
+        # beaten down by averaging over one run, only over runs (q / sqrt(12) each)
+        floor = math.hypot(m.quantum_c / math.sqrt(12.0),
+                           m.noise_c / math.sqrt(n_samples)) / math.sqrt(vals.size)
+        scatter = float(np.std(vals, ddof=1) / math.sqrt(vals.size)) if vals.size > 1 else 0.0
+        offset[name] = float(np.mean(vals))
+        stderr[name] = max(scatter, floor)
+    return SoakAnchor(offset_c=offset, stderr_c=stderr, per_run=per_run,
+                      unsoaked=tuple(unsoaked), window_s=float(window_s),
+                      warnings=tuple(warnings))
