@@ -1,0 +1,850 @@
+"""An independent generator of north-finder start-up runs: a "truth" the nfs model is not.
+
+It writes runs in ``nfs-measurement/1`` (``NAME.csv`` + ``NAME.toml``) made by physics built
+here from NumPy and SciPy only, on purpose different in structure from the package's
+simulator, so that ``nfs fit / compare / diagnose`` can be tried on runs their own model did
+not make.  It hides one physical effect (or none) and returns the truth.
+
+What it models (every value and its reason: ``README.md`` next to this file)
+
+Thermal
+    Housing/base, mounting plate, FOG electronics (light source with its TEC), main board,
+    two QFA blocks, and the fibre coil as a finite-difference radial conduction model of
+    ``n_layers`` cylindrical layers (spool side to outer side).  Heat enters the coil through
+    both faces: the spool face from the plate, the outer face from the housing and the
+    electronics, each through a contact conductance in series with the half layer.  Massless
+    surface nodes are eliminated exactly (Kron reduction).  Solved exactly per sample step
+    with the matrix exponential of the augmented matrix (powers held, chamber temperature
+    linear over the step); the TEC's power, the only state-dependent input, is held over
+    each step at its value at the step's start.
+Sensors
+    Thermometers on mixes of nodes (none on a single node) with first-order lag, offset,
+    noise and quantisation; a FOG with the Earth-rate projection, a bias polynomial in the
+    mean coil temperature, a Shupe term summed over the coil's layers with a
+    quadrupole-like weight, a mean-rate term, angle random walk and a first-order
+    Gauss-Markov bias; two accelerometers on a tilted table; a chamber that cycles and
+    wanders; a TEC drive current and an oscillator voltage.
+
+Run ``python tests/independent/generator.py --help``.  This module imports nothing from
+``nfs`` or ``thermal``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+
+import numpy as np
+from scipy.linalg import expm
+from scipy.signal import lfilter
+
+__all__ = ["OMEGA_IE_DPH", "T_REF_C", "HIDDEN_EFFECTS", "CoilGeometry", "Unit", "Network",
+           "RunData", "coil_network", "unit_network", "Stepper", "simulate_run",
+           "generate_set", "measure_strength", "main"]
+
+#: Earth rotation rate Omega_ie [deg/h] (WGS-84: 7.292115e-5 rad/s).
+OMEGA_IE_DPH = 15.041067
+#: Reference temperature of every temperature law [degC].
+T_REF_C = 25.0
+_S_PER_MIN = 60.0
+_POSITIONS_DEG = (0.0, 90.0, 180.0, 270.0)
+_DWELL_S = 150.0
+_MOVE_S = 10.0
+
+#: hidden effect -> default parameters.  ``outside`` is the one outside the nfs library.
+HIDDEN_EFFECTS: dict[str, dict] = {
+    "shupe_product": {"k_p": 0.008},
+    "magnetic": {"m": 0.012, "D_mag": 40.0},
+    "scale_factor_temperature": {"s1": 4.0e-5},
+    "turn_on_transient": {"a": 0.12, "tau": 150.0},
+    "aux_linear": {"channel": "aux_osc_v", "k": 1.5, "aux_ref": 5.0},
+    "acc_bias_temperature": {"axis": "x", "b_q1": 5.0e-6},
+    "heat_source": {"node": "coil_spool", "power": 0.7},
+    "thermometer_lag": {"thermometer": "fog", "tau": 90.0},
+    "outside": {"effect": "quadrantal", "c": 0.012, "D2_deg": 15.0},
+}
+
+#: hidden effect -> the measured column it acts on.
+_CHANNEL = {"shupe_product": "gyro_dph", "magnetic": "gyro_dph",
+            "scale_factor_temperature": "gyro_dph", "turn_on_transient": "gyro_dph",
+            "aux_linear": "gyro_dph", "acc_bias_temperature": "acc_x_g",
+            "heat_source": "temp_fog_c", "thermometer_lag": "temp_fog_c",
+            "outside": "gyro_dph"}
+
+
+# ---------------------------------------------------------------------------------------------
+# The unit
+
+@dataclass(frozen=True)
+class CoilGeometry:
+    """A potted fibre coil as a thick cylinder, cut into radial layers of equal thickness."""
+
+    inner_radius_m: float = 0.040
+    """r_in, the spool side [m]."""
+    outer_radius_m: float = 0.056
+    """r_out [m]."""
+    height_m: float = 0.028
+    """h, the axial length of the winding [m]."""
+    n_layers: int = 8
+    """Number of finite-difference layers (>= 1)."""
+    conductivity_w_per_m_k: float = 0.25
+    """k, radial conductivity of fibre in potting compound [W/(m K)]."""
+    heat_j_per_m3_k: float = 1.7e6
+    """rho c, volumetric heat capacity of the winding [J/(m^3 K)]."""
+
+
+@dataclass(frozen=True)
+class Unit:
+    """The instrument the generator simulates (README: every value and why)."""
+
+    capacity_j_per_k: dict = field(default_factory=lambda: {
+        "housing": 3200.0, "plate": 900.0, "electronics": 180.0, "board": 320.0,
+        "qfa_x": 42.0, "qfa_y": 36.0})
+    """C_j of the lumped nodes [J/K] (the coil's layers come from ``coil``)."""
+    power_w: dict = field(default_factory=lambda: {
+        "electronics": 2.8, "board": 6.5, "qfa_x": 0.4, "qfa_y": 0.45})
+    """Constant electrical power dissipated in each node after power-on [W]."""
+    links_w_per_k: tuple = (("housing", "chamber", 2.0), ("plate", "housing", 2.5),
+                            ("electronics", "housing", 0.7), ("board", "housing", 0.9),
+                            ("qfa_x", "plate", 0.55), ("qfa_y", "plate", 0.5))
+    """(node, node, G [W/K]) between lumped nodes and the chamber."""
+    coil: CoilGeometry = CoilGeometry()
+    """The fibre coil."""
+    coil_spool_links_w_per_k: tuple = (("plate", 0.6),)
+    """Contacts of the coil's spool face (through the spool hub) [W/K]."""
+    coil_outer_links_w_per_k: tuple = (("housing", 0.3), ("electronics", 0.18))
+    """Contacts of the coil's outer face (cover air and the electronics above it) [W/K]."""
+    tec_set_c: float = 22.0
+    """T_set, the TEC set point of the source assembly [degC]."""
+    tec_p0_w: float = 0.5
+    """p0 of the TEC law [W]."""
+    tec_a_w_per_k: float = 0.03
+    """a of the TEC law [W/K]."""
+    tec_c_w_per_k2: float = 7.0e-4
+    """c of the TEC law [W/K^2]."""
+    tec_resistance_ohm: float = 2.2
+    """Electrical resistance of the TEC, for its drive current [ohm]."""
+    fog_thermometer: dict = field(default_factory=lambda: {
+        "housing": 0.5, "plate": 0.3, "coil_outer": 0.2})
+    """Weights of the FOG thermometer on the housing next to the coil mount."""
+    acc_thermometers: dict = field(default_factory=lambda: {
+        "x": {"qfa_x": 0.75, "plate": 0.25}, "y": {"qfa_y": 0.7, "plate": 0.3}})
+    """Weights of the QFA thermometers on the QFA mounts."""
+    thermometer_lag_s: dict = field(default_factory=lambda: {"fog": 25.0, "x": 18.0, "y": 20.0})
+    """First-order lag of each thermometer [s]."""
+    thermometer_offset_c: dict = field(default_factory=lambda: {"fog": 0.03, "x": -0.02,
+                                                                "y": 0.04})
+    """Constant offset of each thermometer [degC]."""
+    thermometer_noise_c: float = 0.008
+    """White noise of each thermometer [degC]."""
+    thermometer_quantum_c: float = 0.0625
+    """Quantum of each thermometer [degC]."""
+    b0_dph: float = -0.012
+    """FOG constant bias [deg/h]."""
+    b1_dph_per_k: float = 0.0015
+    """FOG bias, linear coefficient in the mean coil temperature [deg/h/K]."""
+    b2_dph_per_k2: float = 8.0e-5
+    """FOG bias, quadratic coefficient [deg/h/K^2]."""
+    shupe_dph_per_k_per_min: float = 0.09
+    """k_sh of the layer Shupe term, on the cosine weight (see :func:`shupe_weights`)."""
+    mean_rate_dph_per_k_per_min: float = 0.02
+    """k_m of the mean-rate (winding imperfection) term [deg/h per K/min]."""
+    arw_deg_per_rth_h: float = 0.00035
+    """N, angle random walk [deg/sqrt(h)]."""
+    gm_sigma_dph: float = 0.003
+    """sigma of the first-order Gauss-Markov bias [deg/h]."""
+    gm_tau_s: float = 400.0
+    """Correlation time of the Gauss-Markov bias [s]."""
+    tilt_north_deg: float = 0.025
+    """alpha_N, turntable tilt towards north [deg]."""
+    tilt_east_deg: float = 0.012
+    """alpha_E, turntable tilt towards east [deg]."""
+    acc_bias_g: tuple = (4.0e-5, -6.0e-5)
+    """Constant biases of the x and y accelerometers [g]."""
+    acc_noise_g_per_rth_hz: float = 20.0e-6
+    """One-sided white-noise density of each accelerometer [g/sqrt(Hz)]."""
+    chamber_cycle_k: float = 0.07
+    """Half the peak-to-peak of the chamber controller's cycling [K]."""
+    chamber_period_s: float = 840.0
+    """Period of the chamber controller's cycling [s]."""
+    chamber_walk_k_per_rth_s: float = 6.0e-4
+    """Random walk of the chamber air temperature [K/sqrt(s)]."""
+    chamber_logger_noise_c: float = 0.005
+    """White noise of the chamber air thermometer [degC]; quantum 0.01 degC."""
+    osc_v: float = 5.0
+    """Oscillator voltage at T_ref [V]."""
+    osc_gain_v_per_k: float = 0.004
+    """Oscillator voltage per kelvin of the electronics [V/K]."""
+    osc_walk_v_per_rth_s: float = 1.5e-4
+    """Random walk of the oscillator voltage [V/sqrt(s)]."""
+    osc_noise_v: float = 2.0e-4
+    """White noise of the voltage measurement [V]."""
+    current_noise_ma: float = 0.5
+    """White noise of the TEC current measurement [mA]."""
+
+
+# ---------------------------------------------------------------------------------------------
+# Thermal network
+
+@dataclass(frozen=True)
+class Network:
+    """A linear thermal network C dT/dt = -L T + G_b T_b + P after Kron reduction.
+
+    ``laplacian`` is the conductance Laplacian among the nodes (including each node's links
+    to the boundaries on its diagonal); ``boundary`` [W/K] holds the conductance of each node
+    to each held boundary temperature (columns ``boundary_names``).
+    """
+
+    names: tuple
+    """Node names."""
+    capacity_j_per_k: np.ndarray
+    """C_j [J/K]."""
+    laplacian_w_per_k: np.ndarray
+    """L [W/K], (n, n): L_jj = sum of node j's conductances, L_jk = -G_jk."""
+    boundary_w_per_k: np.ndarray
+    """G_jb [W/K], (n, n_boundaries)."""
+    boundary_names: tuple
+    """Names of the held boundary temperatures (e.g. ``chamber``)."""
+
+    @property
+    def a_per_s(self) -> np.ndarray:
+        """A = -C^-1 L [1/s], the state matrix."""
+        return -self.laplacian_w_per_k / self.capacity_j_per_k[:, None]
+
+    def time_constants_s(self) -> np.ndarray:
+        """-1/lambda of A's eigenvalues, longest first [s]."""
+        lam = np.linalg.eigvals(self.a_per_s).real
+        return np.sort(-1.0 / lam)[::-1]
+
+
+def _kron_reduce(names, capacity, links, boundary_names):
+    """Network from (a, b, G) links; nodes of zero capacity are eliminated exactly.
+
+    Kron reduction (the Schur complement of the massless nodes' block of the Laplacian,
+    Doerfler & Bullo 2013, IEEE TCAS-I 60(1) 150, eq. (2)): a massless node carries no heat
+    of its own, so it only puts its links in series/parallel; this is the Y-Delta transform
+    for a surface where several contacts meet.
+    """
+    every = list(names) + list(boundary_names)
+    idx = {n: i for i, n in enumerate(every)}
+    m = len(every)
+    lap = np.zeros((m, m))
+    for a, b, g in links:
+        i, j = idx[a], idx[b]
+        lap[i, i] += g
+        lap[j, j] += g
+        lap[i, j] -= g
+        lap[j, i] -= g
+    cap = np.asarray(capacity, dtype=float)
+    keep = [i for i in range(len(names)) if cap[i] > 0] + list(range(len(names), m))
+    drop = [i for i in range(len(names)) if cap[i] <= 0]
+    if drop:
+        lap = (lap[np.ix_(keep, keep)]
+               - lap[np.ix_(keep, drop)] @ np.linalg.solve(lap[np.ix_(drop, drop)],
+                                                         lap[np.ix_(drop, keep)]))
+    nk = len(keep) - len(boundary_names)
+    kept_names = tuple(every[i] for i in keep[:nk])
+    return Network(names=kept_names, capacity_j_per_k=cap[keep[:nk]],
+                   laplacian_w_per_k=lap[:nk, :nk], boundary_w_per_k=-lap[:nk, nk:],
+                   boundary_names=tuple(boundary_names))
+
+
+def _layer_names(n: int) -> list[str]:
+    return [f"coil_{i}" for i in range(n)]
+
+
+def _coil_parts(geom: CoilGeometry):
+    """Layers of a thick cylinder: names, capacities [J/K] and conductances [W/K].
+
+    Layer i spans [r_i, r_i+1] (equal thickness), its node sits at the log-mean radius
+    rho_i = sqrt(r_i r_i+1); C_i = rho c pi (r_i+1^2 - r_i^2) h.  Between two radii the
+    steady radial conductance of a cylinder is G = 2 pi k h / ln(r_b / r_a) (Incropera &
+    DeWitt, Fundamentals of Heat and Mass Transfer, 6th ed., eq. (3.27)), which makes the
+    finite-difference steady state exact at the nodes.  The face nodes ``coil_in_face`` and
+    ``coil_out_face`` are massless (eliminated by Kron reduction).
+    """
+    if geom.n_layers < 1:
+        raise ValueError(f"coil n_layers must be >= 1, got {geom.n_layers}")
+    if not 0 < geom.inner_radius_m < geom.outer_radius_m:
+        raise ValueError("coil radii must satisfy 0 < inner_radius_m < outer_radius_m")
+    r = np.linspace(geom.inner_radius_m, geom.outer_radius_m, geom.n_layers + 1)
+    rho = np.sqrt(r[:-1] * r[1:])
+    cap = geom.heat_j_per_m3_k * np.pi * (r[1:] ** 2 - r[:-1] ** 2) * geom.height_m
+    two_pi_kh = 2.0 * np.pi * geom.conductivity_w_per_m_k * geom.height_m
+    names = _layer_names(geom.n_layers)
+    links = [(names[i], names[i + 1], two_pi_kh / math.log(rho[i + 1] / rho[i]))
+             for i in range(geom.n_layers - 1)]
+    links.append(("coil_in_face", names[0], two_pi_kh / math.log(rho[0] / r[0])))
+    links.append((names[-1], "coil_out_face", two_pi_kh / math.log(r[-1] / rho[-1])))
+    return names, cap, links
+
+
+def coil_network(geom: CoilGeometry, g_spool_w_per_k: float, g_outer_w_per_k: float
+                 ) -> Network:
+    """The coil alone, its faces linked to two held temperatures ``spool`` and ``outer``.
+
+    For checking the finite-difference coil against closed forms (the tests).
+    """
+    names, cap, links = _coil_parts(geom)
+    links = links + [("coil_in_face", "spool", g_spool_w_per_k),
+                     ("coil_out_face", "outer", g_outer_w_per_k)]
+    return _kron_reduce(names + ["coil_in_face", "coil_out_face"],
+                        list(cap) + [0.0, 0.0], links, ("spool", "outer"))
+
+
+def unit_network(unit: Unit) -> Network:
+    """The whole unit: lumped nodes, the coil's layers, one boundary ``chamber``."""
+    lumped = list(unit.capacity_j_per_k)
+    names, cap, links = _coil_parts(unit.coil)
+    links = list(links) + list(unit.links_w_per_k)
+    links += [("coil_in_face", n, g) for n, g in unit.coil_spool_links_w_per_k]
+    links += [("coil_out_face", n, g) for n, g in unit.coil_outer_links_w_per_k]
+    return _kron_reduce(lumped + names + ["coil_in_face", "coil_out_face"],
+                        [unit.capacity_j_per_k[n] for n in lumped] + list(cap) + [0.0, 0.0],
+                        links, ("chamber",))
+
+
+class Stepper:
+    """Exact one-step map of C dT/dt = -L T + G_b T_b(t) + P over a step h.
+
+    T_b linear over the step (first-order hold), P held (zero-order hold):
+
+        T(t+h) = Phi T(t) + Gamma_b T_b(t) + Gamma_d (T_b(t+h) - T_b(t))/h + Gamma_p P(t)
+
+    from one matrix exponential of the augmented matrix
+    [[A, B_b, 0, C^-1], [0, 0, I, 0], [0, 0, 0, 0], [0, 0, 0, 0]] (Van Loan 1978, IEEE TAC
+    23(3) 395, the block-triangular exponential; Franklin, Powell & Workman, Digital Control
+    of Dynamic Systems, 3rd ed., sec. 6.3.2 for ZOH and FOH).  Computed once per step size.
+    """
+
+    def __init__(self, net: Network, h_s: float):
+        n, nb = len(net.names), len(net.boundary_names)
+        a = net.a_per_s
+        bb = net.boundary_w_per_k / net.capacity_j_per_k[:, None]
+        m = np.zeros((n + 2 * nb + n, n + 2 * nb + n))
+        m[:n, :n] = a
+        m[:n, n:n + nb] = bb
+        m[n:n + nb, n + nb:n + 2 * nb] = np.eye(nb)
+        m[:n, n + 2 * nb:] = np.diag(1.0 / net.capacity_j_per_k)
+        e = expm(m * h_s)
+        self.h_s = h_s
+        self.phi = e[:n, :n]
+        self.gamma_b = e[:n, n:n + nb]
+        self.gamma_d = e[:n, n + nb:n + 2 * nb]
+        self.gamma_p = e[:n, n + 2 * nb:]
+        self.a, self.bb = a, bb
+        self.inv_c = 1.0 / net.capacity_j_per_k
+
+    def boundary_terms(self, boundary_c: np.ndarray) -> np.ndarray:
+        """Gamma_b T_b,k + Gamma_d (T_b,k+1 - T_b,k)/h for every step, shape (n_steps, n)."""
+        tb = np.atleast_2d(np.asarray(boundary_c, dtype=float).T).T
+        slope = np.diff(tb, axis=0) / self.h_s
+        return tb[:-1] @ self.gamma_b.T + slope @ self.gamma_d.T
+
+    def rate(self, temp_c: np.ndarray, boundary_c: np.ndarray, power_w: np.ndarray
+             ) -> np.ndarray:
+        """dT/dt = A T + B_b T_b + C^-1 P at each sample [K/s] (rows are samples)."""
+        tb = np.atleast_2d(np.asarray(boundary_c, dtype=float).T).T
+        return temp_c @ self.a.T + tb @ self.bb.T + power_w * self.inv_c
+
+
+def tec_power_w(unit: Unit, t_src_c):
+    """TEC power P_tec = p0 + a (T_src - T_set) + c (T_src - T_set)^2 [W].
+
+    A smooth law for a Peltier element holding the source at T_set against the temperature
+    T_src of its heat sink (the source assembly): the Peltier term is linear in the
+    temperature difference and the Joule term grows with its square, so a quadratic with its
+    minimum below the set point (heating is helped by the Joule heat) is the first-order
+    shape of the input power (Rowe, CRC Handbook of Thermoelectrics, 1995, ch. 54, eqs.
+    (54.1)-(54.4)).  p0 [W], a [W/K], c [W/K^2] (README).
+    """
+    d = np.asarray(t_src_c, dtype=float) - unit.tec_set_c
+    return unit.tec_p0_w + unit.tec_a_w_per_k * d + unit.tec_c_w_per_k2 * d * d
+
+
+# ---------------------------------------------------------------------------------------------
+# Sensors
+
+def first_order_lag(x: np.ndarray, h_s: float, tau_s: float) -> np.ndarray:
+    """tau dy/dt = x - y, exact for x linear between samples (first-order hold), y_0 = x_0.
+
+    y_k+1 = a y_k + (1 - c) x_k+1 + (c - a) x_k with a = exp(-h/tau), c = tau (1 - a)/h
+    (the FOH discretisation, Franklin, Powell & Workman, sec. 6.3.2).
+    """
+    x = np.asarray(x, dtype=float)
+    if tau_s <= 0:
+        return x.copy()
+    a = math.exp(-h_s / tau_s)
+    c = tau_s * (1.0 - a) / h_s
+    b = [1.0 - c, c - a]
+    y, _ = lfilter(b, [1.0, -a], x[1:], zi=[a * x[0] + (c - a) * x[0]])
+    return np.concatenate([x[:1], y])
+
+
+def shupe_weights(n_layers: int) -> np.ndarray:
+    """w_i = cos(pi (i + 1/2) / n): the layer weight of the Shupe term, spool side first.
+
+    The Shupe phase is proportional to the integral over the fibre of dT/dt(z, t) (2z - L)
+    (Shupe 1980, Appl. Opt. 19(5) 654, eq. (5)); a quadrupole winding pairs layers from the
+    two halves so that a uniform heating rate cancels (sum w_i = 0 exactly) and what remains
+    weights the inner layers against the outer ones (Mohr 1996, J. Lightwave Technol. 14(1)
+    27, fig. 3).  The cosine profile is an assumed smooth shape, not derived from a winding.
+    """
+    return np.cos(np.pi * (np.arange(n_layers) + 0.5) / n_layers)
+
+
+def _turntable(time_s: np.ndarray):
+    """theta(t) [deg] and moving: 4 positions, dwell 150 s, move 10 s (rewinding 270 -> 0)."""
+    step = _DWELL_S + _MOVE_S
+    k = np.floor(time_s / step).astype(np.int64)
+    tau = time_s - k * step
+    pos = np.asarray(_POSITIONS_DEG)
+    start, end = pos[k % 4], pos[(k + 1) % 4]
+    moving = tau >= _DWELL_S
+    frac = np.where(moving, (tau - _DWELL_S) / _MOVE_S, 0.0)
+    return start + frac * (end - start), moving
+
+
+def _chamber(unit: Unit, t0_c: float, time_s: np.ndarray, rng: np.random.Generator):
+    """T_amb(t) = T0 + A tri(t/P + phi) + W(t): controller cycling plus a slow random walk.
+
+    A bang-bang chamber controller cycles in a triangle of half-amplitude A and period P;
+    W is a random walk of increments N(0, q^2 h) from W(0) = 0 (unit: README).
+    """
+    h = time_s[1] - time_s[0] if time_s.size > 1 else 1.0
+    phase = rng.uniform()
+    x = np.mod(time_s / unit.chamber_period_s + phase, 1.0)
+    tri = 4.0 * np.abs(x - 0.5) - 1.0
+    walk = np.concatenate([[0.0], np.cumsum(rng.standard_normal(time_s.size - 1))])
+    return t0_c + unit.chamber_cycle_k * tri + unit.chamber_walk_k_per_rth_s * math.sqrt(h) * walk
+
+
+def _thermometer(true_c, h, tau, offset, unit: Unit, rng, extra_tau_s: float = 0.0):
+    """Reading = Q(lag(lag_extra(x)) + offset + noise), Q rounds to the quantum [degC]."""
+    y = first_order_lag(first_order_lag(true_c, h, tau), h, extra_tau_s)
+    clean = y + offset
+    y = clean + unit.thermometer_noise_c * rng.standard_normal(y.shape)
+    q = unit.thermometer_quantum_c
+    return q * np.round(y / q), clean
+
+
+# ---------------------------------------------------------------------------------------------
+# One run
+
+@dataclass(frozen=True)
+class RunData:
+    """One generated run, with every intermediate."""
+
+    name: str
+    """Stem of the files."""
+    start_temperature_c: float
+    """T0 [degC]."""
+    columns: dict
+    """The measured columns, as written."""
+    node_names: tuple
+    """Names of the thermal nodes."""
+    temperature_c: np.ndarray
+    """Node temperatures (n_samples, n_nodes) [degC]."""
+    rate_c_per_s: np.ndarray
+    """Node temperature rates (n_samples, n_nodes) [K/s]."""
+    power_w: np.ndarray
+    """Node powers (n_samples, n_nodes) [W], TEC and hidden heat included."""
+    chamber_c: np.ndarray
+    """True chamber air temperature [degC]."""
+    gyro_terms_dph: dict
+    """Each part of the gyro output [deg/h]: earth, bias, shupe_layers, mean_rate, hidden,
+    arw, gauss_markov."""
+    acc_terms_g: dict
+    """Parts of each accelerometer output [g] (``x_hidden``, ``x_noise``, ...)."""
+    clean: dict
+    """Noise-free versions of the thermometers (before noise and quantum) and aux columns."""
+
+    def node(self, name: str) -> np.ndarray:
+        """Temperature of one node [degC]."""
+        return self.temperature_c[:, self.node_names.index(name)]
+
+
+def _run_name(i: int, t0_c: float) -> str:
+    sign = "m" if t0_c < 0 else "p"
+    return f"indep_{i:02d}_{sign}{abs(t0_c):05.1f}C".replace(".", "d")
+
+
+def _check_hidden(hidden: str | None, params: dict | None) -> dict:
+    if hidden is None:
+        if params:
+            raise ValueError("params given without a hidden effect")
+        return {}
+    if hidden not in HIDDEN_EFFECTS:
+        raise ValueError(f"unknown hidden effect {hidden!r}; valid: "
+                         + ", ".join(sorted(HIDDEN_EFFECTS)) + " (or None)")
+    p = dict(HIDDEN_EFFECTS[hidden])
+    unknown = set(params or {}) - set(p)
+    if unknown:
+        raise ValueError(f"hidden effect {hidden!r} has no parameter(s) "
+                         f"{', '.join(sorted(unknown))}; valid: {', '.join(sorted(p))}")
+    p.update(params or {})
+    return p
+
+
+_STREAMS = ("arw", "gauss_markov", "acc_x", "acc_y", "therm_fog", "therm_x", "therm_y",
+            "chamber", "osc", "current")
+
+
+def simulate_run(start_temperature_c: float, *, hidden: str | None = None,
+                 params: dict | None = None, seed: int = 0, run_index: int = 0,
+                 duration_s: float = 9000.0, sample_rate_hz: float = 1.0,
+                 latitude_deg: float = 30.26, true_heading_deg: float = 212.7,
+                 unit: Unit | None = None, noise: bool = True) -> RunData:
+    """Generate one start-up run at T0 = ``start_temperature_c`` [degC].
+
+    The unit is soaked at T0 (every node at T0) and powered on at t = 0.  Random streams:
+    ``SeedSequence((seed, run_index))`` spawned per sensor, so a hidden effect never
+    changes another sensor's draws.  ``noise=False`` zeroes every random draw (for checks).
+    """
+    unit = Unit() if unit is None else unit
+    p = _check_hidden(hidden, params)
+    if sample_rate_hz <= 0 or duration_s * sample_rate_hz < 2:
+        raise ValueError("need sample_rate_hz > 0 and at least two samples")
+    h = 1.0 / sample_rate_hz
+    n = int(round(duration_s * sample_rate_hz))
+    t = np.arange(n) * h
+    rngs = dict(zip(_STREAMS, (np.random.default_rng(s) for s in
+                               np.random.SeedSequence([seed, run_index]).spawn(len(_STREAMS)))))
+    gain = 1.0 if noise else 0.0
+
+    # 1. thermal: exact steps, the TEC law held over each step
+    net = unit_network(unit)
+    names = net.names
+    idx = {nm: i for i, nm in enumerate(names)}
+    n_layers = unit.coil.n_layers
+    layers = [idx[nm] for nm in _layer_names(n_layers)]
+    node_alias = {"coil_spool": names[layers[0]], "coil_outer": names[layers[-1]]}
+    base_p = np.zeros(len(names))
+    for nm, pw in unit.power_w.items():
+        base_p[idx[nm]] += pw
+    if hidden == "heat_source":
+        target = node_alias.get(p["node"], p["node"])
+        if target not in idx:
+            raise ValueError(f"heat_source node {p['node']!r} unknown; valid: "
+                             + ", ".join(sorted(set(names) | set(node_alias))))
+        base_p[idx[target]] += p["power"]
+    chamber = _chamber(unit, start_temperature_c, t, rngs["chamber"])
+    if not noise:
+        chamber = np.full(n, float(start_temperature_c))
+    st = Stepper(net, h)
+    drive = st.boundary_terms(chamber[:, None]) + st.gamma_p @ base_p
+    g_e = st.gamma_p[:, idx["electronics"]]
+    phi = st.phi
+    temp = np.empty((n, len(names)))
+    x = np.full(len(names), float(start_temperature_c))
+    p_tec = np.empty(n)
+    ie = idx["electronics"]
+    # A plain loop: the TEC power depends on the state, so the steps are sequential.
+    for k in range(n):
+        temp[k] = x
+        p_tec[k] = tec_power_w(unit, x[ie])
+        if k + 1 < n:
+            x = phi @ x + drive[k] + g_e * p_tec[k]
+    power = np.broadcast_to(base_p, temp.shape).copy()
+    power[:, ie] += p_tec
+    rate = st.rate(temp, chamber[:, None], power)
+
+    cap = net.capacity_j_per_k[layers]
+    t_coil = temp[:, layers] @ cap / cap.sum()
+    r_coil = rate[:, layers] @ cap / cap.sum()
+    t_src = temp[:, ie]
+
+    # 2. turntable and axis geometry
+    theta, moving = _turntable(t)
+    az = np.radians(true_heading_deg + theta)
+    elev_x = unit.tilt_north_deg * np.cos(az) + unit.tilt_east_deg * np.sin(az)
+    az_y = az + np.pi / 2
+    elev_y = unit.tilt_north_deg * np.cos(az_y) + unit.tilt_east_deg * np.sin(az_y)
+    lat = math.radians(latitude_deg)
+    ex = np.radians(elev_x)
+    earth = OMEGA_IE_DPH * (math.cos(lat) * np.cos(az) * np.cos(ex) + math.sin(lat) * np.sin(ex))
+
+    # 3. aux channels
+    osc_walk = gain * unit.osc_walk_v_per_rth_s * math.sqrt(h) * np.concatenate(
+        [[0.0], np.cumsum(rngs["osc"].standard_normal(n - 1))])
+    osc_true = unit.osc_v + unit.osc_gain_v_per_k * (t_src - T_REF_C) + osc_walk
+    osc = osc_true + gain * unit.osc_noise_v * rngs["osc"].standard_normal(n)
+    current_true = 1000.0 * np.sqrt(np.maximum(p_tec, 0.0) / unit.tec_resistance_ohm)
+    current = current_true + gain * unit.current_noise_ma * rngs["current"].standard_normal(n)
+
+    # 4. gyro
+    dtc = t_coil - T_REF_C
+    terms = {
+        "earth": earth,
+        "bias": unit.b0_dph + unit.b1_dph_per_k * dtc + unit.b2_dph_per_k2 * dtc * dtc,
+        "shupe_layers": unit.shupe_dph_per_k_per_min * _S_PER_MIN
+        * (rate[:, layers] @ shupe_weights(n_layers)),
+        "mean_rate": unit.mean_rate_dph_per_k_per_min * _S_PER_MIN * r_coil,
+    }
+    a_deg = np.degrees(az)
+    hid = np.zeros(n)
+    if hidden == "shupe_product":
+        hid = p["k_p"] * dtc * _S_PER_MIN * r_coil
+    elif hidden == "magnetic":
+        hid = p["m"] * np.cos(np.radians(a_deg - p["D_mag"]))
+    elif hidden == "scale_factor_temperature":
+        hid = earth * p["s1"] * (t_src - T_REF_C)
+    elif hidden == "turn_on_transient":
+        if p["tau"] <= 0:
+            raise ValueError("turn_on_transient tau must be > 0 s")
+        hid = p["a"] * np.exp(-t / p["tau"])
+    elif hidden == "aux_linear":
+        if p["channel"] != "aux_osc_v":
+            raise ValueError("aux_linear acts on aux_osc_v only in this generator")
+        hid = p["k"] * (osc_true - p["aux_ref"])
+    elif hidden == "outside":
+        if p["effect"] != "quadrantal":
+            raise ValueError("the outside effect is 'quadrantal'")
+        hid = p["c"] * np.cos(2.0 * np.radians(a_deg - p["D2_deg"]))
+    terms["hidden"] = hid
+    terms["arw"] = gain * unit.arw_deg_per_rth_h * 60.0 * math.sqrt(sample_rate_hz) \
+        * rngs["arw"].standard_normal(n)
+    phi_gm = math.exp(-h / unit.gm_tau_s)
+    w = rngs["gauss_markov"].standard_normal(n)
+    w[0] /= math.sqrt(1.0 - phi_gm ** 2)        # start in the stationary distribution
+    terms["gauss_markov"] = gain * unit.gm_sigma_dph * math.sqrt(1.0 - phi_gm ** 2) * lfilter(
+        [1.0], [1.0, -phi_gm], w)
+    gyro = sum(terms.values())
+
+    # 5. accelerometers
+    acc, acc_terms = {}, {}
+    dens = unit.acc_noise_g_per_rth_hz * math.sqrt(sample_rate_hz / 2.0)
+    for axis, elev, bias in (("x", elev_x, unit.acc_bias_g[0]), ("y", elev_y, unit.acc_bias_g[1])):
+        hid_a = np.zeros(n)
+        if hidden == "acc_bias_temperature" and p["axis"] == axis:
+            hid_a = p["b_q1"] * (temp[:, idx[f"qfa_{axis}"]] - T_REF_C)
+        elif hidden == "acc_bias_temperature" and p["axis"] not in ("x", "y"):
+            raise ValueError("acc_bias_temperature axis must be 'x' or 'y'")
+        nz = gain * dens * rngs[f"acc_{axis}"].standard_normal(n)
+        acc_terms[f"{axis}_hidden"], acc_terms[f"{axis}_noise"] = hid_a, nz
+        acc[axis] = np.sin(np.radians(elev)) + bias + hid_a + nz
+
+    # 6. thermometers
+    def mix(weights):
+        col = {**idx, **{k: idx[v] for k, v in node_alias.items()}}
+        return sum(wt * temp[:, col[nm]] for nm, wt in weights.items())
+
+    extra = p["tau"] if hidden == "thermometer_lag" else 0.0
+    if hidden == "thermometer_lag" and p["thermometer"] != "fog":
+        raise ValueError("thermometer_lag acts on the 'fog' thermometer in this generator")
+    u = replace(unit, thermometer_noise_c=unit.thermometer_noise_c * gain)
+    fog, fog_clean = _thermometer(mix(unit.fog_thermometer), h, unit.thermometer_lag_s["fog"],
+                                  unit.thermometer_offset_c["fog"], u, rngs["therm_fog"], extra)
+    tq = {}
+    clean = {"temp_fog_c": fog_clean, "aux_osc_v": osc_true, "aux_source_current_ma": current_true}
+    for axis in ("x", "y"):
+        tq[axis], clean[f"temp_acc_{axis}_c"] = _thermometer(
+            mix(unit.acc_thermometers[axis]), h, unit.thermometer_lag_s[axis],
+            unit.thermometer_offset_c[axis], u, rngs[f"therm_{axis}"])
+    logged = chamber + gain * unit.chamber_logger_noise_c * rngs["chamber"].standard_normal(n)
+
+    columns = {"time_s": t, "position_deg": theta, "moving": moving.astype(float),
+               "gyro_dph": gyro, "acc_x_g": acc["x"], "acc_y_g": acc["y"],
+               "temp_fog_c": fog, "temp_acc_x_c": tq["x"], "temp_acc_y_c": tq["y"],
+               "temp_chamber_c": 0.01 * np.round(logged / 0.01),
+               "aux_source_current_ma": current, "aux_osc_v": osc}
+    return RunData(name=_run_name(run_index, start_temperature_c),
+                   start_temperature_c=float(start_temperature_c), columns=columns,
+                   node_names=names, temperature_c=temp, rate_c_per_s=rate, power_w=power,
+                   chamber_c=chamber, gyro_terms_dph=terms, acc_terms_g=acc_terms, clean=clean)
+
+
+# ---------------------------------------------------------------------------------------------
+# Files
+
+_FORMATS = {"time_s": "%.10g", "position_deg": "%.10g", "moving": "%d", "gyro_dph": "%.9g",
+            "acc_x_g": "%.9g", "acc_y_g": "%.9g", "temp_fog_c": "%.4f",
+            "temp_acc_x_c": "%.4f", "temp_acc_y_c": "%.4f", "temp_chamber_c": "%.2f",
+            "aux_source_current_ma": "%.6g", "aux_osc_v": "%.8g"}
+
+
+def _write_run(run: RunData, out_dir: Path, *, latitude_deg: float, true_heading_deg: float,
+               sample_rate_hz: float) -> None:
+    """NAME.csv (one header row, %-formatted rows) and NAME.toml, written by hand."""
+    cols = list(_FORMATS)
+    data = np.column_stack([run.columns[c] for c in cols])
+    fmt = ",".join(_FORMATS[c] for c in cols)
+    # "%d" needs integers; moving is 0.0/1.0, exact.
+    lines = [",".join(cols)] + [fmt % tuple(row) for row in data.tolist()]
+    (out_dir / f"{run.name}.csv").write_text("\n".join(lines) + "\n", encoding="utf-8")
+    toml = (
+        'format = "nfs-measurement/1"\n'
+        f"latitude_deg = {latitude_deg!r}\n"
+        f"start_temperature_c = {run.start_temperature_c!r}\n"
+        f"true_heading_deg = {float(true_heading_deg)!r}\n"
+        f"sample_rate_hz = {float(sample_rate_hz)!r}\n"
+        f"positions_deg = [{', '.join(repr(p) for p in _POSITIONS_DEG)}]\n"
+        f"dwell_s = {_DWELL_S!r}\n"
+        f"move_s = {_MOVE_S!r}\n"
+        'instrument = "independent generator (tests/independent)"\n')
+    (out_dir / f"{run.name}.toml").write_text(toml, encoding="utf-8")
+
+
+def _truth(hidden: str | None, p: dict) -> dict:
+    if hidden is None:
+        return {"hidden": None, "target": None, "channel": None, "params": {}}
+    target = {"aux_linear": p.get("channel"), "acc_bias_temperature": p.get("axis"),
+              "heat_source": p.get("node"),
+              "thermometer_lag": p.get("thermometer")}.get(hidden)
+    return {"hidden": hidden, "target": target, "channel": _CHANNEL[hidden], "params": p}
+
+
+def generate_set(out_dir, *, hidden: str | None = None, seed: int = 0,
+                 start_temperatures_c=(-32.0, -16.0, -5.0, 17.0, 28.0, 43.0, 54.0),
+                 duration_s=9000.0, sample_rate_hz=1.0, latitude_deg=30.26,
+                 true_heading_deg=212.7, params: dict | None = None) -> dict:
+    """Write one run per start temperature into out_dir; return the truth.
+
+    Returns ``{"hidden": name or None, "target": node/axis/channel/thermometer or None,
+    "channel": the measured column it acts on, "params": {...}}``.  Same arguments, same
+    bytes.
+    """
+    p = _check_hidden(hidden, params)
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    for i, t0 in enumerate(start_temperatures_c):
+        run = simulate_run(float(t0), hidden=hidden, params=params, seed=seed, run_index=i,
+                           duration_s=duration_s, sample_rate_hz=sample_rate_hz,
+                           latitude_deg=latitude_deg, true_heading_deg=true_heading_deg)
+        _write_run(run, out, latitude_deg=float(latitude_deg),
+                   true_heading_deg=true_heading_deg, sample_rate_hz=sample_rate_hz)
+    return _truth(hidden, p)
+
+
+# ---------------------------------------------------------------------------------------------
+# Strength of a hidden effect against its channel's noise floor
+
+def _window_means(x: np.ndarray, moving: np.ndarray, n_win: int) -> np.ndarray:
+    """Means of consecutive windows of n_win samples that hold no moving sample."""
+    m = (len(x) // n_win) * n_win
+    xw = x[:m].reshape(-1, n_win)
+    ok = ~moving[:m].reshape(-1, n_win).any(axis=1)
+    return xw[ok].mean(axis=1)
+
+
+def measure_strength(hidden: str, *, params: dict | None = None, seed: int = 0,
+                     start_temperatures_c=(-32.0, -16.0, -5.0, 17.0, 28.0, 43.0, 54.0),
+                     duration_s: float = 9000.0, sample_rate_hz: float = 1.0) -> dict:
+    """Excess RMS of a hidden effect over its channel's noise floor, pooled over the runs.
+
+    Gyro and accelerometer: 10 s window means (dwell samples only) of the effect's term and
+    of the channel's noise; ``ratio`` uses the raw term, ``ratio_detrended`` the term minus
+    its mean in each run (what a per-run constant cannot take up).  Thermometers: the noise
+    floor is the RMS of reading minus clean reading (noise and quantum); the excess is the
+    clean reading with the effect minus without (same seed); ``ratio_after_rescale`` removes
+    from that difference, per run, its least-squares fit on [1, the run's own rise]: the part
+    a model with another power or conductance could take up.
+    """
+    p = _check_hidden(hidden, params)
+    channel = _CHANNEL[hidden]
+    n_win = max(1, int(round(10.0 * sample_rate_hz)))
+    ex, ex_d, fl = [], [], []
+    for i, t0 in enumerate(start_temperatures_c):
+        kw = dict(seed=seed, run_index=i, duration_s=duration_s, sample_rate_hz=sample_rate_hz)
+        with_ = simulate_run(float(t0), hidden=hidden, params=p, **kw)
+        mv = with_.columns["moving"] > 0.5
+        if channel == "gyro_dph":
+            term = with_.gyro_terms_dph["hidden"]
+            noise = with_.gyro_terms_dph["arw"] + with_.gyro_terms_dph["gauss_markov"]
+        elif channel.startswith("acc_"):
+            ax = channel[4]
+            term, noise = with_.acc_terms_g[f"{ax}_hidden"], with_.acc_terms_g[f"{ax}_noise"]
+        else:
+            without = simulate_run(float(t0), **kw)
+            d = with_.clean[channel] - without.clean[channel]
+            rise = without.clean[channel] - without.clean[channel][0]
+            coef, *_ = np.linalg.lstsq(np.column_stack([np.ones_like(rise), rise]), d,
+                                       rcond=None)
+            ex.append(d)
+            ex_d.append(d - np.column_stack([np.ones_like(rise), rise]) @ coef)
+            fl.append(with_.columns[channel] - with_.clean[channel])
+            continue
+        wm = _window_means(term, mv, n_win)
+        ex.append(wm)
+        ex_d.append(wm - wm.mean())
+        fl.append(_window_means(noise, mv, n_win))
+
+    def rms(parts):
+        return float(np.sqrt(np.mean(np.concatenate(parts) ** 2)))
+
+    floor, excess, excess_d = rms(fl), rms(ex), rms(ex_d)
+    second = "ratio_after_rescale" if channel.startswith("temp_") else "ratio_detrended"
+    return {"hidden": hidden, "channel": channel, "params": p, "floor": floor,
+            "excess": excess, "ratio": excess / floor, second: excess_d / floor}
+
+
+# ---------------------------------------------------------------------------------------------
+# Command line
+
+def main(argv: list[str] | None = None) -> int:
+    """``generator.py OUT_DIR [--hidden NAME] [--seed N] ...``; prints the truth as JSON."""
+    ap = argparse.ArgumentParser(
+        prog="generator.py",
+        description="Write independent north-finder start-up runs (nfs-measurement/1), one "
+                    "per start temperature, with one hidden physical effect or none; print "
+                    "the truth as JSON.")
+    ap.add_argument("out_dir", nargs="?", help="folder to write NAME.csv + NAME.toml into")
+    ap.add_argument("--hidden", choices=sorted(HIDDEN_EFFECTS), default=None,
+                    help="the hidden effect (default: none)")
+    ap.add_argument("--param", action="append", default=[], metavar="KEY=VALUE",
+                    help="override a parameter of the hidden effect (repeatable)")
+    ap.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    ap.add_argument("--temperatures", type=float, nargs="+",
+                    default=[-32.0, -16.0, -5.0, 17.0, 28.0, 43.0, 54.0],
+                    help="start temperatures [degC]")
+    ap.add_argument("--duration", type=float, default=9000.0, help="run length [s]")
+    ap.add_argument("--rate", type=float, default=1.0, help="sample rate [Hz]")
+    ap.add_argument("--latitude", type=float, default=30.26, help="latitude [deg]")
+    ap.add_argument("--heading", type=float, default=212.7, help="true heading [deg]")
+    ap.add_argument("--truth", default=None, help="also write the truth JSON to this file")
+    ap.add_argument("--strengths", action="store_true",
+                    help="instead of writing runs, print every hidden effect's excess RMS "
+                         "over its channel's noise floor")
+    a = ap.parse_args(argv)
+    params = {}
+    for kv in a.param:
+        key, sep, val = kv.partition("=")
+        if not sep:
+            ap.error(f"--param {kv!r}: expected KEY=VALUE")
+        try:
+            params[key] = float(val)
+        except ValueError:
+            params[key] = val
+    try:
+        if a.strengths:
+            for name in HIDDEN_EFFECTS:
+                s = measure_strength(name, params=params if name == a.hidden else None,
+                                     seed=a.seed, start_temperatures_c=a.temperatures,
+                                     duration_s=a.duration, sample_rate_hz=a.rate)
+                extra = {k: v for k, v in s.items() if k.startswith("ratio_")}
+                print(f"{name:26s} {s['channel']:12s} floor {s['floor']:.3g}  excess "
+                      f"{s['excess']:.3g}  ratio {s['ratio']:.2f}  "
+                      + "  ".join(f"{k} {v:.2f}" for k, v in extra.items()))
+            return 0
+        if a.out_dir is None:
+            ap.error("OUT_DIR is required (unless --strengths)")
+        truth = generate_set(a.out_dir, hidden=a.hidden, seed=a.seed,
+                             start_temperatures_c=tuple(a.temperatures), duration_s=a.duration,
+                             sample_rate_hz=a.rate, latitude_deg=a.latitude,
+                             true_heading_deg=a.heading, params=params or None)
+    except ValueError as exc:
+        print(f"generator.py: error: {exc}", file=sys.stderr)
+        return 2
+    text = json.dumps(truth, indent=2, sort_keys=True)
+    print(text)
+    if a.truth:
+        Path(a.truth).write_text(text + "\n", encoding="utf-8")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
