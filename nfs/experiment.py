@@ -20,6 +20,7 @@ import thermal
 from .constants import T_REF_C
 from .effects import EffectContext, EffectInstance
 from .effects.thermometer import THERMOMETERS
+from .errors import EffectError
 from .instrument import Instrument
 from .io.measurement import Run, RunMeta
 from .noise import gyro_noise_dph, white_noise
@@ -216,12 +217,29 @@ def _aux_channels(inst: Instrument, th: thermal.ThermalResult, fs: float,
     return out
 
 
+def _check_simulated_channels(inst: Instrument) -> None:
+    """Every ``channel`` an effect reads must be one of the instrument's [[aux]] channels.
+
+    An instrument may name a measured ``aux_*`` column it does not simulate (a model fitted
+    to runs that recorded it); it cannot be simulated, since nothing produces the channel.
+    """
+    declared = {a.name for a in inst.aux}
+    for e in inst.effects:
+        channel = e.params.get("channel")
+        if isinstance(channel, str) and channel not in declared:
+            raise EffectError(
+                f"effect '{e.label}' reads channel '{channel}', which instrument "
+                f"'{inst.name}' does not simulate; declare it under [[aux]] to simulate it "
+                f"(declared: {', '.join(sorted(declared)) or '(none)'})")
+
+
 def simulate_run(inst: Instrument, cond: RunConditions) -> SimulationResult:
     """Simulate one start-up run of ``inst`` under ``cond``.
 
     The unpowered instrument is soaked at T0 (every node at T0), powered on at t = 0 and held
     in the chamber at T_amb(t) (T0 unless ``cond.chamber_c``).
     """
+    _check_simulated_channels(inst)
     t = cond.time_s
     fs = cond.sample_rate_hz
     rngs = _streams(cond.seed)

@@ -322,7 +322,14 @@ def parse_effects(val: Any, file: Any, key: str = "effects") -> tuple[EffectInst
 
 
 def _check_effect_targets(inst: Instrument, file: Any) -> None:
-    """Every node, axis, thermometer and channel an effect names must exist."""
+    """Every node, axis and thermometer an effect names must exist; a channel must be an
+    ``aux_*`` name.
+
+    A channel need not be declared under ``[[aux]]``: an effect may read a measured column
+    that the model does not simulate (a fitted ``aux_linear`` on a recorded current).  Such
+    an instrument loads, fits and diagnoses against measured runs; simulating it raises
+    (:func:`nfs.experiment.simulate_run`).
+    """
     aux_names = [a.name for a in inst.aux]
     for i, e in enumerate(inst.effects):
         where = f"effects[{i}] ({e.name})"
@@ -330,11 +337,14 @@ def _check_effect_targets(inst: Instrument, file: Any) -> None:
             v = e.params.get(p.name)
             if v is None or p.type is not str:
                 continue
+            if p.name == "channel" and isinstance(v, str) and v.startswith("aux_"):
+                continue
             valid = {"node": inst.network.node_names, "axis": ("x", "y"),
                      "thermometer": tuple(THERMOMETERS), "channel": aux_names}.get(p.name)
             if valid is not None and v not in valid:
                 msg = (f"effect '{e.name}': unknown {p.name} '{v}'; valid: "
-                       + (", ".join(valid) or "(none)"))
+                       + (", ".join(valid) or "(none)")
+                       + (" or any measured aux_* column" if p.name == "channel" else ""))
                 if file is None:
                     raise EffectError(msg)
                 raise ScenarioError(msg, file=file, key=where)
