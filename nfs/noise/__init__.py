@@ -1,6 +1,8 @@
 """Noise: the gyro's angle random walk, bias instability and rate random walk, white noise,
-and the overlapping Allan deviation with the fit of the noise coefficients
-(IEEE Std 952-2020 Annex C; NIST SP 1065)."""
+the overlapping Allan deviation with the fit of the noise coefficients
+(IEEE Std 952-2020 Annex C; NIST SP 1065), the covariance of window means of the gyro's noise
+and the test of whether a residual is that noise (Ljung & Box 1978 on the whitened
+residual)."""
 
 from nfs.noise.allan import (
     AllanResult,
@@ -9,6 +11,13 @@ from nfs.noise.allan import (
     allan_relative_error,
     fit_noise_coefficients,
     octave_taus_s,
+)
+from nfs.noise.covariance import (
+    cholesky_lower,
+    rest_window_segments,
+    segment_sum_covariance,
+    whiten,
+    window_mean_covariance,
 )
 from nfs.noise.generators import (
     BI_FLOOR_FACTOR,
@@ -23,6 +32,7 @@ from nfs.noise.generators import (
     rate_random_walk_noise_dph,
     white_noise,
 )
+from nfs.noise.whiteness import WhitenessResult, ljung_box_q, whiteness_test
 
 __all__ = [
     "AllanResult",
@@ -31,15 +41,23 @@ __all__ = [
     "DEFAULT_CORRELATION_TIME_S",
     "GyroNoise",
     "NoiseFit",
+    "WhitenessResult",
     "allan_deviation",
     "allan_relative_error",
     "angle_random_walk_noise_dph",
     "bias_instability_adev_dph",
     "bias_instability_band_s",
     "bias_instability_noise_dph",
+    "cholesky_lower",
     "fit_noise_coefficients",
     "gyro_noise_dph",
+    "ljung_box_q",
     "octave_taus_s",
     "rate_random_walk_noise_dph",
+    "rest_window_segments",
+    "segment_sum_covariance",
     "white_noise",
+    "whiten",
+    "whiteness_test",
+    "window_mean_covariance",
 ]

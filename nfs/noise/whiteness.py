@@ -1,0 +1,254 @@
+"""Is a residual the gyro's noise?  A portmanteau test and a test of scale against the fitted
+noise model.
+
+Window means of the gyro's noise are not white (bias instability and rate random walk
+correlate them), so a plain Ljung-Box test on a drift residual rejects "white" on clean data
+and says nothing about a missing effect.  Under the null "the residual is the noise model"
+the window means e_r of run r have the covariance Sigma_r of
+:func:`nfs.noise.covariance.window_mean_covariance`; whitened, u_r = L_r^-1 e_r
+(Sigma_r = L_r L_r^T), they are independent unit normals.  Two tests of u follow:
+
+* whiteness: the Ljung-Box Q of u, autocorrelations pooled within runs (Ljung & Box 1978,
+  Biometrika 65(2) 297-303, eq. (2.1))::
+
+      r_k = sum_runs sum_t u[t] u[t + k] / sum_runs sum_t u[t]^2
+      Q = n (n + 2) sum_{k=1}^{h} r_k^2 / (n - k)  ~  chi^2(h)
+
+  with n the number of window means and h = ``lags``;
+
+* scale: sum u^2 ~ chi^2(n - p), two-sided, since a residual that is white but three times
+  too large is not the noise either (Kay 1993, Fundamentals of Statistical Signal Processing
+  II, the GLRT for a known covariance).
+
+A residual of a least-squares fit is not the noise itself: e = eps - X beta_hat for the
+fitted columns X.  Whitened, L^-1 e = L^-1 eps - (L^-1 X) beta_hat, and projecting out the
+whitened columns W = L^-1 X removes the second term whatever beta_hat was, leaving
+(I - P_W) L^-1 eps, the generalised-least-squares residual (Kariya & Kurata 2004, Generalized
+Least Squares, ch. 2): with ``design`` given the test uses that projection and p = rank W,
+so sum u^2 ~ chi^2(n - p) exactly.  A non-linear fit is covered to first order by its Jacobian
+at the optimum.
+
+Without covariances the test is the plain Ljung-Box on the residual less its pooled mean (the
+diagnosis's former test), and the test of scale is not defined.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Sequence
+
+import numpy as np
+from scipy.stats import chi2
+
+from nfs.errors import InputError
+from nfs.noise.covariance import cholesky_lower, whiten
+
+__all__ = [
+    "WhitenessResult",
+    "ljung_box_q",
+    "whiteness_test",
+]
+
+
+@dataclass(frozen=True)
+class WhitenessResult:
+    """Whiteness and scale of a residual against a noise model (:func:`whiteness_test`)."""
+
+    q: float
+    """Ljung-Box statistic Q [-] of the (whitened) residual, eq. (2.1) of Ljung & Box 1978."""
+    dof: int
+    """Degrees of freedom of Q's chi-square law [-]: the number of lags h."""
+    p_value: float
+    """P(chi^2(dof) >= Q) [-]: small means autocorrelation the noise model does not explain."""
+    white: bool
+    """``p_value >= alpha``: no evidence of autocorrelation beyond the noise model."""
+    acf: np.ndarray
+    """Autocorrelations r_1 ... r_h [-] of the (whitened) residual, pooled within runs."""
+    variance_ratio: float
+    """sum u^2 / (n - p) [-], the whitened residual's variance per degree of freedom (1 under
+    the null); NaN without covariances."""
+    variance_dof: int
+    """n - p [-]: degrees of freedom of sum u^2 (window means less fitted columns)."""
+    variance_p_value: float
+    """Two-sided p-value [-] of sum u^2 against chi^2(n - p); NaN without covariances."""
+    unit_variance: bool | None
+    """``variance_p_value >= alpha``; None without covariances."""
+    consistent: bool
+    """The residual passes as the noise: both tests at alpha / 2 (Bonferroni, so the false-
+    alarm rate is at most alpha); without covariances, ``white``."""
+    n: int
+    """Number of window means n [-], all runs."""
+    n_fitted: int
+    """Rank p [-] of the fitted columns projected out (0 without ``design``)."""
+    whitened: bool
+    """Whether the residual was whitened by a noise-model covariance."""
+    alpha: float
+    """Significance level [-] of ``white`` and ``unit_variance``."""
+
+
+def ljung_box_q(parts: Sequence[np.ndarray], lags: int) -> tuple[float, np.ndarray]:
+    """Ljung-Box Q [-] and the autocorrelations r_1 ... r_h [-] of series taken as zero-mean,
+    pooled within runs (Ljung & Box 1978, Biometrika 65(2) 297, eq. (2.1)).
+
+    r_k = sum_runs sum_t x[t] x[t+k] / sum_runs sum_t x[t]^2 (no pair spans two runs) and
+    Q = n (n + 2) sum_k r_k^2 / (n - k), n the total length.  Lags a run is too short for
+    contribute nothing from it.  Subtract any mean before calling.
+    """
+    n = sum(p.size for p in parts)
+    den = sum(float(p @ p) for p in parts)
+    acf = np.zeros(lags)
+    if den > 0.0:
+        for k in range(1, lags + 1):
+            acf[k - 1] = sum(float(p[k:] @ p[:-k]) for p in parts if p.size > k) / den
+    k = np.arange(1, lags + 1)
+    q = float(n * (n + 2) * np.sum(acf**2 / (n - k)))
+    return q, acf
+
+
+def _check_parts(residual_parts: Sequence[np.ndarray]) -> list[np.ndarray]:
+    if isinstance(residual_parts, np.ndarray) or len(residual_parts) == 0:
+        raise InputError("residual_parts must be a non-empty list of 1-D arrays, one per run")
+    parts = []
+    for i, p in enumerate(residual_parts):
+        a = np.asarray(p, dtype=float)
+        if a.ndim != 1 or a.size == 0:
+            raise InputError(f"residual_parts[{i}] must be a non-empty 1-D array, got shape "
+                             f"{a.shape}")
+        if not np.all(np.isfinite(a)):
+            raise InputError(f"residual_parts[{i}] has non-finite values")
+        parts.append(a)
+    return parts
+
+
+def _check_design(design: Sequence[np.ndarray], parts: list[np.ndarray]) -> list[np.ndarray]:
+    if len(design) != len(parts):
+        raise InputError(f"design must have one block per run ({len(parts)}), got "
+                         f"{len(design)}")
+    blocks = []
+    for i, (x, p) in enumerate(zip(design, parts)):
+        a = np.asarray(x, dtype=float)
+        if a.ndim == 1:
+            a = a[:, None]
+        if a.ndim != 2 or a.shape[0] != p.size:
+            raise InputError(f"design[{i}] must have {p.size} rows (run {i}'s window means), "
+                             f"got shape {a.shape}")
+        if not np.all(np.isfinite(a)):
+            raise InputError(f"design[{i}] has non-finite values")
+        blocks.append(a)
+    if len({b.shape[1] for b in blocks}) != 1:
+        raise InputError("design blocks must all have the same columns (a column that does "
+                         "not act on a run is zero in its block)")
+    return blocks
+
+
+def _project_out(parts: list[np.ndarray], blocks: list[np.ndarray]
+                 ) -> tuple[list[np.ndarray], int]:
+    """Residual of the least-squares fit of the stacked ``blocks`` to the stacked ``parts``
+    (orthogonal projection onto the complement of their column space) and the rank."""
+    x = np.vstack(blocks)
+    e = np.concatenate(parts)
+    # an SVD rather than lstsq: its singular values give the rank used for the dof
+    u, s, _ = np.linalg.svd(x, full_matrices=False)
+    rank = int(np.sum(s > s[0] * max(x.shape) * np.finfo(float).eps)) if s.size else 0
+    basis = u[:, :rank]
+    e = e - basis @ (basis.T @ e)
+    bounds = np.cumsum([0] + [p.size for p in parts])
+    return [e[a:b] for a, b in zip(bounds[:-1], bounds[1:])], rank
+
+
+def whiteness_test(residual_parts: list[np.ndarray],
+                   covariances: list[np.ndarray] | None = None, *, lags: int = 20,
+                   alpha: float = 0.01, design: list[np.ndarray] | None = None,
+                   factors: list[np.ndarray] | None = None) -> WhitenessResult:
+    """Test whether a residual is the gyro's noise: Ljung-Box on the residual whitened by the
+    noise model's covariance, and a chi-square test of its scale.
+
+    Each run's residual e_r (window means [deg/h]) is whitened, u_r = L_r^-1 e_r with
+    Sigma_r = L_r L_r^T (:func:`nfs.noise.covariance.whiten`); if ``design`` is given, the
+    whitened fitted columns are projected out of u (the GLS residual, module docstring).  Then
+
+        Q = n (n + 2) sum_{k=1}^{h} r_k^2 / (n - k) ~ chi^2(h)   (Ljung & Box 1978, eq. (2.1))
+        sum u^2 ~ chi^2(n - p)   (two-sided)
+
+    with r_k pooled within runs (:func:`ljung_box_q`).  Without ``covariances`` the pooled
+    mean is subtracted and the plain Ljung-Box results (the test the diagnosis used before:
+    on the gyro's noise it rejects, because bias instability correlates the window means).
+
+    Parameters
+    ----------
+    residual_parts : list of numpy.ndarray
+        Residual window means [deg/h] of each run, in time order.
+    covariances : list of numpy.ndarray, optional
+        Covariance Sigma_r [(deg/h)^2] of each run's window means under the noise model
+        (:func:`nfs.noise.covariance.window_mean_covariance`); runs are independent.
+    lags : int
+        Number of lags h of Q [-], 1 <= h < n.
+    alpha : float
+        Significance level [-], 0 < alpha < 1.
+    design : list of numpy.ndarray, optional
+        Columns fitted to the residual (least squares or otherwise), one (n_r, p) block per
+        run with the same p columns (zero where a column does not act on a run); for a
+        non-linear fit its Jacobian at the optimum.
+    factors : list of numpy.ndarray, optional
+        Lower Cholesky factors L_r (:func:`nfs.noise.covariance.cholesky_lower`) instead of
+        ``covariances``, to reuse one factorisation across many residuals.
+
+    Returns
+    -------
+    WhitenessResult
+    """
+    parts = _check_parts(residual_parts)
+    if isinstance(lags, bool) or not isinstance(lags, (int, np.integer)):
+        raise InputError(f"lags must be an integer, got {lags!r}")
+    n = sum(p.size for p in parts)
+    if not 1 <= lags < n:
+        raise InputError(f"lags must be >= 1 and < the number of window means ({n}), got "
+                         f"{lags}")
+    alpha = float(alpha)
+    if not 0.0 < alpha < 1.0:
+        raise InputError(f"alpha must be in (0, 1), got {alpha!r}")
+    if covariances is not None and factors is not None:
+        raise InputError("give covariances or factors, not both")
+    mats = covariances if covariances is not None else factors
+    whitened = mats is not None
+    if whitened:
+        if len(mats) != len(parts):
+            raise InputError(f"need one covariance per run ({len(parts)}), got {len(mats)}")
+        what = "covariances" if covariances is not None else "factors"
+        lows = []
+        for i, (c, p) in enumerate(zip(mats, parts)):
+            c = np.asarray(c, dtype=float)
+            if c.shape != (p.size, p.size):
+                raise InputError(f"{what}[{i}] must be {p.size} x {p.size} (run {i}'s window "
+                                 f"means), got shape {c.shape}")
+            lows.append(cholesky_lower(c, f"covariances[{i}]") if covariances is not None
+                        else c)
+        u = [whiten(p, factor=low) for p, low in zip(parts, lows)]
+    else:
+        mean = float(np.mean(np.concatenate(parts)))
+        u = [p - mean for p in parts]
+    n_fitted = 0
+    if design is not None:
+        blocks = _check_design(design, parts)
+        if whitened:
+            blocks = [whiten(x, factor=low) for x, low in zip(blocks, lows)]
+        u, n_fitted = _project_out(u, blocks)
+    q, acf = ljung_box_q(u, lags)
+    p_value = float(chi2.sf(q, lags))
+    variance_dof = n - n_fitted
+    if whitened and variance_dof > 0:
+        ss = sum(float(v @ v) for v in u)
+        variance_ratio = ss / variance_dof
+        variance_p = float(min(1.0, 2.0 * min(chi2.cdf(ss, variance_dof),
+                                              chi2.sf(ss, variance_dof))))
+        unit_variance: bool | None = variance_p >= alpha
+        consistent = min(p_value, variance_p) >= alpha / 2.0
+    else:
+        variance_ratio, variance_p, unit_variance = math.nan, math.nan, None
+        consistent = p_value >= alpha
+    return WhitenessResult(q=q, dof=lags, p_value=p_value, white=p_value >= alpha, acf=acf,
+                           variance_ratio=variance_ratio, variance_dof=variance_dof,
+                           variance_p_value=variance_p, unit_variance=unit_variance,
+                           consistent=consistent, n=n, n_fitted=n_fitted, whitened=whitened,
+                           alpha=alpha)
