@@ -1,0 +1,265 @@
+"""Run-level statistics of the candidate scores: clustered inference, grouped CV, Holm.
+
+Every candidate of :mod:`nfs.diagnose.diagnose` is a linear least-squares problem over runs,
+y_r = Z_r beta + e_r (r = 1..G runs; y_r the run's residual window means or thermometer
+readings, Z_r the model's columns beside the candidate's).  Within a run the errors are
+strongly autocorrelated (bias instability, a slowly wandering thermal residual), between
+runs they are independent.  Everything here is therefore computed from the per-run Gram
+matrices G_r = Z_r^T Z_r, h_r = Z_r^T y_r, y_r^T y_r (:class:`RunGrams`), and every
+distribution has run-level degrees of freedom:
+
+- :func:`clustered_fit`: pooled least squares beta = (sum G_r)^-1 sum h_r with the
+  cluster-robust ("sandwich") covariance, one cluster per run (Liang & Zeger 1986,
+  Biometrika 73(1) 13); the run's score is h_r - G_r beta.  The small-sample correction is
+  CR2 (Bell & McCaffrey 2002, Survey Methodology 28(2) 169; Cameron & Miller 2015,
+  J. Human Resources 50(2) 317, sec. VI.B): the score of run r is multiplied by
+  (I - H_rr)^-1/2, H_rr the run's block of the hat matrix, and since
+  Z_r^T f(H_rr) = f(G_r A^-1) Z_r^T (A = sum G_r) this needs only p x p matrices.
+- :meth:`ClusteredFit.test`: Wald test of a set of coefficients.  One coefficient: t with
+  the Bell-McCaffrey degrees of freedom (Cameron & Miller 2015, sec. VI.D; capped at G - 1),
+  two- or one-sided; several: F(k, G - 1) on W / k (Cameron & Miller 2015, sec. VI.D).
+- :func:`group_cv_rms`: leave-one-group-out RMS (a group: the runs of one start
+  temperature); with several candidate designs (the grid points of a shape parameter) each
+  fold chooses the design on its training runs only.
+- :func:`holm`: Holm's step-down family-wise control (Holm 1979, Scand. J. Statist. 6(2) 65).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Sequence
+
+import numpy as np
+from scipy.stats import chi2, f as f_dist, t as t_dist
+
+__all__ = ["RunGrams", "run_grams", "solve", "ClusteredFit", "clustered_fit",
+           "group_cv_rms", "holm"]
+
+#: Largest per-run leverage eigenvalue kept in the CR2 correction (a run that alone
+#: determines a direction has leverage 1 there, and its (1 - leverage)^-1/2 is unbounded).
+_MAX_LEVERAGE = 1.0 - 1e-8
+#: Relative eigenvalue below which a direction of the scaled Gram matrix is dropped.
+_RCOND = 1e-12
+
+
+@dataclass(frozen=True)
+class RunGrams:
+    """Per-run sufficient statistics of the linear problem y_r = Z_r beta + e_r."""
+
+    gram: np.ndarray
+    """G_r = Z_r^T Z_r, shape (n_runs, p, p)."""
+    moment: np.ndarray
+    """h_r = Z_r^T y_r, shape (n_runs, p)."""
+    yy: np.ndarray
+    """y_r^T y_r, shape (n_runs,)."""
+    n: np.ndarray
+    """Samples per run, shape (n_runs,)."""
+
+    def take(self, index: np.ndarray) -> "RunGrams":
+        """The runs ``index`` (repeats allowed: a resample of whole runs)."""
+        return RunGrams(self.gram[index], self.moment[index], self.yy[index], self.n[index])
+
+    def sse(self, beta: np.ndarray) -> np.ndarray:
+        """Residual sum of squares of each run at ``beta`` (beta of shape (p,) or (k, p))."""
+        b = np.atleast_2d(beta)
+        out = (self.yy[None, :] - 2.0 * np.einsum("rp,kp->kr", self.moment, b)
+               + np.einsum("kp,rpq,kq->kr", b, self.gram, b))
+        return out[0] if np.ndim(beta) == 1 else out
+
+
+def run_grams(ys: Sequence[np.ndarray], Zs: Sequence[np.ndarray]) -> RunGrams:
+    """The per-run Gram matrices of targets ``ys`` and designs ``Zs`` (one of each per run)."""
+    return RunGrams(np.array([Z.T @ Z for Z in Zs]),
+                    np.array([Z.T @ y for Z, y in zip(Zs, ys)]),
+                    np.array([float(y @ y) for y in ys]),
+                    np.array([y.size for y in ys], dtype=float))
+
+
+def solve(gram: np.ndarray, moment: np.ndarray) -> np.ndarray:
+    """Minimum-norm solution of the normal equations gram beta = moment (stacks allowed).
+
+    The columns are scaled to unit diagonal first: the drift columns differ by orders of
+    magnitude (a constant, T dT/dt in K^2/min, an aux current in mA), and a pseudo-inverse
+    on the raw Gram matrix would cut directions by scale rather than by collinearity.
+    """
+    d = np.sqrt(np.einsum("...ii->...i", gram))
+    d = np.where(d > 0, 1.0 / np.where(d > 0, d, 1.0), 0.0)
+    scaled = gram * d[..., :, None] * d[..., None, :]
+    b = np.linalg.pinv(scaled, rcond=_RCOND, hermitian=True) @ (moment * d)[..., None]
+    return b[..., 0] * d
+
+
+def _sym_power(S: np.ndarray, fn) -> np.ndarray:
+    """fn applied to the eigenvalues of symmetric matrices ``S`` (stacks allowed)."""
+    lam, U = np.linalg.eigh(S)
+    return (U * fn(lam)[..., None, :]) @ np.swapaxes(U, -1, -2)
+
+
+@dataclass(frozen=True)
+class ClusteredFit:
+    """Pooled least-squares fit over runs with its CR2 cluster-robust covariance."""
+
+    beta: np.ndarray
+    """Coefficients, shape (p,)."""
+    cov: np.ndarray
+    """CR2 covariance of ``beta``, one cluster per run, shape (p, p)."""
+    n_clusters: int
+    """G, the number of runs (repeats of a resampled run count as clusters)."""
+    a_inv_half: np.ndarray
+    """A^-1/2 (A = sum G_r), in the column scaling ``scale`` (for the dof)."""
+    ms: np.ndarray
+    """(I - S_r)^-1/2 S_r per run, S_r = A^-1/2 G_r A^-1/2 (scaled columns)."""
+    q: np.ndarray
+    """(I - S_r)^-1 S_r per run (scaled columns)."""
+    scale: np.ndarray
+    """Column scaling d (the scaled column j is column j times d_j)."""
+
+    def dof(self, c: np.ndarray) -> float:
+        """Bell-McCaffrey degrees of freedom of the contrast c^T beta under iid working
+        errors: nu = (tr B)^2 / tr(B^2), B the G x G matrix of Bell & McCaffrey (2002,
+        eq. (9)), here (from the run blocks of I - H) B_gh = delta_gh d^T Q_g d - v_g^T v_h
+        with d = A^-1/2 c, v_g = (I - S_g)^-1/2 S_g d.  Capped at G - 1."""
+        d = self.a_inv_half @ (np.asarray(c, dtype=float) * self.scale)
+        v = self.ms @ d
+        B = np.diag(np.einsum("p,rpq,q->r", d, self.q, d)) - v @ v.T
+        tr, tr2 = float(np.trace(B)), float(np.sum(B * B))
+        g1 = float(self.n_clusters - 1)
+        return min(tr * tr / tr2, g1) if tr2 > 0 else g1
+
+    def test(self, idx: Sequence[int], sign: int = 0) -> tuple[float, float, float]:
+        """Wald test that ``beta[idx]`` = 0: (statistic, p-value, degrees of freedom).
+
+        One coefficient: t = b / se against Student's t with :meth:`dof` degrees of freedom,
+        two-sided (``sign`` = 0) or one-sided toward ``sign`` (+1: the alternative b > 0).
+        Several: F = b^T V^-1 b / k against F(k, G - 1).
+        """
+        idx = list(idx)
+        b = self.beta[idx]
+        V = self.cov[np.ix_(idx, idx)]
+        k = len(idx)
+        if k == 1:
+            se = math.sqrt(max(float(V[0, 0]), 0.0))
+            c = np.zeros(self.beta.size)
+            c[idx[0]] = 1.0
+            nu = self.dof(c)
+            if se == 0.0 or not np.isfinite(se):
+                return 0.0, 1.0, nu
+            t = float(b[0]) / se
+            p = float(2.0 * t_dist.sf(abs(t), nu)) if sign == 0 else float(
+                t_dist.sf(sign * t, nu))
+            return t, p, nu
+        nu = float(self.n_clusters - 1)
+        w = float(b @ np.linalg.pinv(V, hermitian=True) @ b)
+        return w / k, float(f_dist.sf(w / k, k, nu)), nu
+
+    def se(self) -> np.ndarray:
+        """Standard errors of ``beta``."""
+        return np.sqrt(np.maximum(np.diag(self.cov), 0.0))
+
+    def half_width(self, level: float = 0.95) -> np.ndarray:
+        """Half-widths of the t intervals of each coefficient (each with its own dof)."""
+        out = np.empty(self.beta.size)
+        for j in range(self.beta.size):
+            c = np.zeros(self.beta.size)
+            c[j] = 1.0
+            out[j] = t_dist.ppf(0.5 + level / 2.0, self.dof(c))
+        return out * self.se()
+
+
+def clustered_fit(grams: RunGrams) -> ClusteredFit:
+    """Pooled least squares over the runs of ``grams`` with the CR2 covariance (module
+    docstring): V = A^-1 (sum_r s~_r s~_r^T) A^-1, s~_r = (I - G_r A^-1)^-1/2 (h_r - G_r beta),
+    computed in the scaled columns as A^-1/2 (I - S_r)^-1/2 A^-1/2 s_r."""
+    G, h = grams.gram, grams.moment
+    A = G.sum(0)
+    d = np.sqrt(np.diag(A))
+    d = np.where(d > 0, 1.0 / np.where(d > 0, d, 1.0), 0.0)
+    Gs = G * d[None, :, None] * d[None, None, :]
+    hs = h * d[None, :]
+    As = Gs.sum(0)
+    lam, U = np.linalg.eigh(As)
+    keep = lam > _RCOND * max(float(lam.max()), 0.0)
+    Uk = U[:, keep]
+    a_inv_half = (Uk / np.sqrt(lam[keep])) @ Uk.T
+    a_inv = (Uk / lam[keep]) @ Uk.T
+    beta_s = a_inv @ hs.sum(0)
+    score = hs - Gs @ beta_s
+    S = a_inv_half @ Gs @ a_inv_half
+    mu, W = np.linalg.eigh(S)
+    mu = np.clip(mu, 0.0, _MAX_LEVERAGE)
+    Wt = np.swapaxes(W, -1, -2)
+    M = (W * (1.0 - mu)[:, None, :] ** -0.5) @ Wt
+    u = np.einsum("pq,rqs,st,rt->rp", a_inv_half, M, a_inv_half, score)
+    cov_s = u.T @ u
+    ms = (W * (mu * (1.0 - mu) ** -0.5)[:, None, :]) @ Wt
+    q = (W * (mu / (1.0 - mu))[:, None, :]) @ Wt
+    return ClusteredFit(beta=beta_s * d, cov=cov_s * np.outer(d, d), n_clusters=len(G),
+                        a_inv_half=a_inv_half, ms=ms, q=q, scale=d)
+
+
+def group_cv_rms(designs: Sequence[RunGrams], groups: np.ndarray,
+                 weights: np.ndarray | None = None) -> tuple[float, np.ndarray]:
+    """Leave-one-group-out RMS of the held-out residual, with the design chosen in each fold.
+
+    ``designs`` are the Gram matrices of alternative designs on the same targets (one per grid
+    point of a candidate's shape parameters; one design: no choice).  In each fold (one
+    distinct group held out) every design is fitted on the training runs, the one with the
+    smallest training SSE is kept and predicts the held-out runs; the held-out SSE is pooled
+    over folds: rms = sqrt(sum SSE_out / sum n_out).  ``weights`` are run multiplicities (a
+    resample of whole runs).  Returns (rms, index of the chosen design in each fold).
+    """
+    groups = np.asarray(groups)
+    w = np.ones(len(groups)) if weights is None else np.asarray(weights, dtype=float)
+    tot, cnt, chosen = 0.0, 0.0, []
+    for grp in np.unique(groups[w > 0]):
+        out = np.where((groups == grp) & (w > 0), w, 0.0)
+        wt = np.where(out > 0, 0.0, w)
+        if not (wt > 0).any():
+            continue
+        best, best_sse = 0, None
+        for k, g in enumerate(designs):
+            beta = solve(np.tensordot(wt, g.gram, 1), wt @ g.moment)
+            sse = g.sse(beta)
+            if best_sse is None or sse @ wt < best_sse @ wt:
+                best, best_sse = k, sse
+        chosen.append(best)
+        tot += float(best_sse @ out)
+        cnt += float(designs[0].n @ out)
+    rms = math.sqrt(max(tot, 0.0) / cnt) if cnt else math.nan
+    return rms, np.array(chosen, dtype=int)
+
+
+def holm(p_values: Sequence[float], alpha: float) -> tuple[np.ndarray, np.ndarray]:
+    """Holm's step-down procedure (Holm 1979, Scand. J. Statist. 6(2) 65, sec. 3).
+
+    Sort the m p-values, p_(1) <= ... <= p_(m); reject H_(1), ..., H_(j-1) where j is the
+    first index with p_(j) > alpha / (m - j + 1).  The family-wise error rate is at most
+    alpha for any dependence between the tests.  Returns (rejected, adjusted p-values
+    max_{i<=j} min(1, (m - i + 1) p_(i))).  Written here (a few lines) rather than adding
+    statsmodels for its ``multipletests``.
+    """
+    p = np.asarray(p_values, dtype=float)
+    m = p.size
+    order = np.argsort(p, kind="stable")
+    adj_sorted = np.minimum(1.0, np.maximum.accumulate((m - np.arange(m)) * p[order]))
+    adj = np.empty(m)
+    adj[order] = adj_sorted
+    return adj <= alpha, adj
+
+
+def _ljung_box(parts: list[np.ndarray], lags: int = 20) -> dict[str, float]:
+    """Ljung-Box Q on the residual window means, autocorrelations pooled within runs
+    (Ljung & Box 1978, Biometrika 65(2) 297, eq. (2.1)): Q = n (n+2) sum r_k^2 / (n-k)."""
+    x = [p - np.mean(np.concatenate(parts)) for p in parts]
+    n = sum(p.size for p in x)
+    den = sum(float(p @ p) for p in x)
+    q = 0.0
+    r = []
+    for k in range(1, lags + 1):
+        rk = sum(float(p[k:] @ p[:-k]) for p in x if p.size > k) / den if den > 0 else 0.0
+        r.append(rk)
+        q += rk * rk / (n - k)
+    q *= n * (n + 2)
+    return {"Q": q, "lags": lags, "p_value": float(chi2.sf(q, lags)), "n": n,
+            "white": bool(chi2.sf(q, lags) >= 0.01), "acf": r[:5]}
