@@ -1,0 +1,930 @@
+"""Is the model's thermal structure adequate?  Generic structural alternatives and a verdict.
+
+A thermal candidate of the diagnosis (a heat source, a motor heat pulse, a TEC law on a node,
+an extra thermometer lag) is a *named* change of a lumped network (physics.md section 2,
+equation C_j dT_j/dt = sum_k G_jk (T_k - T_j) + G_j,amb (T_amb - T_j) + P_j).  When the
+network itself is wrong (a coil of several radial layers lumped into two nodes, a
+thermometer that does not sit where the model puts it, another TEC law) some named
+candidate still lowers the thermometer residual, with an unphysical value (a negative heat
+source).  This module supplies the yardstick: *generic* structural alternatives of the
+same network, each with one to three free numbers, and a verdict on the model's structure.
+
+Alternatives (:func:`structural_alternatives`; each is a new
+:class:`~nfs.instrument.Instrument` and its free parameter paths):
+
+- ``split``: node X becomes X (half the capacity, every link, its power, the thermometer
+  weights) and X_2 (the other half), linked by a conductance G [W/K] to fit: one more time
+  constant C/(2G) inside X (the coil's radial layers, a housing of base and lid);
+- ``insert``: the link X-housing (G_0) is replaced by X-X_mid-housing, a node of capacity
+  C_mid [J/K] with two conductances (start 2 G_0 each: the same steady state);
+- ``link``: a conductance G [W/K] >= 0 between two nodes of the coil, electronics, board
+  and housing that the model does not link;
+- ``thermometer``: the FOG thermometer reads a fraction f of another node (a neighbour of
+  its nodes), or another mix of its own nodes.  Paths ``thermometers.<t>.nodes.<node>``
+  (the fraction f in [0, 1] of that node in the sensed temperature; the other nodes keep
+  their relative weights and share 1 - f) are not :mod:`nfs.diagnose.params` paths:
+  :meth:`StructuralAlternative.build` sets them (:func:`set_thermometer_fraction`).
+
+Scoring (:func:`thermal_adequacy`).  The thermometer residual is that of the thermal stage
+of :func:`nfs.diagnose.fit.fit_model` (model readings minus ``temp_fog_c``, ``temp_acc_x_c``,
+``temp_acc_y_c`` at knots every ``decimate_s``), evaluated by ``_thermal_residual_parts``.
+
+1. The model's own thermal stage (:func:`~nfs.diagnose.fit.default_free`, 20 parameters
+   for the default instrument) is refined from the given values by Gauss-Newton steps with
+   the Jacobian J_0 frozen at the start (a chord method; forward differences, one residual
+   evaluation per parameter).  The model should come fitted (``nfs fit``): this only
+   polishes it.
+2. Each alternative's new parameters theta are fitted by variable projection: the model's
+   parameters enter through the frozen J_0, so theta minimises |(I - J_0 J_0^+) r(theta)|^2
+   (:func:`scipy.optimize.least_squares`, bounded; positive capacities and conductances in
+   log).  Every alternative is first screened by one Gauss-Newton step from its start
+   (3 + k evaluations); the ``refine_top`` best are then fitted to convergence.  The fitted
+   model parameters are p + J_0^+ (-r(theta)).  This is why the check costs about as much as
+   the model's own thermal fit: a full refit of the 20 model parameters per alternative
+   (about 8 s each on 7 runs of 2.5 h) would cost ten times more.
+3. Score: leave-one-start-temperature-out cross-validated RMS of the three thermometers
+   [K], pooled (runs with the same start temperature are held out together).  The refit
+   per fold is one Gauss-Newton step from the all-runs fit on the linearised residual
+   r + Z beta, Z = [J_0, d r / d theta], with per-run Gram matrices (the infinitesimal
+   jackknife; Efron and Tibshirani, "An Introduction to the Bootstrap", 1993, section 11.5,
+   and Hastie, Tibshirani and Friedman, "The Elements of Statistical Learning", 2nd ed.,
+   2009, eq. (7.52) for the linear-smoother form).  A CV, not an information criterion:
+   the thermometer noise floor is known, but the knots of one run are autocorrelated by
+   the model error itself, so a penalty per parameter would be too small.  The same score
+   for the model and every alternative; an alternative beats the model when its CV RMS is
+   lower by more than :data:`CV_DROP`.
+
+Adequacy.  Per thermometer and stage (start-up: t < ``startup_s`` = 3600 s after power-on;
+stable: after) the model's residual RMS is compared with the thermometer's noise floor
+sqrt(noise_c^2 + quantum_c^2 / 12) [K] from the instrument (white noise plus uniform
+rounding error, Widrow and Kollar, "Quantization Noise", 2008, eq. (4.15)).  The floor is
+not measured from the residual's high-frequency part: with the default 0.0625 K quantum and
+0.01 K noise, consecutive samples of a slowly moving temperature round to the same level,
+so a difference-based estimate comes out far below the true per-sample error.  The
+structure is adequate when every channel is within :data:`ADEQUACY_FACTOR` (1.5x) of its
+floor and no structural alternative beats the model.
+
+:func:`beats_structure` says whether a thermal candidate's CV RMS beats the best
+structural alternative (the diagnosis names a thermal candidate only then), and
+:func:`one_sided` tests a physically one-sided coefficient (heat power >= 0 W, lag >= 0 s).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field, replace
+from typing import Any, Callable, Sequence
+
+import numpy as np
+from scipy.optimize import least_squares
+from scipy.stats import norm
+
+from thermal import CHAMBER, Link, Network, Node
+
+from ..effects import get_effect, make_effect
+from ..effects.thermometer import THERMOMETERS
+from ..errors import NfsError
+from ..instrument import Instrument
+from ..io.measurement import Run
+from .fit import _prepare_thermal, _thermal_residual_parts, default_free
+from .params import fit_bounds, get_param, set_params
+
+__all__ = ["StructuralAlternative", "AlternativeScore", "ChannelFit", "ThermalAdequacy",
+           "OneSided", "split_node", "insert_node", "free_link", "thermometer_weight",
+           "effect_alternative", "structural_alternatives", "set_thermometer_fraction",
+           "thermal_adequacy", "beats_structure", "one_sided", "physical_lower",
+           "ADEQUACY_FACTOR", "CV_DROP", "STARTUP_S", "DEFAULT_DECIMATE_S", "REFINE_TOP",
+           "STAGES"]
+
+#: A channel is adequate when its residual RMS is within this factor of its noise floor.
+ADEQUACY_FACTOR = 1.5
+#: Relative drop of the CV RMS an alternative must exceed to beat the model.
+CV_DROP = 0.05
+#: End of the start-up stage [s] after power-on (physics.md section 1: 30-90 min).
+STARTUP_S = 3600.0
+#: Default spacing of the residual grid [s].
+DEFAULT_DECIMATE_S = 30.0
+#: Alternatives fitted to convergence after the one-step screening.
+REFINE_TOP = 4
+#: The two stages of a run.
+STAGES = ("start-up", "stable")
+
+_WEIGHT = ".nodes."
+_PHYSICAL_LOWER = {("heat_source", "power"): 0.0, ("motor_heat", "power"): 0.0,
+                   ("tec_power", "c_h"): 0.0, ("tec_power", "c_c"): 0.0,
+                   ("thermometer_lag", "tau"): 0.0}
+
+
+# ---------------------------------------------------------------------------------------------
+# Alternatives
+
+def _is_weight(path: str) -> bool:
+    return path.startswith("thermometers.") and _WEIGHT in path
+
+
+def set_thermometer_fraction(inst: Instrument, thermometer: str, node: str,
+                             fraction: float) -> Instrument:
+    """``inst`` with ``node`` making up ``fraction`` of the sensed temperature of a thermometer.
+
+    T_sensed = (1 - f) sum_j w_j T_j / sum_j w_j + f T_node over the thermometer's other
+    nodes j (physics.md section 2: a thermometer between nodes reads a weighted mean);
+    f = 0 removes ``node`` from the thermometer.
+    """
+    if thermometer not in inst.thermometers:
+        raise NfsError(f"no thermometer '{thermometer}'; thermometers: "
+                       + ", ".join(inst.thermometers))
+    if node not in inst.network.node_names:
+        raise NfsError(f"thermometer '{thermometer}': unknown node '{node}'; nodes: "
+                       + ", ".join(inst.network.node_names))
+    f = float(fraction)
+    if not 0.0 <= f <= 1.0:
+        raise NfsError(f"thermometer '{thermometer}': fraction of '{node}' must be in [0, 1], "
+                       f"got {f}")
+    model = inst.thermometers[thermometer]
+    others = {k: w for k, w in model.nodes.items() if k != node}
+    total = sum(others.values())
+    if total <= 0.0:
+        f = 1.0
+    weights = {k: (1.0 - f) * w / total for k, w in others.items() if f < 1.0}
+    if f > 0.0:
+        weights[node] = f
+    thermos = dict(inst.thermometers)
+    thermos[thermometer] = replace(model, nodes=weights)
+    return replace(inst, thermometers=thermos)
+
+
+@dataclass(frozen=True)
+class StructuralAlternative:
+    """One generic change of the thermal structure, with its free numbers."""
+
+    name: str
+    """Short name, e.g. ``link electronics-coil_inner``."""
+    kind: str
+    """``split``, ``insert``, ``link``, ``thermometer`` or ``effect`` (a named candidate)."""
+    description: str
+    """One sentence: what it changes."""
+    instrument: Instrument
+    """The changed instrument at the start values."""
+    free: tuple[str, ...]
+    """Paths of the new free numbers (:mod:`nfs.diagnose.params`; thermometer fractions are
+    ``thermometers.<t>.nodes.<node>``, set by :func:`set_thermometer_fraction`)."""
+    start: tuple[float, ...]
+    """Start values, in the units of the paths."""
+    bounds: tuple[tuple[float, float], ...]
+    """(lower, upper) of each free number."""
+
+    def build(self, values: Sequence[float]) -> Instrument:
+        """The instrument with the free numbers set to ``values``."""
+        out = self.instrument
+        plain = {}
+        for p, v in zip(self.free, values):
+            if _is_weight(p):
+                t, node = p[len("thermometers."):].split(_WEIGHT, 1)
+                out = set_thermometer_fraction(out, t, node, min(max(float(v), 0.0), 1.0))
+            else:
+                plain[p] = float(v)
+        return set_params(out, plain) if plain else out
+
+
+def _housing(inst: Instrument) -> str | None:
+    """The node with the largest conductance to the chamber (the housing/base)."""
+    best, g_best = None, 0.0
+    for link in inst.network.links:
+        if CHAMBER in (link.a, link.b) and link.conductance_w_per_k > g_best:
+            best = link.b if link.a == CHAMBER else link.a
+            g_best = link.conductance_w_per_k
+    return best
+
+
+def _neighbours(net: Network, node: str) -> list[str]:
+    out = []
+    for link in net.links:
+        if node in (link.a, link.b):
+            other = link.b if link.a == node else link.a
+            if other != CHAMBER:
+                out.append(other)
+    return list(dict.fromkeys(out))
+
+
+def _new_name(net: Network, base: str) -> str:
+    name, i = base, 2
+    while name in net.node_names:
+        name, i = f"{base}{i}", i + 1
+    return name
+
+
+def _link_path(a: str, b: str) -> str:
+    return f"thermal.links.{a}-{b}.conductance_w_per_k"
+
+
+def split_node(inst: Instrument, node: str) -> StructuralAlternative:
+    """Node X -> X and X_2, half the capacity C/2 [J/K] each, linked by G [W/K] (to fit).
+
+    X keeps every link, its power and the thermometer weights; X_2 is reached only through
+    G: one more time constant C / (2 G) [s] inside X.  G starts at a quarter of X's total
+    conductance to its neighbours (so that C/(2G) is a few minutes) and is kept within
+    1/100..100 times that.
+    """
+    net = inst.network
+    j = net.index(node)
+    old = net.nodes[j]
+    twin = _new_name(net, f"{node}_2")
+    half = 0.5 * old.capacity_j_per_k
+    g_all = sum(l.conductance_w_per_k for l in net.links if node in (l.a, l.b))
+    g0 = 0.25 * g_all if g_all > 0 else 0.1
+    nodes = list(net.nodes)
+    nodes[j] = replace(old, capacity_j_per_k=half)
+    nodes.insert(j + 1, Node(twin, half))
+    new = replace(inst, network=Network(tuple(nodes), net.links + (Link(node, twin, g0),)))
+    return StructuralAlternative(
+        name=f"split {node}", kind="split",
+        description=(f"splits {node} into two halves of {half:.4g} J/K linked by a conductance "
+                     f"to fit; {node} keeps its links, power and thermometer weights"),
+        instrument=new, free=(_link_path(node, twin),), start=(g0,),
+        bounds=((g0 / 100.0, g0 * 100.0),))
+
+
+def insert_node(inst: Instrument, node: str, to: str | None = None) -> StructuralAlternative:
+    """The link X-``to`` (G_0) becomes X - X_mid - ``to``: a node of capacity C_mid [J/K].
+
+    C_mid starts at C_X / 3, the two conductances at 2 G_0 [W/K] each (the same series
+    conductance, so the same steady state); all three are fitted within 1/100..100 times
+    their start.  ``to`` defaults to the housing (the node with the largest conductance to
+    the chamber).
+    """
+    net = inst.network
+    to = to or _housing(inst)
+    links = [l for l in net.links if {l.a, l.b} == {node, to}]
+    if not links:
+        raise NfsError(f"insert_node: no link {node}-{to} in instrument '{inst.name}'")
+    g0 = sum(l.conductance_w_per_k for l in links)
+    mid = _new_name(net, f"{node}_mid")
+    c0 = net.nodes[net.index(node)].capacity_j_per_k / 3.0
+    kept = tuple(l for l in net.links if l not in links)
+    new_net = Network(net.nodes + (Node(mid, c0),),
+                      kept + (Link(node, mid, 2 * g0), Link(mid, to, 2 * g0)))
+    free = (f"thermal.nodes.{mid}.capacity_j_per_k", _link_path(node, mid), _link_path(mid, to))
+    start = (c0, 2 * g0, 2 * g0)
+    return StructuralAlternative(
+        name=f"insert node {node}-{to}", kind="insert",
+        description=(f"puts a node of fitted capacity between {node} and {to} (the "
+                     f"{node}-{to} link becomes two links through it)"),
+        instrument=replace(inst, network=new_net), free=free, start=start,
+        bounds=tuple((v / 100.0, v * 100.0) for v in start))
+
+
+def free_link(inst: Instrument, a: str, b: str) -> StructuralAlternative:
+    """A new conductance G [W/K] between nodes a and b, from 0 (bounds 0..5 W/K)."""
+    net = inst.network
+    for n in (a, b):
+        net.index(n)  # ThermalError (an NfsError) listing the valid nodes
+    if any({l.a, l.b} == {a, b} for l in net.links):
+        raise NfsError(f"free_link: {a} and {b} are linked already in '{inst.name}'")
+    new = replace(inst, network=Network(net.nodes, net.links + (Link(a, b, 0.0),)))
+    return StructuralAlternative(
+        name=f"link {a}-{b}", kind="link",
+        description=f"adds a conductance between {a} and {b}, which the model does not link",
+        instrument=new, free=(_link_path(a, b),), start=(0.0,), bounds=((0.0, 5.0),))
+
+
+def thermometer_weight(inst: Instrument, thermometer: str, node: str) -> StructuralAlternative:
+    """The thermometer reads a fraction f in [0, 1] of ``node`` (a new or one of its own).
+
+    For a node it does not read, f starts at 0 (the model); for one of its own nodes, f
+    starts at that node's present share (the others keep their relative weights).
+    """
+    if thermometer not in inst.thermometers:
+        raise NfsError(f"no thermometer '{thermometer}'; thermometers: "
+                       + ", ".join(inst.thermometers))
+    model = inst.thermometers[thermometer]
+    f0 = model.nodes.get(node, 0.0) / sum(model.nodes.values())
+    what = (f"lets the {thermometer} thermometer read another mix of its nodes (the share of "
+            f"{node} fitted)" if node in model.nodes else
+            f"lets the {thermometer} thermometer read a fitted share of {node} (it sits "
+            "elsewhere than the model puts it)")
+    return StructuralAlternative(
+        name=f"{thermometer} thermometer share of {node}", kind="thermometer",
+        description=what, instrument=inst, free=(f"thermometers.{thermometer}.nodes.{node}",),
+        start=(f0,), bounds=((0.0, 1.0),))
+
+
+def physical_lower(effect: str, parameter: str) -> float | None:
+    """The physical lower bound of a thermal candidate's coefficient, or None.
+
+    A heat source or a motor heat pulse dissipates power >= 0 W (a resistor does not cool);
+    the TEC slopes c_h, c_c >= 0 W/K (effects.md: the TEC draws *more* power away from its
+    set point); a thermometer lag tau >= 0 s (causality).
+    """
+    return _PHYSICAL_LOWER.get((effect, parameter))
+
+
+def effect_alternative(inst: Instrument, effect: str, target: str | None = None
+                       ) -> StructuralAlternative:
+    """A named thermal candidate (``heat_source`` on a node, ...) in the same machinery.
+
+    Its coefficients start at 0 within their physical bounds (:func:`physical_lower`; upper
+    10 W, 1 W/K or 300 s), so that its CV RMS is comparable with the structural
+    alternatives'.  Kind ``effect``: scored, but never the best *structural* alternative.
+    """
+    spec = get_effect(effect)
+    if spec.kind not in ("thermal", "thermometer"):
+        raise NfsError(f"effect_alternative: '{effect}' is a {spec.kind} effect, not thermal")
+    params: dict[str, Any] = {}
+    if spec.target is not None and target is not None:
+        params[spec.target] = target
+    free, bounds = [], []
+    upper = {"W": 10.0, "W/K": 1.0, "s": 300.0}
+    for p in spec.parameters:
+        if p.type is not float or p.name == spec.target:
+            continue
+        if p.unit == "degC":
+            params[p.name] = p.default
+            continue
+        params[p.name] = 0.0
+        lo = physical_lower(effect, p.name)
+        hi = upper.get(p.unit, 10.0)
+        free.append(p.name)
+        bounds.append((-hi if lo is None else lo, hi))
+    e = make_effect(effect, params)
+    return StructuralAlternative(
+        name=e.label, kind="effect", description=f"adds the effect {e.label}",
+        instrument=inst.with_effects(list(inst.effects) + [e]),
+        free=tuple(f"effects.{e.label}.{n}" for n in free), start=(0.0,) * len(free),
+        bounds=tuple(bounds))
+
+
+def structural_alternatives(inst: Instrument) -> list[StructuralAlternative]:
+    """The small default list of generic alternatives of ``inst``'s thermal structure.
+
+    Core nodes: the coil nodes, the source (electronics), every other powered node that
+    carries no accelerometer (the board) and the housing (largest conductance to the
+    chamber).  Splits: each coil node, the housing and the powered non-source nodes.
+    Inserts: between each node of the FOG thermometer and the housing.  Links: every pair of
+    core nodes not yet linked.  Thermometer: the FOG thermometer's share of each neighbour
+    of its nodes, and of its first node.  For the default instrument: 4 splits, 2 inserts,
+    4 links and 3 thermometer shares.
+    """
+    net = inst.network
+    g = inst.gyro
+    housing = _housing(inst)
+    acc = set(inst.accelerometers.nodes.values())
+    coil = [n for n in (g.coil_outer, g.coil_inner) if n]
+    powered = [n.name for n in net.nodes
+               if n.power_w > 0 and n.name not in acc and n.name != g.source]
+    shell = [housing] if housing else []
+    core = list(dict.fromkeys(coil + [g.source] + powered + shell))
+    out = [split_node(inst, n) for n in dict.fromkeys(coil + shell + powered)]
+    fog_nodes = list(inst.thermometers["fog"].nodes)
+    if housing:
+        out += [insert_node(inst, n, housing) for n in fog_nodes
+                if n != housing and any({l.a, l.b} == {n, housing} for l in net.links)]
+    linked = {frozenset((l.a, l.b)) for l in net.links}
+    for i, a in enumerate(core):
+        for b in core[i + 1:]:
+            if frozenset((a, b)) not in linked:
+                out.append(free_link(inst, a, b))
+    near = [m for n in fog_nodes for m in _neighbours(net, n) if m not in fog_nodes]
+    out += [thermometer_weight(inst, "fog", m) for m in dict.fromkeys(near)]
+    if len(fog_nodes) > 1:
+        out.append(thermometer_weight(inst, "fog", fog_nodes[0]))
+    return out
+
+
+# ---------------------------------------------------------------------------------------------
+# Results
+
+@dataclass(frozen=True)
+class ChannelFit:
+    """The model's thermometer residual in one stage against the thermometer's floor."""
+
+    thermometer: str
+    """``fog``, ``acc_x`` or ``acc_y``."""
+    stage: str
+    """``start-up`` (t < startup_s after power-on) or ``stable``."""
+    rms_k: float
+    """Residual RMS of the model after its thermal refit [K]."""
+    floor_k: float
+    """Noise floor sqrt(noise_c^2 + quantum_c^2 / 12) [K]."""
+    n_knots: int
+    """Residuals it rests on."""
+    factor: float
+    """The adequacy factor the ratio is held to."""
+
+    @property
+    def ratio(self) -> float:
+        """rms_k / floor_k."""
+        return self.rms_k / self.floor_k if self.floor_k > 0 else math.inf
+
+    @property
+    def adequate(self) -> bool:
+        """ratio <= factor (a channel without knots counts as adequate)."""
+        return self.n_knots == 0 or self.ratio <= self.factor
+
+
+@dataclass(frozen=True)
+class AlternativeScore:
+    """What one alternative changes and what it gains."""
+
+    name: str
+    """Name of the alternative."""
+    kind: str
+    """``split``, ``insert``, ``link``, ``thermometer`` or ``effect``."""
+    description: str
+    """One sentence: what it changes."""
+    params: dict[str, float]
+    """Fitted new numbers {path: value}."""
+    cv_rms_before_k: float
+    """Leave-one-start-temperature-out CV RMS of the three thermometers, model [K]."""
+    cv_rms_after_k: float
+    """The same with the alternative [K]."""
+    rms_before_k: dict[str, dict[str, float]]
+    """Model residual RMS {thermometer: {stage: K}}."""
+    rms_after_k: dict[str, dict[str, float]]
+    """Residual RMS with the alternative {thermometer: {stage: K}}."""
+    refined: bool
+    """True: fitted to convergence; False: one Gauss-Newton step from its start (screened)."""
+    instrument: Instrument = field(repr=False, compare=False)
+    """The fitted alternative instrument (model parameters moved by their linear step)."""
+
+    @property
+    def cv_drop(self) -> float:
+        """Relative drop of the CV RMS."""
+        return 1.0 - self.cv_rms_after_k / self.cv_rms_before_k
+
+    @property
+    def beats_model(self) -> bool:
+        """cv_drop > :data:`CV_DROP`."""
+        return self.cv_drop > CV_DROP
+
+    def to_dict(self) -> dict[str, Any]:
+        """A JSON-ready dict."""
+        return {"name": self.name, "kind": self.kind, "description": self.description,
+                "params": dict(self.params), "cv_rms_before_k": self.cv_rms_before_k,
+                "cv_rms_after_k": self.cv_rms_after_k, "cv_drop": self.cv_drop,
+                "beats_model": self.beats_model, "refined": self.refined,
+                "rms_before_k": {k: dict(v) for k, v in self.rms_before_k.items()},
+                "rms_after_k": {k: dict(v) for k, v in self.rms_after_k.items()}}
+
+
+@dataclass(frozen=True)
+class ThermalAdequacy:
+    """Does the model's thermal structure fit the thermometers?"""
+
+    channels: tuple[ChannelFit, ...]
+    """Per thermometer and stage: residual RMS against the floor."""
+    factor: float
+    """A channel is adequate when its RMS is within this factor of its floor."""
+    adequate: bool
+    """Every channel adequate and no structural alternative beats the model."""
+    cv_rms_k: float
+    """The model's own CV RMS [K] (module docstring)."""
+    alternatives: tuple[AlternativeScore, ...]
+    """Every alternative scored, best CV first."""
+    best: AlternativeScore | None
+    """The structural alternative (kind != effect) with the lowest CV RMS, or None."""
+    model: Instrument = field(repr=False, compare=False)
+    """The model after its thermal refit."""
+    message: str = ""
+    """A sentence a user can act on."""
+    time_s: float = 0.0
+    """Wall time [s]."""
+
+    @property
+    def worst(self) -> ChannelFit:
+        """The channel with the largest ratio to its floor."""
+        return max(self.channels, key=lambda c: c.ratio if c.n_knots else -1.0)
+
+    def to_dict(self) -> dict[str, Any]:
+        """A JSON-ready dict."""
+        return {"adequate": self.adequate, "factor": self.factor, "cv_rms_k": self.cv_rms_k,
+                "message": self.message, "time_s": self.time_s,
+                "channels": [{"thermometer": c.thermometer, "stage": c.stage,
+                              "rms_k": c.rms_k, "floor_k": c.floor_k, "ratio": c.ratio,
+                              "n_knots": c.n_knots, "adequate": c.adequate}
+                             for c in self.channels],
+                "best": None if self.best is None else self.best.name,
+                "alternatives": [a.to_dict() for a in self.alternatives]}
+
+
+# ---------------------------------------------------------------------------------------------
+# The residual, its labels and the linear machinery
+
+class _Problem:
+    """The prepared runs, the label of every residual (thermometer, stage) and their groups."""
+
+    def __init__(self, runs: Sequence[Run], decimate_s: float, startup_s: float):
+        self.data = [_prepare_thermal(r, decimate_s) for r in runs]
+        self.cols = tuple(THERMOMETERS.values())
+        self.names = tuple(THERMOMETERS)
+        self.labels: list[tuple[np.ndarray, np.ndarray]] = []
+        for rd in self.data:
+            which, stable = [], []
+            for i, col in enumerate(self.cols):
+                t = rd.t_knot[rd.mask[col]] - rd.t_knot[0]
+                which.append(np.full(t.size, i))
+                stable.append(t >= startup_s)
+            self.labels.append((np.concatenate(which), np.concatenate(stable)))
+        t0 = [round(rd.t0_c, 1) for rd in self.data]
+        keys = sorted(set(t0))
+        self.group = np.array([keys.index(k) for k in t0], dtype=int)
+        self.n_eval = 0
+
+    def resid(self, inst: Instrument) -> list[np.ndarray]:
+        """Model minus measured, the three thermometers stacked, per run [K]."""
+        self.n_eval += 1
+        parts = _thermal_residual_parts(inst, self.data)
+        return [np.concatenate([parts[c][i] for c in self.cols]) for i in range(len(self.data))]
+
+    def rms(self, r: list[np.ndarray]) -> dict[str, dict[str, float]]:
+        """RMS [K] per thermometer and stage."""
+        out: dict[str, dict[str, float]] = {}
+        for i, name in enumerate(self.names):
+            out[name] = {}
+            for s, stage in enumerate(STAGES):
+                x = np.concatenate([ri[(w == i) & (st == bool(s))]
+                                    for ri, (w, st) in zip(r, self.labels)])
+                out[name][stage] = float(np.sqrt(np.mean(x * x))) if x.size else math.nan
+        return out
+
+    def counts(self) -> dict[str, dict[str, int]]:
+        """Residuals per thermometer and stage."""
+        return {name: {stage: int(sum(np.sum((w == i) & (st == bool(s)))
+                                      for w, st in self.labels))
+                       for s, stage in enumerate(STAGES)} for i, name in enumerate(self.names)}
+
+    def cv_rms(self, r: list[np.ndarray], Z: list[np.ndarray]) -> float:
+        """Leave-one-start-temperature-out RMS of the linearised residual r + Z beta.
+
+        Per group g: beta_-g = argmin over the other groups (lstsq on their summed Gram
+        matrices, columns scaled to unit norm), held-out error r_g + Z_g beta_-g; pooled RMS
+        over all groups.
+        """
+        scale = np.sqrt(sum(np.sum(z * z, axis=0) for z in Z))
+        scale = np.where(scale > 0, scale, 1.0)
+        n_g = int(self.group.max()) + 1
+        p = Z[0].shape[1]
+        G, h = np.zeros((n_g, p, p)), np.zeros((n_g, p))
+        yy, n = np.zeros(n_g), np.zeros(n_g)
+        for g, ri, zi in zip(self.group, r, Z):
+            zs = zi / scale
+            G[g] += zs.T @ zs
+            h[g] -= zs.T @ ri
+            yy[g] += ri @ ri
+            n[g] += ri.size
+        tot = 0.0
+        for g in range(n_g):
+            beta = np.linalg.lstsq(G.sum(0) - G[g], h.sum(0) - h[g], rcond=1e-10)[0]
+            tot += yy[g] - 2.0 * h[g] @ beta + beta @ G[g] @ beta
+        return math.sqrt(max(tot, 0.0) / n.sum())
+
+
+def _jacobian(prob: _Problem, build: Callable[[np.ndarray], Instrument], x: np.ndarray,
+              r0: list[np.ndarray], steps: np.ndarray) -> list[np.ndarray]:
+    """Forward differences d r / d x per run, one evaluation per column."""
+    cols: list[list[np.ndarray]] = [[] for _ in r0]
+    for j, hj in enumerate(steps):
+        xj = x.copy()
+        xj[j] += hj
+        moved = prob.resid(build(xj))
+        for i, (m, b) in enumerate(zip(moved, r0)):
+            cols[i].append((m - b) / hj)
+    return [np.column_stack(c) if c else np.zeros((b.size, 0)) for c, b in zip(cols, r0)]
+
+
+def _sse(r: list[np.ndarray]) -> float:
+    return float(sum(ri @ ri for ri in r))
+
+
+class _Transform:
+    """Numbers with a positive lower bound (capacities, conductances) are fitted in log:
+    their steps are then relative, the same for 0.05 W/K and 3500 J/K."""
+
+    def __init__(self, start: Sequence[float], bounds: Sequence[tuple[float, float]]):
+        self.log = np.array([lo > 0 for lo, _ in bounds], dtype=bool)
+        self.lo = np.array([lo for lo, _ in bounds], dtype=float)
+        self.hi = np.array([hi for _, hi in bounds], dtype=float)
+        self.ulo, self.uhi = self.to_u(self.lo), self.to_u(self.hi)
+        self.u0 = self.to_u(np.clip(np.array(start, dtype=float), self.lo, self.hi))
+
+    def to_u(self, v: np.ndarray) -> np.ndarray:
+        return np.where(self.log, np.log(np.where(self.log, v, 1.0)), v)
+
+    def to_v(self, u: np.ndarray) -> np.ndarray:
+        u = np.clip(u, self.ulo, self.uhi)
+        return np.where(self.log, np.exp(u), u)
+
+    def steps(self, u: np.ndarray) -> np.ndarray:
+        """Forward-difference steps, inward from the upper bound."""
+        h = np.where(self.log, 1e-3, 1e-3 * np.maximum(self.hi - self.lo, 1e-9))
+        return np.where(u + h > self.uhi, -h, h)
+
+
+@dataclass
+class _Model:
+    """The model after its chord refit, with its frozen Jacobian."""
+
+    inst: Instrument
+    paths: list[str]
+    bounds: np.ndarray
+    r: list[np.ndarray]
+    J: list[np.ndarray]
+    Q: np.ndarray          # orthonormal basis of the column space of the stacked J
+    Jpinv: np.ndarray      # pseudo-inverse of the stacked J
+
+    def correct(self, inst: Instrument, r: list[np.ndarray]) -> Instrument:
+        """``inst`` with the model parameters moved by the linear step J^+ (-r)."""
+        if not self.paths:
+            return inst
+        d = self.Jpinv @ -np.concatenate(r)
+        new = {}
+        for p, dv, (lo, hi) in zip(self.paths, d, self.bounds):
+            new[p] = float(np.clip(get_param(inst, p) + dv, lo, hi))
+        return set_params(inst, new)
+
+    def project(self, r: np.ndarray) -> np.ndarray:
+        """(I - Q Q^T) r: the part of r the model's own parameters cannot absorb."""
+        return r - self.Q @ (self.Q.T @ r) if self.Q.size else r
+
+
+def _fit_model(prob: _Problem, inst: Instrument, chord_steps: int = 4) -> _Model:
+    """Chord (frozen-Jacobian Gauss-Newton) refit of the model's default free thermal set."""
+    paths = default_free(inst, ("thermal",))
+    x0 = np.array([get_param(inst, p) for p in paths])
+    bounds = np.array([fit_bounds(inst, p) for p in paths], dtype=float).reshape(-1, 2)
+
+    def build(x):
+        return set_params(inst, dict(zip(paths, np.clip(x, bounds[:, 0], bounds[:, 1]))))
+
+    r = prob.resid(inst)
+    steps = np.array([1e-3 * abs(v) if v else 1e-3 for v in x0])
+    J = _jacobian(prob, build, x0, r, steps)
+    Js = np.vstack(J)
+    scale = np.sqrt(np.sum(Js * Js, axis=0))
+    scale = np.where(scale > 0, scale, 1.0)
+    Jpinv = np.linalg.pinv(Js / scale, rcond=1e-10) / scale[:, None]
+    x = x0.copy()
+    for _ in range(chord_steps):
+        x_new = np.clip(x + Jpinv @ -np.concatenate(r), bounds[:, 0], bounds[:, 1])
+        r_new = prob.resid(build(x_new))
+        gain = _sse(r) - _sse(r_new)
+        if gain <= 0:
+            break
+        x, r = x_new, r_new
+        if gain < 1e-3 * _sse(r):
+            break
+    u, sv, _ = np.linalg.svd(Js / scale, full_matrices=False)
+    Q = u[:, sv > 1e-10 * sv[0]] if sv.size else np.zeros((Js.shape[0], 0))
+    return _Model(build(x), paths, bounds, r, J, Q, Jpinv)
+
+
+def _score(prob: _Problem, model: _Model, alt: StructuralAlternative, refine: bool,
+           cv_model: float, rms_model: dict, max_nfev: int,
+           u_start: np.ndarray | None = None) -> tuple[AlternativeScore, np.ndarray]:
+    """Screen (one projected Gauss-Newton step) or fit one alternative; (score, fitted u)."""
+    tr = _Transform(alt.start, alt.bounds)
+
+    def build(u):
+        return alt.build(tr.to_v(u))
+
+    def projected(r):
+        return model.project(np.concatenate(r))
+
+    u = tr.u0 if u_start is None else np.clip(u_start, tr.ulo, tr.uhi)
+    if refine:
+        res = least_squares(lambda uu: projected(prob.resid(build(uu))), u,
+                            bounds=(tr.ulo, tr.uhi), method="trf", x_scale="jac",
+                            diff_step=1e-3, max_nfev=max_nfev, ftol=1e-4, xtol=1e-4)
+        u = res.x
+    r_a = prob.resid(build(u))
+    Ja = _jacobian(prob, build, u, r_a, tr.steps(u))
+    if not refine:
+        e0 = projected(r_a)
+        Jp = np.column_stack([model.project(c) for c in np.vstack(Ja).T])
+        u_new = np.clip(u + np.linalg.lstsq(Jp, -e0, rcond=1e-10)[0], tr.ulo, tr.uhi)
+        r_new = prob.resid(build(u_new))
+        if float(np.sum(projected(r_new) ** 2)) < float(e0 @ e0):
+            u, r_a = u_new, r_new
+    fitted = build(u)
+    final = model.correct(fitted, r_a)
+    r_f = prob.resid(final)
+    if _sse(r_f) > _sse(r_a):  # the linear step of the model parameters overshot
+        final, r_f = fitted, r_a
+    cv = prob.cv_rms(r_f, [np.hstack([jm, ja]) for jm, ja in zip(model.J, Ja)])
+    params = {p: float(v) for p, v in zip(alt.free, tr.to_v(u))}
+    score = AlternativeScore(
+        name=alt.name, kind=alt.kind, description=alt.description, params=params,
+        cv_rms_before_k=cv_model, cv_rms_after_k=cv, rms_before_k=rms_model,
+        rms_after_k=prob.rms(r_f), refined=refine, instrument=final)
+    return score, u
+
+
+# ---------------------------------------------------------------------------------------------
+# The verdict
+
+def _floor_k(inst: Instrument, name: str) -> float:
+    m = inst.thermometers[name]
+    return math.sqrt(m.noise_c ** 2 + m.quantum_c ** 2 / 12.0)
+
+
+def _advice(best: AlternativeScore) -> str:
+    """What to change in the model for the best alternative, in words."""
+    v = list(best.params.values())
+    if best.kind == "link":
+        a, b = best.name.split(" ", 1)[1].split("-", 1)
+        return (f"add a [[thermal.links]] between {a} and {b} of about {v[0]:.3g} W/K "
+                "(or the physical path it stands for)")
+    if best.kind == "split":
+        node = best.name.split(" ", 1)[1]
+        return (f"give {node} an inner part: split it into two nodes linked by about "
+                f"{v[0]:.3g} W/K (a layer or a mass the model lumps together)")
+    if best.kind == "insert":
+        return (f"put a node of about {v[0]:.3g} J/K on the path ({v[1]:.3g} and {v[2]:.3g} "
+                "W/K on either side)")
+    if best.kind == "thermometer":
+        path = next(iter(best.params))
+        t, node = path[len("thermometers."):].split(_WEIGHT, 1)
+        return (f"check where the {t} thermometer sits: it reads as if {100 * v[0]:.0f} % of "
+                f"it were {node} ([thermometers.{t}] nodes)")
+    return f"add {best.name}"
+
+
+def _message(channels: Sequence[ChannelFit], best: AlternativeScore | None, factor: float,
+             n_alt: int, improves: bool) -> str:
+    worst = max(channels, key=lambda c: c.ratio if c.n_knots else -1.0)
+    where = f"the {worst.thermometer.upper() if worst.thermometer == 'fog' else worst.thermometer}"
+    head = (f"{where} thermometer residual in the {worst.stage} stage is "
+            f"{worst.ratio:.1f}x its floor ({worst.floor_k:.3f} K)")
+    if worst.ratio <= factor and not improves:
+        return (f"the thermal structure fits: every thermometer residual is within "
+                f"{factor:g}x its floor in both stages (worst: {head[4:]}); no generic "
+                f"structural alternative of {n_alt} beats it")
+    if best is None or not improves:
+        return (f"{head}: the thermal structure does not fit there, and none of {n_alt} "
+                "generic alternatives (one more node, a free link, the FOG thermometer "
+                "elsewhere) does better; check the TEC law, the chamber record and the "
+                "thermometer channels")
+    after = best.rms_after_k[worst.thermometer][worst.stage] / worst.floor_k
+    lead = (f"{head}: the thermal structure does not fit there"
+            if worst.ratio > factor else
+            f"{head}, yet a structural alternative lowers the CV RMS by "
+            f"{100 * best.cv_drop:.0f} %")
+    return (f"{lead}; the best alternative, {best.name}, brings it to {after:.1f}x "
+            f"(CV RMS {1000 * best.cv_rms_before_k:.1f} -> {1000 * best.cv_rms_after_k:.1f} "
+            f"mK); consider: {_advice(best)}. Until then a thermal candidate (a heat source, "
+            "a lag) is named only if it beats this alternative")
+
+
+def thermal_adequacy(inst: Instrument, runs: Sequence[Run],
+                     alternatives: Sequence[StructuralAlternative] | None = None, *,
+                     decimate_s: float = DEFAULT_DECIMATE_S, factor: float = ADEQUACY_FACTOR,
+                     startup_s: float = STARTUP_S, refine_top: int = REFINE_TOP,
+                     max_nfev: int = 6) -> ThermalAdequacy:
+    """Is the thermal structure of ``inst`` adequate for ``runs``? (module docstring).
+
+    Parameters
+    ----------
+    inst : Instrument
+        The model, best already fitted (``nfs fit``); its thermal stage is polished here.
+    runs : sequence of Run
+        Measured runs with at least two distinct start temperatures.
+    alternatives : sequence of StructuralAlternative, optional
+        Default :func:`structural_alternatives` of the refitted model.  Given ones should be
+        built on the fitted model (their other numbers are taken as they are); kind
+        ``effect`` ones (:func:`effect_alternative`) are scored but never ``best``.
+    decimate_s : float
+        Spacing of the residual grid [s].
+    factor : float
+        A channel is adequate when its RMS is within ``factor`` of its floor.
+    startup_s : float
+        End of the start-up stage [s] after power-on.
+    refine_top : int
+        How many of the screened alternatives are fitted to convergence.
+    max_nfev : int
+        Residual evaluations of each refinement (Jacobian evaluations not counted).
+
+    Raises
+    ------
+    NfsError
+        Fewer than two start temperatures, a run without the thermometer columns.
+    """
+    t_start = time.perf_counter()
+    runs = list(runs)
+    if not decimate_s > 0:
+        raise NfsError(f"thermal_adequacy: decimate_s must be > 0, got {decimate_s}")
+    if not factor >= 1.0:
+        raise NfsError(f"thermal_adequacy: factor must be >= 1, got {factor}")
+    prob = _Problem(runs, decimate_s, startup_s)
+    if len(set(prob.group)) < 2:
+        raise NfsError("thermal_adequacy needs runs at two start temperatures at least "
+                       "(leave-one-start-temperature-out validation); got "
+                       + (", ".join(f"{r.meta.start_temperature_c:g} C" for r in runs)
+                          or "no runs"))
+    model = _fit_model(prob, inst)
+    cv_model = prob.cv_rms(model.r, model.J)
+    rms_model = prob.rms(model.r)
+    counts = prob.counts()
+    channels = tuple(ChannelFit(name, stage, rms_model[name][stage],
+                                _floor_k(model.inst, name), counts[name][stage], factor)
+                     for name in prob.names for stage in STAGES)
+    alts = (structural_alternatives(model.inst) if alternatives is None else list(alternatives))
+    screened = []
+    for alt in alts:
+        s, u = _score(prob, model, alt, False, cv_model, rms_model, max_nfev)
+        screened.append((alt, s, u))
+    order = sorted(range(len(screened)), key=lambda i: screened[i][1].cv_rms_after_k)
+    scores = [s for _, s, _ in screened]
+    for i in order[:refine_top]:
+        alt, s, u = screened[i]
+        refined, _ = _score(prob, model, alt, True, cv_model, rms_model, max_nfev, u)
+        if refined.cv_rms_after_k <= s.cv_rms_after_k:
+            scores[i] = refined
+        else:
+            scores[i] = replace(s, refined=True)
+    scores.sort(key=lambda s: s.cv_rms_after_k)
+    structural = [s for s in scores if s.kind != "effect"]
+    best = structural[0] if structural else None
+    improves = best is not None and best.beats_model
+    adequate = all(c.adequate for c in channels) and not improves
+    message = _message(channels, best, factor, len(structural), improves)
+    return ThermalAdequacy(channels=channels, factor=factor, adequate=adequate,
+                           cv_rms_k=cv_model, alternatives=tuple(scores), best=best,
+                           model=model.inst, message=message,
+                           time_s=time.perf_counter() - t_start)
+
+
+def beats_structure(cv_rms_k: float, adequacy: ThermalAdequacy, margin: float = 0.0) -> bool:
+    """Does a thermal candidate with CV RMS ``cv_rms_k`` [K] beat every structural alternative?
+
+    True when ``cv_rms_k < (1 - margin) * min(CV RMS of the model, of every structural
+    alternative)``: the diagnosis names a thermal candidate only then.  The candidate's CV
+    RMS must be on the same residual (the three thermometers at the knots, pooled,
+    leave-one-start-temperature-out); :func:`effect_alternative` scores a candidate that way.
+    """
+    if not math.isfinite(cv_rms_k):
+        return False
+    ref = min([adequacy.cv_rms_k] + [s.cv_rms_after_k for s in adequacy.alternatives
+                                     if s.kind != "effect"])
+    return cv_rms_k < (1.0 - margin) * ref
+
+
+# ---------------------------------------------------------------------------------------------
+# One-sided physics
+
+@dataclass(frozen=True)
+class OneSided:
+    """A coefficient that physics keeps on one side of a bound, tested on that side."""
+
+    estimate: float
+    """The unconstrained fitted value."""
+    stderr: float
+    """Its standard error."""
+    lower: float
+    """The physical lower bound (0 W for a heat source, 0 s for a lag)."""
+    z: float
+    """(estimate - lower) / stderr."""
+    p_value: float
+    """One-sided p-value of H0: value <= lower against H1: value > lower, 1 - Phi(z)."""
+    constrained: float
+    """The constrained estimate max(estimate, lower)."""
+    alpha: float
+    """Significance level."""
+
+    @property
+    def significant(self) -> bool:
+        """p_value < alpha (never for an estimate at or below the bound: p >= 0.5)."""
+        return self.p_value < self.alpha
+
+    @property
+    def at_bound(self) -> bool:
+        """The data push the coefficient to the unphysical side."""
+        return self.estimate <= self.lower
+
+
+def one_sided(estimate: float, stderr: float, *, lower: float = 0.0,
+              alpha: float = 0.01) -> OneSided:
+    """One-sided test and constrained fit of a coefficient with a physical lower bound.
+
+    z = (theta_hat - lower) / se, p = 1 - Phi(z) (the one-sided Wald test; for the
+    likelihood-ratio test on the boundary the null distribution is the 50:50 mixture of
+    chi^2_0 and chi^2_1, which gives the same p for theta_hat > lower: Self and Liang,
+    J. Am. Stat. Assoc. 82 (1987) 605, theorem 2 case 1; Chernoff, Ann. Math. Stat. 25
+    (1954) 573).  A negative estimate of a heat power has p >= 0.5: never significant.
+    The constrained estimate is the clamp max(theta_hat, lower), the exact minimiser of
+    the quadratic (Gauss-Newton) cost in theta with the other coefficients profiled out.
+
+    Raises NfsError for a non-finite estimate or a negative or NaN standard error.
+    """
+    est, se = float(estimate), float(stderr)
+    if not math.isfinite(est):
+        raise NfsError(f"one_sided: the estimate must be finite, got {estimate}")
+    if not se >= 0.0:
+        raise NfsError(f"one_sided: the standard error must be >= 0, got {stderr}")
+    d = est - lower
+    if se == 0.0:
+        z = math.inf if d > 0 else (-math.inf if d < 0 else 0.0)
+    else:
+        z = d / se
+    p = float(norm.sf(z))
+    return OneSided(estimate=est, stderr=se, lower=float(lower), z=z, p_value=p,
+                    constrained=max(est, float(lower)), alpha=float(alpha))
