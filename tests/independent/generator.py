@@ -120,11 +120,11 @@ class Unit:
     """Contacts of the coil's outer face (cover air and the electronics above it) [W/K]."""
     tec_set_c: float = 22.0
     """T_set, the TEC set point of the source assembly [degC]."""
-    tec_p0_w: float = 0.5
+    tec_p0_w: float = 0.3
     """p0 of the TEC law [W]."""
-    tec_a_w_per_k: float = 0.03
+    tec_a_w_per_k: float = 0.012
     """a of the TEC law [W/K]."""
-    tec_c_w_per_k2: float = 7.0e-4
+    tec_c_w_per_k2: float = 6.0e-4
     """c of the TEC law [W/K^2]."""
     tec_resistance_ohm: float = 2.2
     """Electrical resistance of the TEC, for its drive current [ohm]."""
@@ -357,9 +357,9 @@ def tec_power_w(unit: Unit, t_src_c):
 
     A smooth law for a Peltier element holding the source at T_set against the temperature
     T_src of its heat sink (the source assembly): the Peltier term is linear in the
-    temperature difference and the Joule term grows with its square, so a quadratic with its
-    minimum below the set point (heating is helped by the Joule heat) is the first-order
-    shape of the input power (Rowe, CRC Handbook of Thermoelectrics, 1995, ch. 54, eqs.
+    temperature difference and the Joule term grows with its square, so a quadratic is the
+    first-order shape of the input power; its minimum sits a little below the set point, at
+    T_set - a/(2c), where the source's own heat leaks to the colder sink unaided (Rowe, CRC Handbook of Thermoelectrics, 1995, ch. 54, eqs.
     (54.1)-(54.4)).  p0 [W], a [W/K], c [W/K^2] (README).
     """
     d = np.asarray(t_src_c, dtype=float) - unit.tec_set_c
