@@ -322,7 +322,8 @@ def window_mean_covariance(starts: np.ndarray, lengths: np.ndarray, sample_rate_
     counts = np.bincount(labels, weights=m, minlength=n_windows)
     avg = np.zeros((n_windows, a.size))
     avg[labels, np.arange(a.size)] = 1.0 / counts[labels]
-    return avg @ cov @ avg.T
+    mean_cov = avg @ cov @ avg.T
+    return 0.5 * (mean_cov + mean_cov.T)   # symmetric to the last bit, for the Cholesky
 
 
 # --------------------------------------------------------------------------------------------

@@ -39,6 +39,7 @@ from dataclasses import dataclass
 from typing import Sequence
 
 import numpy as np
+from scipy.linalg import svd
 from scipy.stats import chi2
 
 from nfs.errors import InputError
@@ -149,7 +150,7 @@ def _project_out(parts: list[np.ndarray], blocks: list[np.ndarray]
     x = np.vstack(blocks)
     e = np.concatenate(parts)
     # an SVD rather than lstsq: its singular values give the rank used for the dof
-    u, s, _ = np.linalg.svd(x, full_matrices=False)
+    u, s, _ = svd(x, full_matrices=False)
     rank = int(np.sum(s > s[0] * max(x.shape) * np.finfo(float).eps)) if s.size else 0
     basis = u[:, :rank]
     e = e - basis @ (basis.T @ e)
