@@ -1,0 +1,167 @@
+"""Tests of nfs.diagnose.structure: is the model's thermal structure adequate?
+
+"Measured" runs: the default scenario's conditions at four start temperatures (-32, -5, 28,
+54 C; one each side of the TEC set point and two far out), shortened to 2 h (one hour of
+start-up, one of stable stage), simulated with noise by nfs.experiment.simulate_run.
+Residual grid every 30 s.  Oracle: the generating instrument (we know its structure).
+Noise floor of each thermometer: sqrt(0.01^2 + 0.0625^2 / 12) = 0.0206 K (default noise and
+quantum).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+import pytest
+
+from nfs.diagnose.structure import (ADEQUACY_FACTOR, beats_structure, effect_alternative,
+                                    free_link, insert_node, one_sided, physical_lower,
+                                    set_thermometer_fraction, split_node,
+                                    structural_alternatives, thermal_adequacy,
+                                    thermometer_weight)
+from nfs.errors import NfsError
+from nfs.experiment import simulate_run
+from nfs.io.scenario import load_scenario
+
+TEMPS = (-32.0, -5.0, 28.0, 54.0)
+FLOOR_K = math.hypot(0.01, 0.0625 / math.sqrt(12.0))
+#: The hidden link of the second case [W/K] (as strong as electronics-coil_outer).
+HIDDEN_G = 0.3
+
+
+@pytest.fixture(scope="module")
+def default():
+    return load_scenario().instrument
+
+
+def _runs(inst):
+    sc = load_scenario()
+    conds = [dataclasses.replace(c, duration_s=7200.0) for c in sc.conditions()
+             if c.start_temperature_c in TEMPS]
+    return [simulate_run(inst, c).run for c in conds]
+
+
+@pytest.fixture(scope="module")
+def own(default):
+    return thermal_adequacy(default, _runs(default))
+
+
+@pytest.fixture(scope="module")
+def hidden_link(default):
+    truth = free_link(default, "electronics", "coil_inner").build([HIDDEN_G])
+    return thermal_adequacy(default, _runs(truth))
+
+
+def test_alternatives_of_the_default(default):
+    """Oracle: the default network (physics.md section 2) - 4 splits (coil_outer,
+    coil_inner, housing, board), 2 inserts (the FOG thermometer's nodes to the housing),
+    the 4 unlinked pairs of electronics, board, coil nodes and housing, 3 thermometer
+    shares; each split halves the capacity and keeps the energy-free structure."""
+    alts = structural_alternatives(default)
+    names = {a.name for a in alts}
+    assert {"split coil_outer", "split coil_inner", "split housing", "split board",
+            "insert node electronics-housing", "insert node coil_outer-housing",
+            "link coil_inner-electronics", "link electronics-board",
+            "link coil_outer-board", "link coil_inner-board",
+            "fog thermometer share of housing", "fog thermometer share of coil_inner",
+            "fog thermometer share of electronics"} == names
+    s = split_node(default, "coil_outer")
+    net = s.build(s.start).network
+    assert net.nodes[net.index("coil_outer")].capacity_j_per_k == pytest.approx(47.5)
+    assert net.nodes[net.index("coil_outer_2")].capacity_j_per_k == pytest.approx(47.5)
+    # a split or an insert with stiff links is the original network: same steady state
+    ins = insert_node(default, "electronics")
+    for alt in (s, ins):
+        stiff = alt.build(alt.start)
+        t_ss = stiff.network.steady_state(20.0)
+        t0 = default.network.steady_state(20.0)
+        for name in default.network.node_names:
+            assert t_ss[stiff.network.index(name)] == pytest.approx(
+                t0[default.network.index(name)], abs=1e-9), (alt.name, name)
+    w = thermometer_weight(default, "fog", "coil_inner").build([0.25])
+    assert w.thermometers["fog"].nodes == pytest.approx(
+        {"electronics": 0.225, "coil_outer": 0.525, "coil_inner": 0.25})
+    with pytest.raises(NfsError, match="linked already"):
+        free_link(default, "electronics", "coil_outer")
+    with pytest.raises(NfsError, match="fraction"):
+        set_thermometer_fraction(default, "fog", "housing", 1.5)
+
+
+def test_own_runs_are_adequate(own):
+    """Oracle: the model is the generating instrument - every thermometer's held-out
+    residual within 1.5x its floor in both stages, and no alternative lowers the CV RMS by
+    more than CV_DROP (it can only fit noise)."""
+    assert own.adequate, own.message
+    for c in own.channels:
+        assert c.ratio <= ADEQUACY_FACTOR, (c.thermometer, c.stage, c.ratio)
+        assert c.floor_k == pytest.approx(FLOOR_K)
+        assert c.rms_k == pytest.approx(FLOOR_K, rel=0.15)
+    assert not any(a.beats_model for a in own.alternatives if a.kind != "effect")
+    assert own.cv_rms_k == pytest.approx(FLOOR_K, rel=0.1)
+    assert "fits" in own.message
+
+
+def test_hidden_link_is_found(hidden_link):
+    """Oracle: the runs come from the default plus a link electronics-coil_inner of
+    0.3 W/K.  The default model fitted to them absorbs it in-sample, but its values do not
+    carry over to another start temperature: the held-out FOG thermometer residual is far
+    above its floor (the accelerometer thermometers, on nodes away from the link, much
+    less); the best alternative is that very link, fitted within 15 % of 0.3 W/K, and it
+    brings the FOG residual down by a third or more."""
+    ad = hidden_link
+    assert not ad.adequate
+    worst = ad.worst
+    assert worst.thermometer == "fog"
+    assert worst.ratio > 2.0
+    fog = {c.stage: c for c in ad.channels if c.thermometer == "fog"}
+    assert ad.best.name == "link coil_inner-electronics", [a.name for a in ad.alternatives]
+    assert ad.best.beats_model
+    g = ad.best.params["thermal.links.coil_inner-electronics.conductance_w_per_k"]
+    assert g == pytest.approx(HIDDEN_G, rel=0.15)
+    for stage, c in fog.items():
+        after = ad.best.cv_channels_after_k["fog"][stage]
+        assert after < 0.8 * c.cv_rms_k, stage
+    assert ad.best.cv_rms_after_k < 1.5 * FLOOR_K
+    assert "FOG thermometer" in ad.message and "link coil_inner-electronics" in ad.message
+    # a thermal candidate is named only when it beats the best alternative
+    assert not beats_structure(ad.cv_rms_k * 0.9, ad)
+    assert beats_structure(0.9 * ad.best.cv_rms_after_k, ad)
+
+
+def test_one_sided_negative_never_significant():
+    """Oracle: a heat power cannot be negative.  For a one-sided test of H0: P <= 0 the
+    p-value of a negative estimate is 1 - Phi(z) >= 0.5 whatever its standard error, the
+    constrained estimate is 0; a positive estimate 3 standard errors out has p = 1 - Phi(3)
+    = 0.00135."""
+    rng = np.random.default_rng(5)
+    for est, se in zip(-rng.exponential(2.0, 200), rng.exponential(0.5, 200)):
+        r = one_sided(est, se)
+        assert r.p_value >= 0.5 and not r.significant and r.constrained == 0.0 and r.at_bound
+    assert not one_sided(-4.9, 0.0).significant
+    pos = one_sided(0.3, 0.1)
+    assert pos.p_value == pytest.approx(0.0013499, rel=1e-4) and pos.significant
+    assert pos.constrained == 0.3
+    assert physical_lower("heat_source", "power") == 0.0
+    assert physical_lower("thermometer_lag", "tau") == 0.0
+    with pytest.raises(NfsError, match="standard error"):
+        one_sided(1.0, -1.0)
+
+
+def test_effect_alternative_is_one_sided(default):
+    """Oracle: effects.md - a heat source's power and a lag are kept >= 0 by their bounds."""
+    a = effect_alternative(default, "heat_source", "coil_outer")
+    assert a.free == ("effects.heat_source:coil_outer.power",)
+    assert a.bounds[0][0] == 0.0
+    lag = effect_alternative(default, "thermometer_lag", "fog")
+    assert lag.bounds[0][0] == 0.0
+
+
+def test_bad_input(default):
+    """Oracle: leave-one-start-temperature-out needs two start temperatures."""
+    sc = load_scenario()
+    cond = dataclasses.replace(sc.conditions()[0], duration_s=1200.0)
+    run = simulate_run(default, cond).run
+    with pytest.raises(NfsError, match="two start temperatures"):
+        thermal_adequacy(default, [run, run])
