@@ -2,10 +2,17 @@
 
 Build a :class:`Network` of :class:`Node` and :class:`Link` objects, then :func:`simulate`
 it exactly over sample intervals of held input; the :class:`ThermalResult` labels every
-node and carries the energy bookkeeping.
+node and carries the energy bookkeeping.  :func:`estimate_states` estimates the node
+temperatures from :class:`LinearSensor` readings through the network (Kalman filter and
+smoother, thermal/estimate.py).
 """
 
 from thermal.network import CHAMBER, Link, Network, Node
 from thermal.solve import ThermalResult, simulate
+from thermal.estimate import (LinearSensor, NodeEstimate, ProcessNoiseFit, StateEstimate,
+                              ThermalRecord, estimate_states, fit_process_noise,
+                              kalman_smooth)
 
-__all__ = ["CHAMBER", "Node", "Link", "Network", "simulate", "ThermalResult"]
+__all__ = ["CHAMBER", "Node", "Link", "Network", "simulate", "ThermalResult",
+           "LinearSensor", "ThermalRecord", "NodeEstimate", "ProcessNoiseFit",
+           "StateEstimate", "kalman_smooth", "fit_process_noise", "estimate_states"]
