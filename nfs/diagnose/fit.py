@@ -51,9 +51,9 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Any, Iterable, Sequence
+from typing import Any, Iterable, Mapping, Sequence
 
 import numpy as np
 from scipy.optimize import least_squares
@@ -69,8 +69,13 @@ from ..instrument import Instrument
 from ..io.atomic import atomic_write_text
 from ..io.measurement import Run
 from ..sensors import axis_elevation_deg, thermometer_reading
+from .bound_advice import bound_advice, perturbed_starts
+from .noise_fit import GyroNoiseEstimate, gyro_noise_from_residual
 from .params import (_all_paths, expand_paths, fit_bounds, get_param,
                      set_params)
+from .prior import Prior, build_prior
+from .sensor_fit import LEVEL_PATHS, LevelData, level_from_means
+from .soak import SoakAnchor, anchor_offsets, soak_offsets
 
 __all__ = ["StageReport", "FitResult", "fit_model", "default_free", "write_fitted_model",
            "model_drift_dph", "STAGES", "DEFAULT_DECIMATE_S"]
@@ -109,11 +114,18 @@ class StageReport:
     cost_start: float
     """0.5 sum r^2 at the start (weighted residuals)."""
     cost: float
-    """0.5 sum r^2 at the solution."""
+    """0.5 sum r^2 at the solution (data rows plus prior rows: the MAP cost)."""
     n_residuals: int
-    """m, the number of residuals."""
+    """m, the number of data residuals (the prior rows not counted)."""
     time_s: float
     """Wall time of the stage [s]."""
+    n_prior: int = 0
+    """Prior rows (parameters with a finite prior width)."""
+    cost_prior: float = 0.0
+    """0.5 sum of the squared prior rows at the solution (half the squared shift in prior
+    widths, summed)."""
+    n_starts: int = 1
+    """Starts tried (the preset and its perturbations); the lowest cost was kept."""
 
 
 @dataclass(frozen=True)
@@ -146,6 +158,20 @@ class FitResult:
     """Residual RMS per channel after the fit."""
     warnings: tuple[str, ...] = ()
     """Everything a user should know: no convergence, bounds hit, one run, ..."""
+    prior_centre: dict[str, float] = field(default_factory=dict)
+    """Centre p0 of each parameter's Gaussian prior (the preset, or the soak anchor for a
+    thermometer offset); empty without a prior."""
+    prior_sigma: dict[str, float] = field(default_factory=dict)
+    """Width sigma_p of each prior [unit of the parameter]; inf: no prior on it."""
+    prior_shift: dict[str, float] = field(default_factory=dict)
+    """(fitted - p0) / sigma_p: how far the data moved each parameter, in prior widths."""
+    bound_advice: dict[str, str] = field(default_factory=dict)
+    """For each parameter at a bound: what the bound says about the model's structure."""
+    soak: SoakAnchor | None = None
+    """The thermometer offsets read from the soak at power-on (None: not used)."""
+    noise: GyroNoiseEstimate | None = None
+    """Gyro noise fitted to the Allan deviation of the drift residual at rest, with the curve
+    (None: the drift stage did not run or ``fit_noise`` was off)."""
 
     @property
     def converged(self) -> dict[str, bool]:
@@ -169,8 +195,16 @@ class FitResult:
             flag = " (at bound)" if p in self.at_bound else ""
             if p in self.unidentifiable:
                 flag += " (not identifiable)"
+            shift = self.prior_shift.get(p, math.nan)
+            moved = f", {shift:+.2f} prior widths" if math.isfinite(shift) else ""
             lines.append(f"{p} = {v:.6g} +- {self.stderr.get(p, math.nan):.3g}"
-                         f" (start {self.initial_params[p]:.6g}){flag}")
+                         f" (start {self.initial_params[p]:.6g}{moved}){flag}")
+        if self.noise is not None:
+            n = self.noise
+            lines.append(f"gyro noise from the Allan deviation of the drift residual: "
+                         f"N = {n.arw_deg_per_rth_h:.3g} deg/sqrt(h), "
+                         f"B = {n.bias_instability_dph:.3g} deg/h, "
+                         f"K = {n.rrw_deg_per_h_per_rth_h:.3g} deg/h/sqrt(h)")
         for ch in self.rms_after:
             lines.append(f"rms {ch}: {self.rms_before.get(ch, math.nan):.4g} -> "
                          f"{self.rms_after[ch]:.4g}")
@@ -577,27 +611,74 @@ def _drift_models(inst: Instrument, rd: _DriftRun, ctx) -> dict[str, np.ndarray]
 # The least-squares core shared by both stages
 
 def _solve(name: str, fun, x0: np.ndarray, lb: np.ndarray, ub: np.ndarray,
-           max_nfev: int | None, paths: Sequence[str]):
+           max_nfev: int | None, paths: Sequence[str], prior: Prior | None = None,
+           extra_starts: Sequence[np.ndarray] = ()):
+    """Minimise 0.5 |r|^2 over the box, r = data rows of ``fun`` plus the prior rows.
+
+    From ``x0`` and from each of ``extra_starts``; the solution of lowest cost is kept.
+    Standard errors: see :func:`_errors`.
+    """
     t0 = time.perf_counter()
     x0 = np.clip(x0, lb, ub)
     r0 = fun(x0)
-    res = least_squares(fun, x0, bounds=(lb, ub), method="trf", x_scale="jac",
-                        max_nfev=max_nfev)
-    m, n = res.fun.size, res.x.size
+    m, n = r0.size, x0.size
+    use_prior = prior is not None and bool(prior.active.any())
+
+    def total(x):
+        r = fun(x)
+        return np.concatenate([r, prior.rows(x)]) if use_prior else r
+
+    best, nfev = None, 0
+    r_start = total(x0)
+    for xs in [x0, *[np.clip(x, lb, ub) for x in extra_starts]]:
+        res = least_squares(total, xs, bounds=(lb, ub), method="trf", x_scale="jac",
+                            max_nfev=max_nfev)
+        nfev += int(res.nfev)
+        if best is None or res.cost < best.cost:
+            best = res
+    res = best
+    cost_prior = float(0.5 * np.sum(res.fun[m:] ** 2))
     report = StageReport(name=name, free=tuple(paths), converged=bool(res.status > 0),
-                         message=str(res.message), nfev=int(res.nfev),
-                         cost_start=float(0.5 * r0 @ r0), cost=float(res.cost),
-                         n_residuals=int(m), time_s=time.perf_counter() - t0)
-    # cov = s^2 (J^T J)^-1 through the SVD of J (pseudo-inverse)
+                         message=str(res.message), nfev=nfev,
+                         cost_start=float(0.5 * r_start @ r_start), cost=float(res.cost),
+                         n_residuals=int(m), time_s=time.perf_counter() - t0,
+                         n_prior=int(res.fun.size - m), cost_prior=cost_prior,
+                         n_starts=1 + len(extra_starts))
     jac = np.asarray(res.jac, dtype=float)
-    s2 = 2.0 * res.cost / max(m - n, 1)
+    stderr, unident = _errors(jac[:m], res.fun[:m], paths,
+                              prior.jacobian() if use_prior else None)
+    span = ub - lb
+    at = [p for i, p in enumerate(paths)
+          if res.active_mask[i] != 0
+          or (np.isfinite(span[i]) and min(res.x[i] - lb[i], ub[i] - res.x[i]) <= 1e-6 * span[i])]
+    return res, report, stderr, unident, at
+
+
+def _errors(jac: np.ndarray, r: np.ndarray, paths: Sequence[str],
+            jac_prior: np.ndarray | None) -> tuple[dict[str, float], dict[str, str]]:
+    """Standard errors and the parameters the data rows cannot determine.
+
+    Data only: cov = s^2 (J^T J)^-1, s^2 = |r|^2 / (m - n), through the SVD of J (a
+    pseudo-inverse).  With a prior, the posterior of the linearised problem: the data rows
+    (whitened by their stated noise, which the residual says is s times too small) and the
+    prior rows P give cov = (J^T J / s^2 + P^T P)^-1 (Tarantola 2005, *Inverse Problem
+    Theory*, sec. 3.2: the Gaussian linear case).  A direction the data rows do not constrain gives the parameters in it an infinite standard
+    error (the value there is the prior's, not a measurement) and names them.
+    """
+    m, n = jac.shape
+    s2 = float(r @ r) / max(m - n, 1)
     col = np.sqrt(np.sum(jac * jac, axis=0))
     col_safe = np.where(col > 0, col, 1.0)
     _, sv, vt = np.linalg.svd(jac / col_safe, full_matrices=False)
     tol = max(m, n) * np.finfo(float).eps * 1e4 * (sv[0] if sv.size else 0.0)
     good = sv > tol
-    inv = (vt[good].T / sv[good] ** 2) @ vt[good]
-    stderr = np.sqrt(np.maximum(np.diag(inv), 0.0) * s2) / col_safe
+    if jac_prior is None:
+        inv = (vt[good].T / sv[good] ** 2) @ vt[good]
+        stderr = np.sqrt(np.maximum(np.diag(inv), 0.0) * s2) / col_safe
+    else:
+        h = jac.T @ jac / max(s2, np.finfo(float).tiny) + jac_prior.T @ jac_prior
+        d = np.sqrt(np.maximum(np.diag(h), np.finfo(float).tiny))
+        stderr = np.sqrt(np.maximum(np.diag(np.linalg.pinv(h / np.outer(d, d))), 0.0)) / d
     unident = {}
     for i, p in enumerate(paths):
         weak = col[i] == 0 or (np.abs(vt[~good, i]) > 0.1).any()
@@ -605,11 +686,7 @@ def _solve(name: str, fun, x0: np.ndarray, lb: np.ndarray, ub: np.ndarray,
             stderr[i] = math.inf
             unident[p] = ("the residual does not depend on it" if col[i] == 0 else
                           "collinear with other free parameters on these runs")
-    span = ub - lb
-    at = [p for i, p in enumerate(paths)
-          if res.active_mask[i] != 0
-          or (np.isfinite(span[i]) and min(res.x[i] - lb[i], ub[i] - res.x[i]) <= 1e-6 * span[i])]
-    return res, report, dict(zip(paths, stderr)), unident, at
+    return dict(zip(paths, stderr)), unident
 
 
 def _rms(parts: dict[str, list[np.ndarray]]) -> dict[str, float]:
@@ -645,9 +722,46 @@ def _tec_identifiability(inst: Instrument, data: list[_ThermalRun], free: Sequen
     return out
 
 
+_NOISE_FIELDS = ("arw_deg_per_rth_h", "bias_instability_dph", "rrw_deg_per_h_per_rth_h")
+
+
+def _level_start(base: Instrument, data_d: list[_DriftRun], sp: Sequence[str],
+                 weights: dict[str, float]) -> dict[str, float]:
+    """Tilts and accelerometer biases from the window means at rest by linear least squares
+    (:func:`nfs.diagnose.sensor_fit.level_from_means`), the model's accelerometer effects
+    subtracted first."""
+    free = [p for p in LEVEL_PATHS if p in sp]
+    if not free:
+        return {}
+    level = set_params(base, {p: 0.0 for p in LEVEL_PATHS})
+    rows = []
+    for rd in data_d:
+        effects = _drift_models(level, rd, rd.ctx)
+        a = np.radians(rd.azimuth)
+        rows.append(LevelData(cos_a=_block(rd, np.cos(a)), sin_a=_block(rd, np.sin(a)),
+                              acc_x_g=rd.measured["acc_x_g"] - effects["acc_x_g"],
+                              acc_y_g=rd.measured["acc_y_g"] - effects["acc_y_g"]))
+    return level_from_means(rows, {p: get_param(base, p) for p in LEVEL_PATHS}, free,
+                            scale_x_g=weights["acc_x_g"], scale_y_g=weights["acc_y_g"])
+
+
+def _noise_of(model: Instrument, data_d: list[_DriftRun]) -> GyroNoiseEstimate:
+    """Allan fit of the full-rate drift residual at rest, gyro - projection - model drift."""
+    recs = []
+    for rd in data_d:
+        e = (np.asarray(rd.run["gyro_dph"], dtype=float) - rd.projection
+             - model_drift_dph(model, rd.ctx, rd.cond.latitude_deg))
+        recs.append(e[rd.trusted])
+    fs = float(np.median([rd.cond.sample_rate_hz for rd in data_d]))
+    return gyro_noise_from_residual(recs, fs)
+
+
 def fit_model(inst: Instrument, runs: Sequence[Run], free: Iterable[str] | None = None, *,
               stages: Sequence[str] = STAGES, decimate_s: float = DEFAULT_DECIMATE_S,
-              max_nfev: int | None = 100, drift_signal: str = "raw") -> FitResult:
+              max_nfev: int | None = 100, drift_signal: str = "raw",
+              prior: Mapping[str, float | str] | str | None = "default",
+              prior_scale: float = 1.0, soak_anchor: bool = True, n_starts: int = 3,
+              fit_noise: bool = True) -> FitResult:
     """Calibrate the free parameters of ``inst`` to ``runs`` (module docstring for the method).
 
     Parameters
@@ -671,6 +785,26 @@ def fit_model(inst: Instrument, runs: Sequence[Run], free: Iterable[str] | None 
     drift_signal : ``"raw"`` or ``"denoised"``
         Measured drift to fit: window means of gyro - projection, or the wavelet-denoised
         drift of :func:`nfs.denoise.separate_drift`.
+    prior : ``"default"``, mapping or None
+        Gaussian prior on every free parameter, centred on its start value
+        (:mod:`nfs.diagnose.prior`): ``"default"`` takes the widths of
+        :data:`~nfs.diagnose.prior.PRIOR_WIDTHS`; a mapping {path or pattern: width}
+        overrides some (a number: absolute width; ``"30%"``: relative); None: no prior
+        (unregularised least squares).
+    prior_scale : float
+        Multiplies every prior width; inf switches the prior off.
+    soak_anchor : bool
+        With a prior: centre each free thermometer offset on its reading in the first minute
+        after power-on minus T0 (:func:`nfs.diagnose.soak.soak_offsets`), with the width of
+        its standard error; runs that were not soaked are named in the warnings.
+    n_starts : int
+        Starts of the thermal stage: the preset, then up to two perturbations of it (every
+        capacity and conductance +-30 %, :func:`nfs.diagnose.bound_advice.perturbed_starts`);
+        the lowest cost is kept.  1: the preset only.
+    fit_noise : bool
+        After the drift stage, fit the gyro's ARW, bias instability and rate random walk to the
+        Allan deviation of the drift residual at rest (:mod:`nfs.diagnose.noise_fit`) and set
+        them in the fitted instrument.
 
     Raises
     ------
@@ -692,8 +826,19 @@ def fit_model(inst: Instrument, runs: Sequence[Run], free: Iterable[str] | None 
     by_stage = {s: [p for p in paths if _stage_of(kinds[p], stages) == s] for s in stages}
     bounds = {p: fit_bounds(inst, p) for p in paths}
     initial_params = {p: get_param(inst, p) for p in paths}
+    if n_starts < 1:
+        raise NfsError(f"fit_model: n_starts must be >= 1, got {n_starts}")
+    use_prior = prior is not None and math.isfinite(prior_scale)
+    pr = (build_prior(inst, paths, initial_params, None if prior == "default" else prior,
+                      prior_scale) if use_prior else None)
+    start = dict(initial_params)
+    soak = None
+    if pr is not None and soak_anchor and any(p.endswith(".offset_c") for p in paths):
+        soak = soak_offsets(inst, runs)
+        pr, start = anchor_offsets(pr, start, soak, prior_scale)
 
     current = inst
+    noise = None
     stage_reports: dict[str, StageReport] = {}
     stderr: dict[str, float] = {}
     unident: dict[str, str] = {}
@@ -705,8 +850,10 @@ def fit_model(inst: Instrument, runs: Sequence[Run], free: Iterable[str] | None 
     def stage(name: str, fun, base: Instrument, sp: list[str]) -> Instrument:
         """Solve one stage from ``base`` over the free paths ``sp``; record its report."""
         lb, ub = (np.array([bounds[p][i] for p in sp]) for i in (0, 1))
-        res, rep, se, un, at = _solve(name, fun, np.array([initial_params[p] for p in sp]),
-                                      lb, ub, max_nfev, sp)
+        x0 = np.array([start[p] for p in sp])
+        extra = perturbed_starts(sp, x0, lb, ub)[:n_starts - 1] if name == "thermal" else []
+        res, rep, se, un, at = _solve(name, fun, x0, lb, ub, max_nfev, sp,
+                                      None if pr is None else pr.subset(sp), extra)
         stage_reports[name] = rep
         stderr.update(se)
         unident.update(un)
@@ -719,11 +866,16 @@ def fit_model(inst: Instrument, runs: Sequence[Run], free: Iterable[str] | None 
         rms_before.update(_rms(_thermal_residual_parts(current, data)))
         if sp:
             base = current
+            # each thermometer's rows divided by its noise and rounding level, so the cost is
+            # chi-square-like beside the prior rows
+            floor = {col: math.hypot(base.thermometers[nm].noise_c,
+                                     base.thermometers[nm].quantum_c / math.sqrt(12.0)) or 1.0
+                     for nm, col in THERMOMETERS.items()}
 
             def fun(x):
                 model = set_params(base, dict(zip(sp, x)))
                 parts = _thermal_residual_parts(model, data)
-                return np.concatenate([a for arrs in parts.values() for a in arrs])
+                return np.concatenate([a / floor[c] for c, arrs in parts.items() for a in arrs])
 
             current = stage("thermal", fun, base, sp)
             unident.update(_tec_identifiability(current, data, sp))
@@ -753,16 +905,24 @@ def fit_model(inst: Instrument, runs: Sequence[Run], free: Iterable[str] | None 
             return np.concatenate([a / weights[ch] for ch, arrs in parts.items() for a in arrs])
 
         rms_before.update(_rms(parts_of(base)))
+        if "acc_x_g" in weights:
+            start.update(_level_start(base, data_d, sp, weights))
         current = stage("drift", fun, base, sp)
         rms_after.update(_rms(parts_of(current)))
+        if fit_noise:
+            noise = _noise_of(current, data_d)
+            current = set_params(current, {f"gyro.{k}": getattr(noise, k) for k in _NOISE_FIELDS})
 
     params = {p: get_param(current, p) for p in paths}
     for s, rep in stage_reports.items():
         if not rep.converged:
             warnings.append(f"{s} stage did not converge ({rep.nfev} evaluations): {rep.message}")
+    advice = {p: bound_advice(p, params[p], bounds[p]) for p in at_bound}
     for p in at_bound:
-        warnings.append(f"{p} ended at its bound {bounds[p]} (value {params[p]:.6g}): the data "
-                        "push it further; the model may lack an effect")
+        warnings.append(f"{p} ended at its bound {bounds[p]} (value {params[p]:.6g}): "
+                        f"{advice[p]}")
+    if soak is not None:
+        warnings.extend(soak.warnings)
     for p, why in unident.items():
         warnings.append(f"{p} is not identifiable: {why}")
     if len(runs) == 1:
@@ -774,7 +934,11 @@ def fit_model(inst: Instrument, runs: Sequence[Run], free: Iterable[str] | None 
     return FitResult(instrument=current, initial=inst, params=params,
                      initial_params=initial_params, stderr=stderr, bounds=bounds,
                      at_bound=tuple(at_bound), unidentifiable=unident, stages=stage_reports,
-                     rms_before=rms_before, rms_after=rms_after, warnings=tuple(warnings))
+                     rms_before=rms_before, rms_after=rms_after, warnings=tuple(warnings),
+                     prior_centre={} if pr is None else dict(zip(pr.paths, pr.centre.tolist())),
+                     prior_sigma={} if pr is None else dict(zip(pr.paths, pr.sigma.tolist())),
+                     prior_shift={} if pr is None else pr.shift([params[p] for p in pr.paths]),
+                     bound_advice=advice, soak=soak, noise=noise)
 
 
 def write_fitted_model(result: FitResult, path: str | Path) -> Path:

@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, replace
-from typing import Sequence
+from typing import Mapping, Sequence
 
 import numpy as np
 
@@ -31,8 +31,10 @@ from ..experiment import conditions_from_run, thermal_power
 from ..instrument import Instrument
 from ..io.measurement import Run
 from ..sensors import thermometer_reading
+from .prior import Prior
 
-__all__ = ["DEFAULT_WINDOW_S", "DEFAULT_SOAK_TOLERANCE_K", "SoakAnchor", "soak_offsets"]
+__all__ = ["DEFAULT_WINDOW_S", "DEFAULT_SOAK_TOLERANCE_K", "SoakAnchor", "soak_offsets",
+           "anchor_offsets"]
 
 #: Length of the window after power-on whose readings anchor the offsets [s].
 DEFAULT_WINDOW_S = 60.0
@@ -111,6 +113,11 @@ def soak_offsets(inst: Instrument, runs: Sequence[Run], *, window_s: float = DEF
     n_used: dict[str, int] = {}
     unsoaked, warnings = [], []
     for run in runs:
+        for col in ("time_s", "moving", *THERMOMETERS.values()):
+            if col not in run.columns:
+                raise InputError(f"run '{run.name}' has no column '{col}', which the soak "
+                                 "anchor of the thermometer offsets needs", file=run.path,
+                                 column=col)
         t = np.asarray(run["time_s"], dtype=float)
         n = max(1, int(np.count_nonzero(t - t[0] < window_s)))
         model = _model_readings(inst, run, n)
@@ -148,3 +155,23 @@ def soak_offsets(inst: Instrument, runs: Sequence[Run], *, window_s: float = DEF
     return SoakAnchor(offset_c=offset, stderr_c=stderr, per_run=per_run,
                       unsoaked=tuple(unsoaked), window_s=float(window_s),
                       warnings=tuple(warnings))
+
+
+def anchor_offsets(prior: Prior, start: Mapping[str, float], anchor: SoakAnchor,
+                   prior_scale: float = 1.0) -> tuple[Prior, dict[str, float]]:
+    """``prior`` and ``start`` with each free thermometer offset centred on the soak anchor.
+
+    The prior width of an anchored offset becomes the anchor's standard error (times
+    ``prior_scale``), and the fit starts there.  Offsets the anchor has no value for (no
+    soaked run) keep the prior they had.
+    """
+    start = dict(start)
+    for name, off in anchor.offset_c.items():
+        path = f"thermometers.{name}.offset_c"
+        if path in prior.paths:
+            prior = prior.with_centre(
+                path, off, anchor.stderr_c[name] * prior_scale,
+                f"soak anchor: mean of the first {anchor.window_s:g} s of "
+                f"{len(anchor.per_run) - len(anchor.unsoaked)} soaked run(s) minus T0")
+            start[path] = off
+    return prior, start
