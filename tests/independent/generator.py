@@ -263,7 +263,7 @@ def _coil_parts(geom: CoilGeometry):
     Layer i spans [r_i, r_i+1] (equal thickness), its node sits at the log-mean radius
     rho_i = sqrt(r_i r_i+1); C_i = rho c pi (r_i+1^2 - r_i^2) h.  Between two radii the
     steady radial conductance of a cylinder is G = 2 pi k h / ln(r_b / r_a) (Incropera &
-    DeWitt, Fundamentals of Heat and Mass Transfer, 6th ed., eq. (3.27)), which makes the
+    DeWitt, Fundamentals of Heat and Mass Transfer, 6th ed., sec. 3.3.1), which makes the
     finite-difference steady state exact at the nodes.  The face nodes ``coil_in_face`` and
     ``coil_out_face`` are massless (eliminated by Kron reduction).
     """
@@ -318,7 +318,8 @@ class Stepper:
     from one matrix exponential of the augmented matrix
     [[A, B_b, 0, C^-1], [0, 0, I, 0], [0, 0, 0, 0], [0, 0, 0, 0]] (Van Loan 1978, IEEE TAC
     23(3) 395, the block-triangular exponential; Franklin, Powell & Workman, Digital Control
-    of Dynamic Systems, 3rd ed., sec. 6.3.2 for ZOH and FOH).  Computed once per step size.
+    of Dynamic Systems, 3rd ed., ch. 6, for the zero- and first-order hold).  Computed once
+    per step size.
     """
 
     def __init__(self, net: Network, h_s: float):
@@ -359,8 +360,10 @@ def tec_power_w(unit: Unit, t_src_c):
     T_src of its heat sink (the source assembly): the Peltier term is linear in the
     temperature difference and the Joule term grows with its square, so a quadratic is the
     first-order shape of the input power; its minimum sits a little below the set point, at
-    T_set - a/(2c), where the source's own heat leaks to the colder sink unaided (Rowe, CRC Handbook of Thermoelectrics, 1995, ch. 54, eqs.
-    (54.1)-(54.4)).  p0 [W], a [W/K], c [W/K^2] (README).
+    T_set - a/(2c), where the source's own heat leaks to the colder sink unaided.  The
+    module equations (Q_c = alpha I T_c - I^2 R / 2 - K dT, P = alpha I dT + I^2 R; Rowe
+    (ed.), CRC Handbook of Thermoelectrics, 1995) motivate the shape; the quadratic itself
+    is an assumed smooth fit, not derived from a module.  p0 [W], a [W/K], c [W/K^2] (README).
     """
     d = np.asarray(t_src_c, dtype=float) - unit.tec_set_c
     return unit.tec_p0_w + unit.tec_a_w_per_k * d + unit.tec_c_w_per_k2 * d * d
@@ -373,7 +376,7 @@ def first_order_lag(x: np.ndarray, h_s: float, tau_s: float) -> np.ndarray:
     """tau dy/dt = x - y, exact for x linear between samples (first-order hold), y_0 = x_0.
 
     y_k+1 = a y_k + (1 - c) x_k+1 + (c - a) x_k with a = exp(-h/tau), c = tau (1 - a)/h
-    (the FOH discretisation, Franklin, Powell & Workman, sec. 6.3.2).
+    (the first-order-hold equivalent, Franklin, Powell & Workman, ch. 6).
     """
     x = np.asarray(x, dtype=float)
     if tau_s <= 0:

@@ -105,8 +105,8 @@ def test_single_layer_coil_is_an_exact_exponential():
 def test_coil_steady_state_is_the_cylinder_log_profile():
     """Oracle: steady radial conduction through a cylindrical shell, T(r) = T_a - Q (1/g_a
     + ln(r / r_in) / (2 pi k h)), Q = (T_a - T_b) / (1/g_a + ln(r_out/r_in)/(2 pi k h) +
-    1/g_b) (Incropera & DeWitt eq. (3.27)); the log-conductance finite differences are exact
-    at the node radii for any number of layers."""
+    1/g_b) (Incropera & DeWitt, 6th ed., sec. 3.3.1); the log-conductance finite
+    differences are exact at the node radii for any number of layers."""
     geom = g.CoilGeometry(n_layers=6)
     net = g.coil_network(geom, 0.6, 0.3)
     tb = np.array([30.0, 10.0])
