@@ -86,6 +86,10 @@ StatePower = Callable[[int, np.ndarray], tuple[np.ndarray, np.ndarray]]
 
 _LOG_2PI = math.log(2.0 * math.pi)
 
+#: 5 % critical value of the boundary likelihood-ratio test, 1/2 chi^2_0 + 1/2 chi^2_1
+#: (the 90 % point of chi^2_1).
+_LR_CRITICAL = 2.706
+
 
 @dataclass(frozen=True)
 class LinearSensor:
@@ -221,6 +225,12 @@ class ProcessNoiseFit:
 
     at_upper_bound: bool
     """True when q-hat is the upper bound."""
+
+    significant: bool
+    """True when the likelihood-ratio statistic 2 (log L(q-hat) - log L(lower bound))
+    exceeds 2.706, the 5 % point of its null distribution 1/2 chi^2_0 + 1/2 chi^2_1 for a
+    variance on the boundary (Self & Liang 1987, JASA 82(398), case 5): the readings show a
+    network error."""
 
     n_evaluations: int
     """Filter runs of the search."""
@@ -714,6 +724,7 @@ def fit_process_noise(network: Network, sensors: Sequence[LinearSensor],
     return ProcessNoiseFit(q_w2_per_s=10.0 ** best, log10_stderr=stderr, log_likelihood=best_ll,
                            log_likelihood_zero=ll_lo, bounds_w2_per_s=(lo, hi),
                            at_lower_bound=bool(at_lo), at_upper_bound=bool(at_hi),
+                           significant=bool(2.0 * (best_ll - ll_lo) > _LR_CRITICAL),
                            n_evaluations=count[0])
 
 
