@@ -628,12 +628,14 @@ def _solve(name: str, fun, x0: np.ndarray, lb: np.ndarray, ub: np.ndarray,
         r = fun(x)
         return np.concatenate([r, prior.rows(x)]) if use_prior else r
 
-    best, nfev = None, 0
+    best, nfev, tried = None, 0, 0
     r_start = total(x0)
     for xs in [x0, *[np.clip(x, lb, ub) for x in extra_starts]]:
+        if best is not None and _settled(best, m, lb, ub):
+            break
         res = least_squares(total, xs, bounds=(lb, ub), method="trf", x_scale="jac",
                             max_nfev=max_nfev)
-        nfev += int(res.nfev)
+        nfev, tried = nfev + int(res.nfev), tried + 1
         if best is None or res.cost < best.cost:
             best = res
     res = best
@@ -643,7 +645,7 @@ def _solve(name: str, fun, x0: np.ndarray, lb: np.ndarray, ub: np.ndarray,
                          cost_start=float(0.5 * r_start @ r_start), cost=float(res.cost),
                          n_residuals=int(m), time_s=time.perf_counter() - t0,
                          n_prior=int(res.fun.size - m), cost_prior=cost_prior,
-                         n_starts=1 + len(extra_starts))
+                         n_starts=tried)
     jac = np.asarray(res.jac, dtype=float)
     stderr, unident = _errors(jac[:m], res.fun[:m], paths,
                               prior.jacobian() if use_prior else None)
@@ -652,6 +654,15 @@ def _solve(name: str, fun, x0: np.ndarray, lb: np.ndarray, ub: np.ndarray,
           if res.active_mask[i] != 0
           or (np.isfinite(span[i]) and min(res.x[i] - lb[i], ub[i] - res.x[i]) <= 1e-6 * span[i])]
     return res, report, stderr, unident, at
+
+
+def _settled(res, m: int, lb: np.ndarray, ub: np.ndarray) -> bool:
+    """A solution no other start needs to challenge: the data rows at their noise level
+    (reduced chi-square <= 1.5; a lower minimum could only fit noise) and no parameter on a
+    bound."""
+    n = res.x.size
+    chi2 = float(res.fun[:m] @ res.fun[:m]) / max(m - n, 1)
+    return chi2 <= 1.5 and not np.any(res.active_mask != 0)
 
 
 def _errors(jac: np.ndarray, r: np.ndarray, paths: Sequence[str],

@@ -1,0 +1,99 @@
+"""The preset as a Gaussian prior of the fit (nfs.diagnose.prior, fit_model's prior=).
+
+Oracles: the documented table (a capacity's width is 50 % of its preset, an offset's 1 K),
+the closed form of the prior rows (x - p0) / sigma; a node no thermometer sees (a bracket
+hung on the housing by 0.01 W/K) whose capacity the unregularised fit sends to its bound
+(a known failure, checked here so that the contrast is real) and the MAP fit keeps within one
+prior width of the preset; with the prior switched off, the fit is plain least squares on the
+data rows (scipy.optimize.least_squares run directly on the thermal residual).
+"""
+
+import math
+from dataclasses import replace
+
+import numpy as np
+import pytest
+from scipy.optimize import least_squares
+
+from thermal import Link, Network, Node
+
+from nfs.diagnose.fit import _prepare_thermal, _thermal_residual_parts, fit_model
+from nfs.diagnose.params import get_param, set_params
+from nfs.diagnose.prior import PRIOR_WIDTHS, build_prior
+from nfs.errors import NfsError
+from nfs.experiment import simulate_run
+from nfs.io.scenario import load_scenario
+
+
+@pytest.fixture(scope="module")
+def scenario():
+    return load_scenario()
+
+
+def test_table_widths(scenario):
+    inst = scenario.instrument
+    paths = ["thermal.nodes.coil_outer.capacity_j_per_k", "thermometers.fog.offset_c",
+             "effects.shupe_gradient.k_r", "accelerometers.bias_x_g"]
+    start = {p: get_param(inst, p) for p in paths}
+    pr = build_prior(inst, paths, start)
+    np.testing.assert_allclose(pr.sigma, [0.5 * 95.0, 1.0, 3.0, 0.01])
+    np.testing.assert_array_equal(pr.centre, [start[p] for p in paths])
+    # overrides: absolute, relative, and a global scale
+    pr2 = build_prior(inst, paths, start, {"thermometers.*.offset_c": 0.1,
+                                           "thermal.nodes.*": "20%"}, prior_scale=2.0)
+    np.testing.assert_allclose(pr2.sigma, [2 * 0.2 * 95.0, 0.2, 6.0, 0.02])
+    x = pr.centre + np.array([47.5, -0.5, 0.0, 0.02])
+    np.testing.assert_allclose(pr.rows(x), [1.0, -0.5, 0.0, 2.0])
+    assert pr.shift(x)["thermometers.fog.offset_c"] == pytest.approx(-0.5)
+    assert all(w.reason for w in PRIOR_WIDTHS.values())
+    with pytest.raises(NfsError, match="thermometers.fog.offset_c"):
+        build_prior(inst, paths, start, {"thermometers.fog.offset_c": -1.0})
+    with pytest.raises(NfsError, match="prior_scale"):
+        build_prior(inst, paths, start, prior_scale=0.0)
+
+
+def test_unseen_capacity_stays_at_its_prior(scenario):
+    inst = scenario.instrument
+    net = inst.network
+    inst = replace(inst, network=Network(nodes=net.nodes + (Node("bracket", 60.0, 0.0),),
+                                         links=net.links + (Link("bracket", "housing", 0.01),)))
+    conds = [replace(c, duration_s=1800.0) for c in scenario.conditions()[:2]]
+    runs = [simulate_run(inst, c).run for c in conds]
+    free = ["thermal.nodes.bracket.capacity_j_per_k", "thermal.nodes.coil_inner.capacity_j_per_k",
+            "thermometers.fog.lag_s"]
+    bracket = "thermal.nodes.bracket.capacity_j_per_k"
+    plain = fit_model(inst, runs, free, stages=("thermal",), prior=None)
+    assert bracket in plain.at_bound          # the failure the prior is there to prevent
+    res = fit_model(inst, runs, free, stages=("thermal",))
+    assert res.at_bound == ()
+    assert abs(res.prior_shift[bracket]) <= 1.0
+    assert res.prior_sigma[bracket] == pytest.approx(30.0)
+    # the posterior is never wider than the prior, and the seen parameters barely move
+    assert res.stderr[bracket] <= res.prior_sigma[bracket]
+    for p in free[1:]:
+        assert abs(res.params[p] - get_param(inst, p)) <= 3 * res.stderr[p]
+
+
+def test_no_prior_is_plain_least_squares(scenario):
+    inst = scenario.instrument
+    cond = replace(scenario.conditions()[0], duration_s=1800.0)
+    truth = set_params(inst, {"thermometers.fog.lag_s": 40.0,
+                              "thermal.nodes.coil_outer.capacity_j_per_k": 110.0})
+    runs = [simulate_run(truth, cond).run]
+    free = ["thermometers.fog.lag_s", "thermal.nodes.coil_outer.capacity_j_per_k"]
+    off = fit_model(inst, runs, free, stages=("thermal",), prior_scale=math.inf, n_starts=1)
+    none = fit_model(inst, runs, free, stages=("thermal",), prior=None, n_starts=1)
+    assert off.params == none.params and off.stderr == none.stderr
+    assert off.prior_shift == {} and off.stages["thermal"].n_prior == 0
+    # the unregularised objective, solved directly
+    data = [_prepare_thermal(r, 10.0) for r in runs]
+
+    def fun(x):
+        parts = _thermal_residual_parts(set_params(inst, dict(zip(free, x))), data)
+        return np.concatenate([a for arrs in parts.values() for a in arrs])
+
+    x0 = np.array([get_param(inst, p) for p in free])
+    ref = least_squares(fun, x0, bounds=([0, 9.5], [300, 950]), method="trf", x_scale="jac")
+    for p, v in zip(free, ref.x):
+        assert abs(off.params[p] - v) <= 0.05 * off.stderr[p], p
+
