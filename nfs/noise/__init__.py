@@ -32,7 +32,13 @@ from nfs.noise.generators import (
     rate_random_walk_noise_dph,
     white_noise,
 )
-from nfs.noise.whiteness import WhitenessResult, ljung_box_q, whiteness_test
+from nfs.noise.whiteness import (
+    WhitenessResult,
+    WindowNoiseFit,
+    fit_window_noise,
+    ljung_box_q,
+    whiteness_test,
+)
 
 __all__ = [
     "AllanResult",
@@ -42,6 +48,7 @@ __all__ = [
     "GyroNoise",
     "NoiseFit",
     "WhitenessResult",
+    "WindowNoiseFit",
     "allan_deviation",
     "allan_relative_error",
     "angle_random_walk_noise_dph",
@@ -50,6 +57,7 @@ __all__ = [
     "bias_instability_noise_dph",
     "cholesky_lower",
     "fit_noise_coefficients",
+    "fit_window_noise",
     "gyro_noise_dph",
     "ljung_box_q",
     "octave_taus_s",

@@ -35,9 +35,9 @@ Cov(S_A, S_B).
   Var(X(t + d) - X(t)) = q^2 F(|d|), F(d) = sum_{i,j < d} phi^|i-j| =
   d + 2 phi (d (1 - phi) - (1 - phi^d)) / (1 - phi)^2 (the geometric sum also behind
   :func:`~nfs.noise.generators.bias_instability_adev_dph`), and the covariance of two
-  increments of such a process is (polarisation; e.g. Papoulis & Pillai 2002, Probability,
-  Random Variables and Stochastic Processes, 4th ed., the structure function of a process with
-  stationary increments)::
+  increments S_A = X(a2) - X(a1), S_B = X(b2) - X(b1) of such a process is the polarisation
+  identity of its structure function (derived here: expand each V(t - s) as
+  Var X(t) + Var X(s) - 2 Cov(X(s), X(t)) and the Var terms cancel)::
 
       Cov(S_A, S_B) = (V(b2 - a1) + V(a2 - b1) - V(b2 - a2) - V(b1 - a1)) / 2
 

@@ -39,14 +39,18 @@ from dataclasses import dataclass
 from typing import Sequence
 
 import numpy as np
-from scipy.linalg import svd
+from scipy.linalg import eigh, svd
+from scipy.optimize import minimize_scalar
 from scipy.stats import chi2
 
 from nfs.errors import InputError
-from nfs.noise.covariance import cholesky_lower, whiten
+from nfs.noise.covariance import cholesky_lower, whiten, window_mean_covariance
+from nfs.noise.generators import DEFAULT_CORRELATION_TIME_S
 
 __all__ = [
     "WhitenessResult",
+    "WindowNoiseFit",
+    "fit_window_noise",
     "ljung_box_q",
     "whiteness_test",
 ]
@@ -253,3 +257,120 @@ def whiteness_test(residual_parts: list[np.ndarray],
                            variance_p_value=variance_p, unit_variance=unit_variance,
                            consistent=consistent, n=n, n_fitted=n_fitted, whitened=whitened,
                            alpha=alpha)
+
+
+# --------------------------------------------------------------------------------------------
+# the noise model fitted to the window means themselves
+
+@dataclass(frozen=True)
+class WindowNoiseFit:
+    """Angle random walk and bias instability fitted by maximum likelihood to residual window
+    means (:func:`fit_window_noise`)."""
+
+    arw_deg_per_rth_h: float
+    """Angle random walk N [deg/sqrt(h)]."""
+    bias_instability_dph: float
+    """Bias instability B [deg/h] (0 when the fit sits at the lower bound of B^2 / N^2)."""
+    log_likelihood: float
+    """Gaussian log-likelihood of the window means at the fit [-]."""
+    n: int
+    """Number of window means n [-], all runs."""
+
+
+def _layout_key(segments: tuple[np.ndarray, np.ndarray, np.ndarray | None]) -> bytes:
+    starts, lengths, window = segments
+    labels = np.arange(np.size(starts)) if window is None else window
+    return b"|".join(np.ascontiguousarray(v, dtype=np.int64).tobytes()
+                     for v in (starts, lengths, labels))
+
+
+def fit_window_noise(residual_parts: list[np.ndarray],
+                     segments: list[tuple[np.ndarray, np.ndarray, np.ndarray | None]],
+                     sample_rate_hz: float, *,
+                     correlation_time_s: float = DEFAULT_CORRELATION_TIME_S
+                     ) -> WindowNoiseFit:
+    """Maximum-likelihood angle random walk N and bias instability B of residual window
+    means, rate random walk left out (K = 0).
+
+    The covariance of run r's window means is linear in the squared coefficients,
+    Sigma_r = N^2 A_r + B^2 C_r, with A_r and C_r the covariances at N = 1 and B = 1
+    (:func:`nfs.noise.covariance.window_mean_covariance`).  With A_r = L L^T and the
+    eigendecomposition L^-1 C_r L^-T = U diag(lambda) U^T (once per window layout),
+    z = U^T L^-1 e_r has independent entries of variance N^2 (1 + rho lambda_i),
+    rho = B^2 / N^2, so the Gaussian log-likelihood costs O(n) per evaluation and N^2 has the
+    closed-form maximiser for given rho (the profile likelihood; e.g. Harville 1977, JASA
+    72(358) 320, for the linear covariance model)::
+
+        N^2(rho) = (1/n) sum z_i^2 / (1 + rho lambda_i)
+        -2 log L(rho) = n log N^2(rho) + sum log(1 + rho lambda_i) + n (1 + log 2 pi)
+                        + 2 sum log diag L
+
+    maximised over log rho in [-30, 30] by a bounded scalar search
+    (scipy.optimize.minimize_scalar; B = 0 when it ends at the lower bound).  At the maximum the whitened residual has
+    sum u^2 = n exactly, so the test of scale of :func:`whiteness_test` is void with these
+    coefficients: the scale must come from coefficients known beforehand (the instrument's
+    declared noise, or a fit to other runs).  The whiteness test with them keeps its size
+    (measured in tests/noise/test_whiteness.py).
+
+    Parameters
+    ----------
+    residual_parts : list of numpy.ndarray
+        Residual window means [deg/h] of each run.
+    segments : list of (starts, lengths, window)
+        Each run's windows as :func:`nfs.noise.covariance.window_mean_covariance` takes them
+        (``window`` may be None); runs with the same layout share one eigendecomposition.
+    sample_rate_hz : float
+        Sample rate fs [Hz].
+    correlation_time_s : float
+        Longest correlation time T_c [s] of the bias-instability construction.
+
+    Returns
+    -------
+    WindowNoiseFit
+    """
+    parts = _check_parts(residual_parts)
+    if len(segments) != len(parts):
+        raise InputError(f"segments must have one (starts, lengths, window) per run "
+                         f"({len(parts)}), got {len(segments)}")
+    # per window layout: L (A = L L^T), the eigenvalues lambda and vectors U, log det L
+    layouts: dict[bytes, tuple[np.ndarray, np.ndarray, np.ndarray, float]] = {}
+    z2, lam = [], []
+    log_det_a = 0.0
+    for i, (p, seg) in enumerate(zip(parts, segments)):
+        key = _layout_key(seg)
+        if key not in layouts:
+            starts, lengths, window = seg
+            kw = dict(correlation_time_s=correlation_time_s, window=window)
+            a = window_mean_covariance(starts, lengths, sample_rate_hz, arw_deg_per_rth_h=1.0,
+                                       **kw)
+            c = window_mean_covariance(starts, lengths, sample_rate_hz, arw_deg_per_rth_h=0.0,
+                                       bias_instability_dph=1.0, **kw)
+            low = cholesky_lower(a, f"segments[{i}] white covariance")
+            m = whiten(whiten(c, factor=low).T, factor=low)      # L^-1 C L^-T
+            lam_r, vec = eigh(0.5 * (m + m.T))
+            layouts[key] = (low, np.maximum(lam_r, 0.0), vec,
+                            float(np.sum(np.log(np.diag(low)))))
+        low, lam_r, vec, log_diag = layouts[key]
+        if low.shape[0] != p.size:
+            raise InputError(f"segments[{i}] has {low.shape[0]} windows but "
+                             f"residual_parts[{i}] has {p.size} means")
+        z2.append((vec.T @ whiten(p, factor=low)) ** 2)
+        lam.append(lam_r)
+        log_det_a += log_diag
+    z2_all = np.concatenate(z2)
+    lam_all = np.concatenate(lam)
+    n = z2_all.size
+
+    def neg2_loglik(log_rho: float) -> float:
+        w = 1.0 + math.exp(log_rho) * lam_all
+        theta = float(np.mean(z2_all / w))
+        return n * math.log(theta) + float(np.sum(np.log(w)))
+
+    res = minimize_scalar(neg2_loglik, bounds=(-30.0, 30.0), method="bounded",
+                          options={"xatol": 1e-6})
+    rho = math.exp(res.x) if res.x > -29.0 else 0.0
+    n2 = float(np.mean(z2_all / (1.0 + rho * lam_all)))
+    loglik = -0.5 * (neg2_loglik(math.log(rho)) if rho > 0 else n * math.log(n2)) \
+        - 0.5 * n * (1.0 + math.log(2.0 * math.pi)) - log_det_a
+    return WindowNoiseFit(arw_deg_per_rth_h=math.sqrt(n2),
+                          bias_instability_dph=math.sqrt(rho * n2), log_likelihood=loglik, n=n)
