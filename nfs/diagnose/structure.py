@@ -502,6 +502,8 @@ class ThermalAdequacy:
     """A sentence a user can act on."""
     time_s: float = 0.0
     """Wall time [s]."""
+    n_evaluations: int = 0
+    """Thermometer residual evaluations (network solves of all runs) it took."""
 
     @property
     def worst(self) -> ChannelFit:
@@ -512,6 +514,7 @@ class ThermalAdequacy:
         """A JSON-ready dict."""
         return {"adequate": self.adequate, "factor": self.factor, "cv_rms_k": self.cv_rms_k,
                 "message": self.message, "time_s": self.time_s,
+                "n_evaluations": self.n_evaluations,
                 "channels": [{"thermometer": c.thermometer, "stage": c.stage,
                               "rms_k": c.rms_k, "cv_rms_k": c.cv_rms_k, "floor_k": c.floor_k, "ratio": c.ratio,
                               "n_knots": c.n_knots, "adequate": c.adequate}
@@ -567,35 +570,38 @@ class _Problem:
                        for s, stage in enumerate(STAGES)} for i, name in enumerate(self.names)}
 
     def linear_fit(self, r: list[np.ndarray], Z: list[np.ndarray], lo: np.ndarray,
-                   hi: np.ndarray) -> tuple[float, np.ndarray, list[np.ndarray]]:
-        """Leave-one-start-temperature-out CV RMS [K] of the linearised residual r + Z beta
-        with lo <= beta <= hi, the bounded beta of all runs and the held-out residual per run.
+                   hi: np.ndarray, folds: bool = True
+                   ) -> tuple[float, np.ndarray, list[np.ndarray]]:
+        """Leave-one-start-temperature-out CV of the linearised residual r + Z beta.
 
-        Per group g: beta_-g minimises |r + Z beta| over the other groups within the bounds
-        (the parameters' physical box, as a refit per fold would keep them), the held-out
-        error is r_g + Z_g beta_-g; pooled RMS over all groups.  Per-run Gram matrices make
-        a fold cost one small bounded solve.
+        Returns (CV RMS [K], beta of all runs, held-out residual per run).  beta minimises
+        |r + Z beta| over all runs within lo <= beta <= hi (the parameters' box); per group
+        g, beta_-g minimises it over the other groups within the same box (the one-step
+        refit per fold) and the held-out error is r_g + Z_g beta_-g, pooled over all
+        groups.  Per-run Gram matrices make a fold cost one small bounded solve.  With
+        ``folds`` False only beta is computed (CV NaN, no held-out residual).
         """
         scale = np.sqrt(sum(np.sum(z * z, axis=0) for z in Z))
         scale = np.where(scale > 0, scale, 1.0)
         n_g = int(self.group.max()) + 1
         p = Z[0].shape[1]
         G, h = np.zeros((n_g, p, p)), np.zeros((n_g, p))
-        yy, n = np.zeros(n_g), np.zeros(n_g)
+        n = 0
         for g, ri, zi in zip(self.group, r, Z):
             zs = zi / scale
             G[g] += zs.T @ zs
             h[g] -= zs.T @ ri
-            yy[g] += ri @ ri
-            n[g] += ri.size
+            n += ri.size
         lo_s, hi_s = lo * scale, hi * scale
+        beta = _bounded_solve(G.sum(0), h.sum(0), lo_s, hi_s)
+        if not folds:
+            return math.nan, beta / scale, []
         held: list[np.ndarray] = [np.empty(0)] * len(r)
         for g in range(n_g):
-            beta = _bounded_solve(G.sum(0) - G[g], h.sum(0) - h[g], lo_s, hi_s) / scale
+            step = _bounded_solve(G.sum(0) - G[g], h.sum(0) - h[g], lo_s, hi_s) / scale
             for i in np.flatnonzero(self.group == g):
-                held[i] = r[i] + Z[i] @ beta
-        beta = _bounded_solve(G.sum(0), h.sum(0), lo_s, hi_s)
-        return math.sqrt(_sse(held) / n.sum()), beta / scale, held
+                held[i] = r[i] + Z[i] @ step
+        return math.sqrt(_sse(held) / n), beta / scale, held
 
 
 def _bounded_solve(G: np.ndarray, h: np.ndarray, lo: np.ndarray, hi: np.ndarray
@@ -689,41 +695,50 @@ class _Model:
 
 
 def _fit_model(prob: _Problem, inst: Instrument, chord_steps: int = 4) -> _Model:
-    """Chord (frozen-Jacobian Gauss-Newton) refit of the model's default free thermal set."""
+    """Chord (frozen-Jacobian Gauss-Newton) refit of the model's default free thermal set.
+
+    When the refit moved the model far (its residual sum of squares fell by more than
+    10 %: the model was not fitted to these runs), the Jacobian is computed again at the
+    refitted point and the chord steps repeated, so that the frozen Jacobian the
+    alternatives and the CV rely on belongs to the fitted model.
+    """
     paths = default_free(inst, ("thermal",))
-    x0 = np.array([get_param(inst, p) for p in paths])
     bounds = np.array([fit_bounds(inst, p) for p in paths], dtype=float).reshape(-1, 2)
 
     def build(x):
         return set_params(inst, dict(zip(paths, np.clip(x, bounds[:, 0], bounds[:, 1]))))
 
+    x = np.array([get_param(inst, p) for p in paths])
     r = prob.resid(inst)
-    steps = np.array([1e-3 * abs(v) if v else 1e-3 for v in x0])
-    steps = np.where(x0 + steps > bounds[:, 1], -steps, steps)
-    J = _jacobian(prob, build, x0, r, steps)
-    Js = np.vstack(J)
-    scale = np.sqrt(np.sum(Js * Js, axis=0))
-    scale = np.where(scale > 0, scale, 1.0)
-    u, sv, vt = np.linalg.svd(Js / scale, full_matrices=False)
-    good = sv > 1e-10 * sv[0] if sv.size else sv > 0
-    Q = u[:, good]
-    pinv = (vt[good].T / sv[good]) @ u[:, good].T / scale[:, None]
-    x = x0.copy()
-    for _ in range(chord_steps):
-        x_new = np.clip(x + pinv @ -np.concatenate(r), bounds[:, 0], bounds[:, 1])
-        r_new = prob.resid(build(x_new))
-        gain = _sse(r) - _sse(r_new)
-        if gain <= 0:
-            break
-        x, r = x_new, r_new
-        if gain < 1e-3 * _sse(r):
+    for _ in range(2):
+        sse_start = _sse(r)
+        steps = np.array([1e-3 * abs(v) if v else 1e-3 for v in x])
+        steps = np.where(x + steps > bounds[:, 1], -steps, steps)
+        J = _jacobian(prob, build, x, r, steps)
+        Js = np.vstack(J)
+        scale = np.sqrt(np.sum(Js * Js, axis=0))
+        scale = np.where(scale > 0, scale, 1.0)
+        u, sv, vt = np.linalg.svd(Js / scale, full_matrices=False)
+        good = sv > 1e-10 * sv[0] if sv.size else sv > 0
+        Q = u[:, good]
+        pinv = (vt[good].T / sv[good]) @ u[:, good].T / scale[:, None]
+        for _ in range(chord_steps):
+            x_new = np.clip(x + pinv @ -np.concatenate(r), bounds[:, 0], bounds[:, 1])
+            r_new = prob.resid(build(x_new))
+            gain = _sse(r) - _sse(r_new)
+            if gain <= 0:
+                break
+            x, r = x_new, r_new
+            if gain < 1e-3 * _sse(r):
+                break
+        if _sse(r) > 0.9 * sse_start:
             break
     return _Model(build(x), paths, x, bounds, r, J, Q)
 
 
 def _score(prob: _Problem, model: _Model, alt: StructuralAlternative, refine: bool,
            cv_model: float, rms_model: dict, max_nfev: int,
-           u_start: np.ndarray | None = None) -> tuple[AlternativeScore, np.ndarray]:
+           u_start: np.ndarray | None = None, chord_steps: int = 3) -> tuple[AlternativeScore, np.ndarray]:
     """Screen or fit one alternative; (score, its fitted u).
 
     Screening: the residual and its Jacobian at the start u_0 (1 + k evaluations); the
@@ -749,18 +764,31 @@ def _score(prob: _Problem, model: _Model, alt: StructuralAlternative, refine: bo
     lo_m, hi_m = model.box()
     lo = np.concatenate([lo_m, tr.ulo - u])
     hi = np.concatenate([hi_m, tr.uhi - u])
-    cv, beta, held = prob.linear_fit(r_a, Z, lo, np.maximum(hi, lo + 1e-12))
+    hi = np.maximum(hi, lo + 1e-12)
+    cv, beta, held = prob.linear_fit(r_a, Z, lo, hi)
     n_m = len(model.paths)
     u_fit = np.clip(u + beta[n_m:], tr.ulo, tr.uhi)
-    r_lin = [ri + zi @ beta for ri, zi in zip(r_a, Z)]
     final = model.moved(build(u_fit), beta[:n_m])
-    r_f = r_lin
+    r_f = [ri + zi @ beta for ri, zi in zip(r_a, Z)]
     if refine:
-        r_eval = prob.resid(final)
-        if _sse(r_eval) <= _sse(r_lin) * 1.01:
-            r_f = r_eval
-        elif _sse(r_a) < _sse(r_eval):  # the linear step overshot: keep the fitted point
-            final, r_f, u_fit = build(u), r_a, u
+        # chord steps of all the numbers (model's and alternative's) with the frozen
+        # Jacobian Z, each accepted while it lowers the evaluated residual; the CV is then
+        # taken from the evaluated all-runs fit
+        r_f, final, u_fit, shift = r_a, build(u), u, np.zeros(beta.size)
+        for _ in range(chord_steps):
+            _, step, _ = prob.linear_fit(r_f, Z, lo - shift,
+                                         np.maximum(hi - shift, lo - shift + 1e-12), folds=False)
+            new_shift = shift + step
+            u_new = np.clip(u + new_shift[n_m:], tr.ulo, tr.uhi)
+            cand = model.moved(build(u_new), new_shift[:n_m])
+            r_c = prob.resid(cand)
+            if _sse(r_c) >= _sse(r_f) * (1.0 - 1e-3):
+                if _sse(r_c) < _sse(r_f):
+                    r_f, final, u_fit, shift = r_c, cand, u_new, new_shift
+                break
+            r_f, final, u_fit, shift = r_c, cand, u_new, new_shift
+        cv, _, held = prob.linear_fit(r_f, Z, lo - shift,
+                                      np.maximum(hi - shift, lo - shift + 1e-12))
     params = {p: float(v) for p, v in zip(alt.free, tr.to_v(u_fit))}
     score = AlternativeScore(
         name=alt.name, kind=alt.kind, description=alt.description, params=params,
@@ -898,7 +926,7 @@ def thermal_adequacy(inst: Instrument, runs: Sequence[Run],
     return ThermalAdequacy(channels=channels, factor=factor, adequate=adequate,
                            cv_rms_k=cv_model, alternatives=tuple(scores), best=best,
                            model=model.inst, message=message,
-                           time_s=time.perf_counter() - t_start)
+                           time_s=time.perf_counter() - t_start, n_evaluations=prob.n_eval)
 
 
 def beats_structure(cv_rms_k: float, adequacy: ThermalAdequacy, margin: float = 0.0) -> bool:
