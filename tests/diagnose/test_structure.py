@@ -45,7 +45,9 @@ def _runs(inst):
 
 @pytest.fixture(scope="module")
 def own(default):
-    return thermal_adequacy(default, _runs(default))
+    alts = structural_alternatives(default) + [
+        effect_alternative(default, "heat_source", "coil_outer")]
+    return thermal_adequacy(default, _runs(default), alts)
 
 
 @pytest.fixture(scope="module")
@@ -103,6 +105,18 @@ def test_own_runs_are_adequate(own):
     assert "fits" in own.message
 
 
+def test_heat_source_candidate_is_physical_and_not_named(own):
+    """Oracle: the runs have no extra heat source.  Scored in the same machinery, a heat
+    source on coil_outer stays >= 0 W (its bound), is never the best structural alternative,
+    and does not beat the structure by more than CV_DROP, so the diagnosis would not name it."""
+    hs = next(a for a in own.alternatives if a.kind == "effect")
+    assert hs.name == "heat_source:coil_outer"
+    assert hs.params["effects.heat_source:coil_outer.power"] >= 0.0
+    assert own.best.kind != "effect"
+    assert not hs.beats_model
+    assert not beats_structure(hs.cv_rms_after_k, own, margin=0.05)
+
+
 def test_hidden_link_is_found(hidden_link):
     """Oracle: the runs come from the default plus a link electronics-coil_inner of
     0.3 W/K.  The default model fitted to them absorbs it in-sample, but its values do not
@@ -128,6 +142,24 @@ def test_hidden_link_is_found(hidden_link):
     # a thermal candidate is named only when it beats the best alternative
     assert not beats_structure(ad.cv_rms_k * 0.9, ad)
     assert beats_structure(0.9 * ad.best.cv_rms_after_k, ad)
+
+
+@pytest.mark.slow
+def test_thermometer_elsewhere_is_found(default):
+    """Oracle: the runs come from the default with the FOG thermometer reading 30 % of
+    coil_inner (it sits deeper in the coil than the model says).  The default model is
+    inadequate at the FOG thermometer; the best alternative moves that thermometer (kind
+    ``thermometer``: coil_inner and the housing, both slow nodes, fit alike) and brings
+    the held-out residual within 1.5x its floor."""
+    truth = thermometer_weight(default, "fog", "coil_inner").build([0.3])
+    ad = thermal_adequacy(default, _runs(truth))
+    assert not ad.adequate
+    assert ad.worst.thermometer == "fog" and ad.worst.ratio > 3.0
+    assert ad.best.kind == "thermometer", [a.name for a in ad.alternatives]
+    assert ad.best.beats_model
+    for stage in ("start-up", "stable"):
+        assert ad.best.cv_channels_after_k["fog"][stage] < ADEQUACY_FACTOR * FLOOR_K
+    assert "FOG thermometer" in ad.message
 
 
 def test_one_sided_negative_never_significant():
