@@ -1,7 +1,11 @@
-"""Calibrate a model's free parameters to measured runs (issue 4, part 1: "Fit").
+"""Calibrate a model's free parameters to measured runs.
 
 Bounded nonlinear least squares (:func:`scipy.optimize.least_squares`, method ``trf``,
-``x_scale="jac"``) in two stages:
+``x_scale="jac"``; :mod:`nfs.diagnose.stage`) in two stages.  By default every free
+parameter has a Gaussian prior centred on its start value (the preset) with the widths of
+:mod:`nfs.diagnose.prior`, entered as rows (p - p0) / sigma beside the data rows, which are
+divided by their noise level: the solution is the maximum a posteriori estimate, and a
+parameter the runs do not determine stays near its preset instead of running to a bound.
 
 **thermal**
     Free thermal parameters (capacities, conductances, node powers, thermal-effect
@@ -17,7 +21,13 @@ Bounded nonlinear least squares (:func:`scipy.optimize.least_squares`, method ``
     the run's own time base by cubic Hermite interpolation (values and the solver's exact
     rates at the knots), and the thermometer chain of the simulator
     (:func:`nfs.sensors.thermometer_reading`: lag, thermometer effects, offset) runs there
-    with its noise and quantisation switched off; the residual is taken at the knots.
+    with its noise and quantisation switched off; the residual is taken at the knots and
+    divided by the thermometer's noise and rounding level sqrt(noise_c^2 + quantum_c^2 / 12).
+    With a prior, each free thermometer offset is centred on its soak anchor (the readings of
+    the first minute after power-on minus T0, :mod:`nfs.diagnose.soak`).  When the solution
+    from the preset stays above the noise (reduced chi-square > 1.5) or ends on a bound, the
+    stage starts again from the preset with every capacity and conductance +-30 %
+    (:func:`nfs.diagnose.bound_advice.perturbed_starts`) and keeps the lowest cost.
 **drift**
     Thermal parameters fixed at the thermal fit.  Free: ``gyro.bias_dph``, the gyro effect
     coefficients, the accelerometer biases, accelerometer effect coefficients and the
@@ -39,24 +49,29 @@ Bounded nonlinear least squares (:func:`scipy.optimize.least_squares`, method ``
       when an accelerometer or turntable parameter is free.
 
     Each channel is divided by the standard error of its window means (within-window
-    scatter / sqrt(count), median over windows) so the units mix on a common scale.
+    scatter / sqrt(count), median over windows) so the units mix on a common scale.  The
+    tilts and accelerometer biases start at their linear least-squares solution from the
+    window means (:mod:`nfs.diagnose.sensor_fit`), then move with the rest.  After the stage
+    the gyro's ARW, bias instability and rate random walk are fitted to the Allan deviation
+    of the full-rate residual at rest (:mod:`nfs.diagnose.noise_fit`) and set in the fitted
+    instrument.
 
-Uncertainties: cov = s^2 (J^T J)^-1 with s^2 = 2 cost / (m - n) at the solution of each
-stage (pseudo-inverse; a direction the data do not constrain gives an infinite standard
-error and its parameters are reported as not identifiable).  These are conditional on the
-other stage's parameters and on the model being right.
+Uncertainties: cov = s^2 (J^T J)^-1 with s^2 = 2 cost / (m - n) of the data rows at the
+solution of each stage, or with a prior the posterior (J^T J / s^2 + P^T P)^-1 (pseudo-
+inverse; a direction the data rows do not constrain gives an infinite standard error and its
+parameters are reported as not identifiable).  These are conditional on the other stage's
+parameters and on the model being right.  A parameter that ends on its bound is reported
+with what it says about the model's structure (:func:`nfs.diagnose.bound_advice.bound_advice`).
 """
 
 from __future__ import annotations
 
 import math
-import time
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any, Iterable, Mapping, Sequence
 
 import numpy as np
-from scipy.optimize import least_squares
 
 import thermal
 from thermal.solve import step_matrices
@@ -73,9 +88,10 @@ from .bound_advice import bound_advice, perturbed_starts
 from .noise_fit import GyroNoiseEstimate, gyro_noise_from_residual
 from .params import (_all_paths, expand_paths, fit_bounds, get_param,
                      set_params)
-from .prior import Prior, build_prior
+from .prior import build_prior
 from .sensor_fit import LEVEL_PATHS, LevelData, level_from_means
 from .soak import SoakAnchor, anchor_offsets, soak_offsets
+from .stage import StageReport, solve_stage
 
 __all__ = ["StageReport", "FitResult", "fit_model", "default_free", "write_fitted_model",
            "model_drift_dph", "STAGES", "DEFAULT_DECIMATE_S"]
@@ -96,37 +112,6 @@ _ZERO_RNG = np.random.default_rng(0)
 
 # ---------------------------------------------------------------------------------------------
 # Results
-
-@dataclass(frozen=True)
-class StageReport:
-    """How one stage of the fit went."""
-
-    name: str
-    """``thermal`` or ``drift``."""
-    free: tuple[str, ...]
-    """The parameters this stage fitted."""
-    converged: bool
-    """True when least_squares stopped on a tolerance (status > 0), not on max_nfev."""
-    message: str
-    """least_squares' own message."""
-    nfev: int
-    """Residual evaluations."""
-    cost_start: float
-    """0.5 sum r^2 at the start (weighted residuals)."""
-    cost: float
-    """0.5 sum r^2 at the solution (data rows plus prior rows: the MAP cost)."""
-    n_residuals: int
-    """m, the number of data residuals (the prior rows not counted)."""
-    time_s: float
-    """Wall time of the stage [s]."""
-    n_prior: int = 0
-    """Prior rows (parameters with a finite prior width)."""
-    cost_prior: float = 0.0
-    """0.5 sum of the squared prior rows at the solution (half the squared shift in prior
-    widths, summed)."""
-    n_starts: int = 1
-    """Starts tried (the preset and its perturbations); the lowest cost was kept."""
-
 
 @dataclass(frozen=True)
 class FitResult:
@@ -608,97 +593,7 @@ def _drift_models(inst: Instrument, rd: _DriftRun, ctx) -> dict[str, np.ndarray]
 
 
 # ---------------------------------------------------------------------------------------------
-# The least-squares core shared by both stages
-
-def _solve(name: str, fun, x0: np.ndarray, lb: np.ndarray, ub: np.ndarray,
-           max_nfev: int | None, paths: Sequence[str], prior: Prior | None = None,
-           extra_starts: Sequence[np.ndarray] = ()):
-    """Minimise 0.5 |r|^2 over the box, r = data rows of ``fun`` plus the prior rows.
-
-    From ``x0`` and from each of ``extra_starts``; the solution of lowest cost is kept.
-    Standard errors: see :func:`_errors`.
-    """
-    t0 = time.perf_counter()
-    x0 = np.clip(x0, lb, ub)
-    r0 = fun(x0)
-    m, n = r0.size, x0.size
-    use_prior = prior is not None and bool(prior.active.any())
-
-    def total(x):
-        r = fun(x)
-        return np.concatenate([r, prior.rows(x)]) if use_prior else r
-
-    best, nfev, tried = None, 0, 0
-    r_start = total(x0)
-    for xs in [x0, *[np.clip(x, lb, ub) for x in extra_starts]]:
-        if best is not None and _settled(best, m, lb, ub):
-            break
-        res = least_squares(total, xs, bounds=(lb, ub), method="trf", x_scale="jac",
-                            max_nfev=max_nfev)
-        nfev, tried = nfev + int(res.nfev), tried + 1
-        if best is None or res.cost < best.cost:
-            best = res
-    res = best
-    cost_prior = float(0.5 * np.sum(res.fun[m:] ** 2))
-    report = StageReport(name=name, free=tuple(paths), converged=bool(res.status > 0),
-                         message=str(res.message), nfev=nfev,
-                         cost_start=float(0.5 * r_start @ r_start), cost=float(res.cost),
-                         n_residuals=int(m), time_s=time.perf_counter() - t0,
-                         n_prior=int(res.fun.size - m), cost_prior=cost_prior,
-                         n_starts=tried)
-    jac = np.asarray(res.jac, dtype=float)
-    stderr, unident = _errors(jac[:m], res.fun[:m], paths,
-                              prior.jacobian() if use_prior else None)
-    span = ub - lb
-    at = [p for i, p in enumerate(paths)
-          if res.active_mask[i] != 0
-          or (np.isfinite(span[i]) and min(res.x[i] - lb[i], ub[i] - res.x[i]) <= 1e-6 * span[i])]
-    return res, report, stderr, unident, at
-
-
-def _settled(res, m: int, lb: np.ndarray, ub: np.ndarray) -> bool:
-    """A solution no other start needs to challenge: the data rows at their noise level
-    (reduced chi-square <= 1.5; a lower minimum could only fit noise) and no parameter on a
-    bound."""
-    n = res.x.size
-    chi2 = float(res.fun[:m] @ res.fun[:m]) / max(m - n, 1)
-    return chi2 <= 1.5 and not np.any(res.active_mask != 0)
-
-
-def _errors(jac: np.ndarray, r: np.ndarray, paths: Sequence[str],
-            jac_prior: np.ndarray | None) -> tuple[dict[str, float], dict[str, str]]:
-    """Standard errors and the parameters the data rows cannot determine.
-
-    Data only: cov = s^2 (J^T J)^-1, s^2 = |r|^2 / (m - n), through the SVD of J (a
-    pseudo-inverse).  With a prior, the posterior of the linearised problem: the data rows
-    (whitened by their stated noise, which the residual says is s times too small) and the
-    prior rows P give cov = (J^T J / s^2 + P^T P)^-1 (Tarantola 2005, *Inverse Problem
-    Theory*, sec. 3.2: the Gaussian linear case).  A direction the data rows do not constrain gives the parameters in it an infinite standard
-    error (the value there is the prior's, not a measurement) and names them.
-    """
-    m, n = jac.shape
-    s2 = float(r @ r) / max(m - n, 1)
-    col = np.sqrt(np.sum(jac * jac, axis=0))
-    col_safe = np.where(col > 0, col, 1.0)
-    _, sv, vt = np.linalg.svd(jac / col_safe, full_matrices=False)
-    tol = max(m, n) * np.finfo(float).eps * 1e4 * (sv[0] if sv.size else 0.0)
-    good = sv > tol
-    if jac_prior is None:
-        inv = (vt[good].T / sv[good] ** 2) @ vt[good]
-        stderr = np.sqrt(np.maximum(np.diag(inv), 0.0) * s2) / col_safe
-    else:
-        h = jac.T @ jac / max(s2, np.finfo(float).tiny) + jac_prior.T @ jac_prior
-        d = np.sqrt(np.maximum(np.diag(h), np.finfo(float).tiny))
-        stderr = np.sqrt(np.maximum(np.diag(np.linalg.pinv(h / np.outer(d, d))), 0.0)) / d
-    unident = {}
-    for i, p in enumerate(paths):
-        weak = col[i] == 0 or (np.abs(vt[~good, i]) > 0.1).any()
-        if weak:
-            stderr[i] = math.inf
-            unident[p] = ("the residual does not depend on it" if col[i] == 0 else
-                          "collinear with other free parameters on these runs")
-    return dict(zip(paths, stderr)), unident
-
+# Residual summaries
 
 def _rms(parts: dict[str, list[np.ndarray]]) -> dict[str, float]:
     out = {}
@@ -809,9 +704,11 @@ def fit_model(inst: Instrument, runs: Sequence[Run], free: Iterable[str] | None 
         after power-on minus T0 (:func:`nfs.diagnose.soak.soak_offsets`), with the width of
         its standard error; runs that were not soaked are named in the warnings.
     n_starts : int
-        Starts of the thermal stage: the preset, then up to two perturbations of it (every
-        capacity and conductance +-30 %, :func:`nfs.diagnose.bound_advice.perturbed_starts`);
-        the lowest cost is kept.  1: the preset only.
+        Most starts of the thermal stage: the preset, then up to two perturbations of it
+        (every capacity and conductance +-30 %,
+        :func:`nfs.diagnose.bound_advice.perturbed_starts`), tried only while the best
+        solution stays above the noise (reduced chi-square > 1.5) or on a bound; the lowest
+        cost is kept.  1: the preset only.
     fit_noise : bool
         After the drift stage, fit the gyro's ARW, bias instability and rate random walk to the
         Allan deviation of the drift residual at rest (:mod:`nfs.diagnose.noise_fit`) and set
@@ -863,7 +760,7 @@ def fit_model(inst: Instrument, runs: Sequence[Run], free: Iterable[str] | None 
         lb, ub = (np.array([bounds[p][i] for p in sp]) for i in (0, 1))
         x0 = np.array([start[p] for p in sp])
         extra = perturbed_starts(sp, x0, lb, ub)[:n_starts - 1] if name == "thermal" else []
-        res, rep, se, un, at = _solve(name, fun, x0, lb, ub, max_nfev, sp,
+        res, rep, se, un, at = solve_stage(name, fun, x0, lb, ub, max_nfev, sp,
                                       None if pr is None else pr.subset(sp), extra)
         stage_reports[name] = rep
         stderr.update(se)

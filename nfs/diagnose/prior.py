@@ -8,8 +8,8 @@ sigma_p.  :func:`nfs.diagnose.fit.fit_model` appends one residual row per parame
 to its data rows, which are divided by their noise level, so the cost 0.5 sum r^2 is half the
 negative log posterior (up to a constant) and its minimum is the maximum a posteriori (MAP)
 estimate (Tarantola 2005, *Inverse Problem Theory*, sec. 3.2: the least-squares misfit of a
-Gaussian problem is the data term plus the prior term).  A parameter the data do not determine then stays
-at its prior instead of running to a bound.
+Gaussian problem is the data term plus the prior term).  A parameter the data do not
+determine then stays at its prior instead of running to a bound.
 
 The widths live in one table, :data:`PRIOR_WIDTHS` (parameter paths) and
 :data:`EFFECT_PRIOR_WIDTHS` (effect parameters, by unit), each with its reason.  A caller

@@ -1,0 +1,154 @@
+"""The least-squares core of one stage of :func:`nfs.diagnose.fit.fit_model`.
+
+Bounded nonlinear least squares (:func:`scipy.optimize.least_squares`, method ``trf``,
+``x_scale="jac"``) of the data rows of a stage plus, when a prior is given, its rows
+(x - p0) / sigma (:mod:`nfs.diagnose.prior`); from the start and, while the best solution is
+not settled (data rows above their noise level, or a parameter on a bound), from extra
+starts; the lowest cost wins.  Standard errors from the data rows or from the posterior, and
+the parameters the data rows cannot determine.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+from typing import Sequence
+
+import numpy as np
+from scipy.optimize import least_squares
+
+from .prior import Prior
+
+__all__ = ["StageReport", "solve_stage"]
+
+
+@dataclass(frozen=True)
+class StageReport:
+    """How one stage of the fit went."""
+
+    name: str
+    """``thermal`` or ``drift``."""
+    free: tuple[str, ...]
+    """The parameters this stage fitted."""
+    converged: bool
+    """True when least_squares stopped on a tolerance (status > 0), not on max_nfev."""
+    message: str
+    """least_squares' own message."""
+    nfev: int
+    """Residual evaluations."""
+    cost_start: float
+    """0.5 sum r^2 at the start (weighted residuals)."""
+    cost: float
+    """0.5 sum r^2 at the solution (data rows plus prior rows: the MAP cost)."""
+    n_residuals: int
+    """m, the number of data residuals (the prior rows not counted)."""
+    time_s: float
+    """Wall time of the stage [s]."""
+    n_prior: int = 0
+    """Prior rows (parameters with a finite prior width)."""
+    cost_prior: float = 0.0
+    """0.5 sum of the squared prior rows at the solution (half the squared shift in prior
+    widths, summed)."""
+    n_starts: int = 1
+    """Starts tried (the preset, then its perturbations while the best solution was not
+    settled); the lowest cost was kept."""
+
+
+def solve_stage(name: str, fun, x0: np.ndarray, lb: np.ndarray, ub: np.ndarray,
+           max_nfev: int | None, paths: Sequence[str], prior: Prior | None = None,
+           extra_starts: Sequence[np.ndarray] = ()):
+    """Minimise 0.5 |r|^2 over the box [lb, ub], r = ``fun(x)`` (the data rows, divided by
+    their noise level) followed by the rows of ``prior``.
+
+    From ``x0``, then from each of ``extra_starts`` while the best solution is not settled
+    (:func:`_settled`); the solution of lowest cost is kept.  Standard errors: see
+    :func:`_errors`.
+
+    Returns
+    -------
+    (scipy OptimizeResult, StageReport, {path: stderr}, {path: why not identifiable},
+    [paths at a bound])
+    """
+    t0 = time.perf_counter()
+    x0 = np.clip(x0, lb, ub)
+    r0 = fun(x0)
+    m, n = r0.size, x0.size
+    use_prior = prior is not None and bool(prior.active.any())
+
+    def total(x):
+        r = fun(x)
+        return np.concatenate([r, prior.rows(x)]) if use_prior else r
+
+    best, nfev, tried = None, 0, 0
+    r_start = total(x0)
+    for xs in [x0, *[np.clip(x, lb, ub) for x in extra_starts]]:
+        if best is not None and _settled(best, m, lb, ub):
+            break
+        res = least_squares(total, xs, bounds=(lb, ub), method="trf", x_scale="jac",
+                            max_nfev=max_nfev)
+        nfev, tried = nfev + int(res.nfev), tried + 1
+        if best is None or res.cost < best.cost:
+            best = res
+    res = best
+    cost_prior = float(0.5 * np.sum(res.fun[m:] ** 2))
+    report = StageReport(name=name, free=tuple(paths), converged=bool(res.status > 0),
+                         message=str(res.message), nfev=nfev,
+                         cost_start=float(0.5 * r_start @ r_start), cost=float(res.cost),
+                         n_residuals=int(m), time_s=time.perf_counter() - t0,
+                         n_prior=int(res.fun.size - m), cost_prior=cost_prior,
+                         n_starts=tried)
+    jac = np.asarray(res.jac, dtype=float)
+    stderr, unident = _errors(jac[:m], res.fun[:m], paths,
+                              prior.jacobian() if use_prior else None)
+    span = ub - lb
+    at = [p for i, p in enumerate(paths)
+          if res.active_mask[i] != 0
+          or (np.isfinite(span[i]) and min(res.x[i] - lb[i], ub[i] - res.x[i]) <= 1e-6 * span[i])]
+    return res, report, stderr, unident, at
+
+
+def _settled(res, m: int, lb: np.ndarray, ub: np.ndarray) -> bool:
+    """A solution no other start needs to challenge: the data rows at their noise level
+    (reduced chi-square <= 1.5; a lower minimum could only fit noise) and no parameter on a
+    bound."""
+    n = res.x.size
+    chi2 = float(res.fun[:m] @ res.fun[:m]) / max(m - n, 1)
+    return chi2 <= 1.5 and not np.any(res.active_mask != 0)
+
+
+def _errors(jac: np.ndarray, r: np.ndarray, paths: Sequence[str],
+            jac_prior: np.ndarray | None) -> tuple[dict[str, float], dict[str, str]]:
+    """Standard errors and the parameters the data rows cannot determine.
+
+    Data only: cov = s^2 (J^T J)^-1, s^2 = |r|^2 / (m - n), through the SVD of J (a
+    pseudo-inverse).  With a prior, the posterior of the linearised problem: the data rows
+    (whitened by their stated noise, which the residual says is s times too small) and the
+    prior rows P give cov = (J^T J / s^2 + P^T P)^-1 (Tarantola 2005, *Inverse Problem
+    Theory*, sec. 3.2: the Gaussian linear case).  A direction the data rows do not
+    constrain gives the parameters in it an infinite standard error (the value there is the
+    prior's, not a measurement; :attr:`nfs.diagnose.fit.FitResult.prior_sigma` holds its width) and names
+    them.
+    """
+    m, n = jac.shape
+    s2 = float(r @ r) / max(m - n, 1)
+    col = np.sqrt(np.sum(jac * jac, axis=0))
+    col_safe = np.where(col > 0, col, 1.0)
+    _, sv, vt = np.linalg.svd(jac / col_safe, full_matrices=False)
+    tol = max(m, n) * np.finfo(float).eps * 1e4 * (sv[0] if sv.size else 0.0)
+    good = sv > tol
+    if jac_prior is None:
+        inv = (vt[good].T / sv[good] ** 2) @ vt[good]
+        stderr = np.sqrt(np.maximum(np.diag(inv), 0.0) * s2) / col_safe
+    else:
+        h = jac.T @ jac / max(s2, np.finfo(float).tiny) + jac_prior.T @ jac_prior
+        d = np.sqrt(np.maximum(np.diag(h), np.finfo(float).tiny))
+        stderr = np.sqrt(np.maximum(np.diag(np.linalg.pinv(h / np.outer(d, d))), 0.0)) / d
+    unident = {}
+    for i, p in enumerate(paths):
+        weak = col[i] == 0 or (np.abs(vt[~good, i]) > 0.1).any()
+        if weak:
+            stderr[i] = math.inf
+            unident[p] = ("the residual does not depend on it" if col[i] == 0 else
+                          "collinear with other free parameters on these runs")
+    return dict(zip(paths, stderr)), unident
