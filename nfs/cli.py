@@ -217,7 +217,9 @@ def _cmd_fit(args) -> int:
     if not args.quiet:
         print(f"fitting {inst.name} to {len(runs)} run(s)...", file=sys.stderr)
     res = fit_model(inst, runs, free=args.free, stages=tuple(args.stages),
-                    decimate_s=args.decimate_s)
+                    decimate_s=args.decimate_s,
+                    prior=None if args.no_prior else "default", prior_scale=args.prior_scale,
+                    n_starts=args.starts, fit_noise=not args.no_noise_fit)
     write_fitted_model(res, args.output)
     print(res.summary())
     print(f"wrote {args.output}")
@@ -417,6 +419,17 @@ def build_parser() -> argparse.ArgumentParser:
                     choices=["thermal", "drift"])
     fi.add_argument("--decimate-s", type=float, default=10.0,
                     help="time step of the fit [s] (default 10)")
+    fi.add_argument("--prior-scale", type=float, default=1.0,
+                    help="multiply every prior width of nfs.diagnose.prior by this (default 1; "
+                         "inf: no prior)")
+    fi.add_argument("--no-prior", action="store_true",
+                    help="plain least squares: no prior on the parameters, no soak anchor")
+    fi.add_argument("--starts", type=int, default=3,
+                    help="most starts of the thermal stage: the preset, then capacities and "
+                         "conductances +-30 %% while the fit stays above the noise (default 3)")
+    fi.add_argument("--no-noise-fit", action="store_true",
+                    help="keep the model's gyro noise instead of fitting it to the Allan "
+                         "deviation of the drift residual")
     fi.add_argument("-q", "--quiet", action="store_true")
     fi.set_defaults(func=_cmd_fit)
 
