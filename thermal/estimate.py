@@ -29,14 +29,21 @@ Gamma; Van Loan 1978, IEEE TAC 23(3), theorem 1, for the process noise):
     expm([[-A, G Q G'], [0, A']] h) = [[., Phi^-1 Q_d], [0, Phi']]                          (5)
 
 A state-dependent power p(T_k) (a TEC law), held over the step as the simulator holds it,
-makes the step nonlinear; it is evaluated at the filtered estimate and linearised there,
-F_k = Phi + Gamma_P dp/dT (an extended Kalman filter of the held discrete model; Simon 2006,
-Optimal State Estimation, section 13.2).
+enters the mean exactly: it is evaluated at the filtered (smoothed, for the rates) estimate
+and held, x_k+1 = ... + Gamma_P p(T_k^+).  Its slope dp/dT is left out of the covariance,
+which propagates with the network's Phi alone (an extended Kalman filter would use
+F_k = Phi + Gamma_P dp/dT; Simon 2006, Optimal State Estimation, section 13.2).  For the
+TEC the slope is 0.02-0.1 W/K against the electronics' 1.1 W/K of conductances, a few per
+cent of one entry of A; leaving it out makes the covariance, the gains and the smoother's
+Lam independent of the readings, so they are computed once for all records that share
+their time steps and missing readings, which is what makes the filter fast.
 
-Filter (Simon 2006, equations 5.19, with Joseph's covariance update 5.19's stable form):
+Filter (Simon 2006, equations 5.19):
 
     v_k = z_k - H x_k^- - o,   S_k = H P_k^- H' + R,   K_k = P_k^- H' S_k^-1
-    x_k^+ = x_k^- + K_k v_k,   P_k^+ = (I - K_k H) P_k^- (I - K_k H)' + K_k R K_k'      (6)
+    x_k^+ = x_k^- + K_k v_k,   P_k^+ = (I - K_k H) P_k^-                                 (6)
+
+A missing reading (NaN) zeroes its row of H at that step.
 
 Log-likelihood by the prediction-error decomposition (Harvey 1989, Forecasting, Structural
 Time Series Models and the Kalman Filter, equation 3.4.7; Shumway & Stoffer 2017, Time
@@ -53,13 +60,11 @@ Control 18(1), 65-75), which needs no inverse of P_k^- (singular when q = 0):
     lam~_k-1 = F_k-1' lam^_k,                  Lam~_k-1 = F_k-1' Lam^_k F_k-1
     x_k|N = x_k^+ - P_k^+ lam~_k,              P_k|N = P_k^+ - P_k^+ Lam~_k P_k^+           (8)
 
-A missing reading (NaN) drops its row from H at that step.
-
 The recursions are written here rather than taken from filterpy or pykalman: neither
 discretises a continuous model exactly with Van Loan's process noise, neither is a
 dependency of the package, and running all records at once as stacked NumPy arrays (one
-Python loop over the steps, not one per record) is what makes seven 2.5 h runs smooth in a
-fraction of a second.
+Python loop over the steps, not one per record, and one covariance for all) is what makes
+seven 2.5 h runs smooth in a fraction of a second.
 """
 
 from __future__ import annotations
@@ -80,9 +85,8 @@ __all__ = ["LinearSensor", "ThermalRecord", "StatePower", "NodeEstimate", "Proce
            "StateEstimate", "kalman_smooth", "fit_process_noise", "estimate_states"]
 
 #: A held state-dependent heat source of one record: ``law(k, temperature_c)`` at sample k
-#: from the node temperatures (n,) [degC] -> (extra power per node (n,) [W], its Jacobian
-#: dP/dT (n, n) [W/K]).
-StatePower = Callable[[int, np.ndarray], tuple[np.ndarray, np.ndarray]]
+#: from the node temperatures (n,) [degC] -> extra power per node (n,) [W].
+StatePower = Callable[[int, np.ndarray], np.ndarray]
 
 _LOG_2PI = math.log(2.0 * math.pi)
 
@@ -144,7 +148,7 @@ class ThermalRecord:
     constant node powers; None for none."""
 
     power_law: StatePower | None = None
-    """A held state-dependent extra power (e.g. a TEC law) with its Jacobian, or None."""
+    """A held state-dependent extra power (e.g. a TEC law), or None."""
 
 
 @dataclass(frozen=True)
@@ -170,7 +174,8 @@ class NodeEstimate:
     """dT_j/dt at t_k [K/s] = A T + B u_k + C^-1 d from (1) at the smoothed state."""
 
     rate_std_c_per_s: np.ndarray
-    """Standard deviation of the rate [K/s], shape (n_k, n)."""
+    """Standard deviation of the rate [K/s], shape (n_k, n) (the power law's slope left
+    out, as in the covariance)."""
 
     heat_w: np.ndarray
     """Smoothed unmodelled heat input d_j(t_k) [W], shape (n_k, n)."""
@@ -356,13 +361,14 @@ def _discretise(model: _Model, h_s: float) -> _Step:
 # Records, stacked
 
 @dataclass
-class _Batch:
-    """All records padded to one length: per-step arrays (r, n_k, ...)."""
+class _Group:
+    """Records that share their length, steps and missing readings, so one covariance,
+    one gain sequence and one smoother covariance serve them all: (r, n_k, ...) arrays."""
 
-    lengths: np.ndarray
-    cls: np.ndarray          # (r, n_k - 1) step class of each interval
-    steps: list[_Step]
-    z: np.ndarray            # (r, n_k, m), NaN missing
+    members: list[int]
+    cls: np.ndarray          # (n_k - 1,) step class of each interval
+    seen: np.ndarray         # (n_k, m) True where the readings exist
+    z: np.ndarray            # (r, n_k, m), 0 where missing
     u: np.ndarray            # (r, n_k, 1 + n) without the state-dependent power
     x0: np.ndarray           # (r, N)
     laws: list[StatePower | None]
@@ -396,32 +402,34 @@ def _check_record(rec: ThermalRecord, i: int, n: int, m: int) -> tuple[np.ndarra
     return t, z, amb, power, t0
 
 
-def _batch(model: _Model, records: Sequence[ThermalRecord]) -> _Batch:
+def _groups(model: _Model, records: Sequence[ThermalRecord]) -> tuple[list[_Step], list[_Group]]:
+    """The discrete matrices of every distinct step and the records grouped by (length,
+    steps, missing readings)."""
     if not records:
         raise ThermalError("state estimation needs at least one record")
     n, m = model.n, model.h.shape[0]
     checked = [_check_record(rec, i, n, m) for i, rec in enumerate(records)]
-    lengths = np.array([c[0].size for c in checked])
-    n_k, r = int(lengths.max()), len(records)
-    all_dt = np.concatenate([np.diff(c[0]) for c in checked])
-    keys = np.unique(np.round(all_dt, 9))
+    keys = np.unique(np.round(np.concatenate([np.diff(c[0]) for c in checked]), 9))
     steps = [_discretise(model, float(h)) for h in keys]
-    cls = np.zeros((r, n_k - 1), dtype=int)
-    z = np.full((r, n_k, m), np.nan)
-    u = np.empty((r, n_k, 1 + n))
-    x0 = np.empty((r, model.a.shape[0]))
-    for q, (t, zq, amb, power, t0) in enumerate(checked):
-        k = t.size
-        c = np.searchsorted(keys, np.round(np.diff(t), 9))
-        cls[q, :k - 1] = c
-        cls[q, k - 1:] = c[-1]
-        z[q, :k] = zq
-        u[q, :k, 0] = amb
-        u[q, :k, 1:] = model.p_const + power
-        u[q, k:] = u[q, k - 1]
-        x0[q] = np.concatenate([t0, np.zeros(n), model.lag_from_t @ t0])
-    return _Batch(lengths=lengths, cls=cls, steps=steps, z=z, u=u, x0=x0,
-                  laws=[rec.power_law for rec in records])
+    by_key: dict[tuple, list[int]] = {}
+    classes = []
+    for q, (t, zq, *_rest) in enumerate(checked):
+        cls = np.searchsorted(keys, np.round(np.diff(t), 9))
+        classes.append(cls)
+        key = (t.size, cls.tobytes(), np.isfinite(zq).tobytes())
+        by_key.setdefault(key, []).append(q)
+    groups = []
+    for members in by_key.values():
+        first = checked[members[0]]
+        seen = np.isfinite(first[1])
+        z = np.stack([np.where(seen, checked[q][1], 0.0) for q in members])
+        u = np.stack([np.column_stack([checked[q][2], model.p_const + checked[q][3]])
+                      for q in members])
+        x0 = np.stack([np.concatenate([checked[q][4], np.zeros(n),
+                                       model.lag_from_t @ checked[q][4]]) for q in members])
+        groups.append(_Group(members=members, cls=classes[members[0]], seen=seen, z=z, u=u,
+                             x0=x0, laws=[records[q].power_law for q in members]))
+    return steps, groups
 
 
 def _initial_cov(model: _Model, initial_std_c: float, initial_power_std_w: float) -> np.ndarray:
@@ -438,173 +446,130 @@ def _initial_cov(model: _Model, initial_std_c: float, initial_power_std_w: float
     return jac @ base @ jac.T
 
 
-def _law_at(batch: _Batch, k: int, temps: np.ndarray, n: int
-            ) -> tuple[np.ndarray, np.ndarray | None]:
-    """Held extra power (r, n) and its Jacobian (r, n, n) of every record at step k.
-
-    The shapes are checked at the first step only and finiteness once for all records:
-    this runs once per step and record, the inner loop of the filter.
-    """
-    r = temps.shape[0]
-    p = np.zeros((r, n))
-    jac = np.zeros((r, n, n))
-    for q, law in enumerate(batch.laws):
-        if law is None or k >= batch.lengths[q]:
-            continue
-        pq, jq = law(k, temps[q])
-        if k == 0 and (np.shape(pq) != (n,) or np.shape(jq) != (n, n)):
-            raise ThermalError(f"power_law must return shapes ({n},) and ({n}, {n}), got "
-                               f"{np.shape(pq)} and {np.shape(jq)}")
-        p[q] = pq
-        jac[q] = jq
-    if not (np.isfinite(p).all() and np.isfinite(jac).all()):
-        raise ThermalError(f"power_law is not finite at sample {k}")
-    return p, jac
+def _law_at(group: _Group, k: int, temps: np.ndarray, n: int) -> np.ndarray:
+    """Held extra power (r, n) [W] of the group's state-dependent laws at step k."""
+    p = np.zeros((temps.shape[0], n))
+    for q, law in enumerate(group.laws):
+        if law is not None:
+            p[q] = law(k, temps[q])
+    if not np.isfinite(p).all():
+        raise ThermalError(f"power_law is not finite (or not of shape ({n},)) at sample {k}")
+    return p
 
 
-def _run(model: _Model, batch: _Batch, q_scale: float, p0: np.ndarray, smooth: bool):
-    """Filter (6) with the likelihood (7) and, when ``smooth``, the smoother (8).
+def _run(model: _Model, steps: list[_Step], group: _Group, q_scale: float, p0: np.ndarray,
+         smooth: bool):
+    """Filter (6) with the likelihood (7) and, when ``smooth``, the smoother (8), for a group.
 
-    The readings of one step are processed one sensor at a time (R is diagonal, so the
-    sequential scalar updates equal the joint update (6) and their log-likelihood terms sum
-    to (7); Simon 2006, section 6.1): no matrix inverse, and the smoother's update of
-    Lam through C = I - K h' is a rank-two correction.  Returns the total log-likelihood,
-    the per-record log-likelihoods and, with ``smooth``, a dict of smoothed arrays.
+    The covariance recursion does not depend on the readings, so it runs once for the
+    group (N x N arrays) while the means run for all its records at once (r x N).  A
+    missing reading zeroes its row of H and gets S_mm = 1, v_m = 0: it then adds nothing to
+    the update, to (7) or to (8).  Returns the per-record log-likelihoods (r,) and, with
+    ``smooth``, a dict of smoothed arrays.
     """
     n = model.n
-    h = model.h
-    m, big = h.shape
-    r, n_k = batch.z.shape[:2]
-    single = len(batch.steps) == 1
-    phis = np.stack([s.phi for s in batch.steps])
-    phims = np.stack([s.phi_minus_i for s in batch.steps])
-    gammas = np.stack([s.gamma for s in batch.steps])
-    qds = np.stack([q_scale * s.q_unit for s in batch.steps])
-    has_law = any(law is not None for law in batch.laws)
-    h_rows = list(h)
-    h_outer = [np.outer(hi, hi) for hi in h_rows]
-    # a sensor read through a lag reads one state: P h and h' x are then a column, not a product
-    picks = [int(np.flatnonzero(hi)[0]) if np.count_nonzero(hi) == 1 and hi.max() == 1.0
-             else None for hi in h_rows]
-    seen_all = np.isfinite(batch.z)
-    every = seen_all.all(axis=0)                 # (n_k, m): no record misses this reading
-    z_all = np.where(seen_all, batch.z, 0.0)
-    s_all = np.ones((r, n_k, m))                 # innovation variances S (1 where unseen)
-    v_all = np.zeros((r, n_k, m))                # innovations v (0 where unseen)
+    m, big = model.h.shape
+    r, n_k = group.z.shape[:2]
+    cls = group.cls.tolist()
+    seen = group.seen
+    phis = [s.phi for s in steps]
+    phis_t = [s.phi.T.copy() for s in steps]
+    phims_t = [s.phi_minus_i.T.copy() for s in steps]
+    gammas_t = [s.gamma.T.copy() for s in steps]
+    qds = [q_scale * s.q_unit for s in steps]
+    has_law = any(law is not None for law in group.laws)
+    patterns: dict[bytes, np.ndarray] = {}
+    hks = [patterns.setdefault(row.tobytes(), model.h * row[:, None]) for row in seen]
+    r_diag = np.where(seen, model.r, 1.0)
+    offset = model.offset * seen                # (n_k, m)
+    diag = np.arange(m)
 
-    x = batch.x0.copy()
-    p = np.broadcast_to(p0, (r, big, big)).copy()
+    logdet = 0.0
+    quad = np.zeros(r)
+    v_all = np.zeros((r, n_k, m))               # innovations v (0 where unseen)
+    s_diag = np.ones((n_k, m))                  # diagonal of S (1 where unseen)
+    x = group.x0.copy()
+    p = p0.copy()
     if smooth:
         xf_all = np.empty((r, n_k, big))
-        pf_all = np.empty((r, n_k, big, big))
-        k_all = np.zeros((r, n_k, m, big))       # gains K = P h / s (0 where no reading)
-        f_all = np.empty((r, n_k, big, big)) if has_law else None
+        pf_all = np.empty((n_k, big, big))
+        gain_all = np.empty((n_k, big, m))
+        sinv_all = np.empty((n_k, m, m))
     for k in range(n_k):
-        for i in range(m):
-            j = picks[i]
-            if j is None:
-                ph = p @ h_rows[i]                             # (r, N), P symmetric
-                s = ph @ h_rows[i] + model.r[i]
-                v = z_all[:, k, i] - x @ h_rows[i] - model.offset[i]
-            else:
-                ph = p[:, :, j].copy()
-                s = ph[:, j] + model.r[i]
-                v = z_all[:, k, i] - x[:, j] - model.offset[i]
-            if every[k, i]:
-                g = 1.0 / s
-            else:
-                seen = seen_all[:, k, i]
-                v = np.where(seen, v, 0.0)
-                s = np.where(seen, s, 1.0)
-                g = np.where(seen, 1.0 / s, 0.0)
-            gain = ph * g[:, None]
-            x += gain * v[:, None]
-            p -= gain[:, :, None] * ph[:, None, :]
-            s_all[:, k, i] = s
-            v_all[:, k, i] = v
-            if smooth:
-                k_all[:, k, i] = gain
-        p = 0.5 * (p + p.transpose(0, 2, 1))
+        hk = hks[k]
+        pht = p @ hk.T
+        s = hk @ pht
+        s[diag, diag] += r_diag[k]
+        s_inv = np.linalg.inv(s)
+        gain = pht @ s_inv
+        v = group.z[:, k] - x @ hk.T - offset[k]
+        sv = v @ s_inv
+        quad += np.sum(sv * v, axis=1)
+        logdet += math.log(np.linalg.det(s))
+        x += v @ gain.T
+        p -= gain @ pht.T
+        p = 0.5 * (p + p.T)
+        v_all[:, k] = v
+        s_diag[k] = s[diag, diag]
         if smooth:
             xf_all[:, k] = x
-            pf_all[:, k] = p
+            pf_all[k] = p
+            gain_all[k] = gain
+            sinv_all[k] = s_inv
         if k == n_k - 1:
             break
-        # prediction to k + 1
-        if single:
-            phi, phim, gamma, qd = phis[0], phims[0], gammas[0], qds[0]
-        else:
-            ck = batch.cls[:, k]
-            phi, phim, gamma, qd = phis[ck], phims[ck], gammas[ck], qds[ck]
-        uk = batch.u[:, k].copy()
-        f = phi
+        c = cls[k]
+        uk = group.u[:, k]
         if has_law:
-            extra, jac = _law_at(batch, k, x[:, :n], n)
-            uk[:, 1:] += extra
-            f = np.broadcast_to(phi, (r, big, big)).copy()
-            f[:, :, :n] += (gamma[..., 1:] if gamma.ndim == 3 else gamma[None, :, 1:]) @ jac
-            if smooth:
-                f_all[:, k] = f
-        if gamma.ndim == 2:
-            x = x + x @ phim.T + uk @ gamma.T
-        else:
-            x = x + (phim @ x[:, :, None])[:, :, 0] + (gamma @ uk[:, :, None])[:, :, 0]
-        p = f @ p @ np.swapaxes(f, -1, -2) + qd
-    # a record shorter than the batch stops contributing at its end: padded steps have no
-    # readings and add nothing to (7)
-    loglik = -0.5 * np.sum(np.where(seen_all, np.log(s_all) + v_all * v_all / s_all + _LOG_2PI,
-                                    0.0), axis=(1, 2))
-    total = float(loglik.sum())
+            uk = uk.copy()
+            uk[:, 1:] += _law_at(group, k, x[:, :n], n)
+        x = x + x @ phims_t[c] + uk @ gammas_t[c]
+        p = phis[c] @ p @ phis_t[c] + qds[c]
+    loglik = -0.5 * (quad + logdet + seen.sum() * _LOG_2PI)
     if not smooth:
-        return total, loglik, None
+        return loglik, None
 
-    # modified Bryson-Frazier backward pass (8), the sensors of a step in reverse order
-    g_all = np.where(seen_all, 1.0 / s_all, 0.0)
-    innov = np.where(seen_all, v_all / np.sqrt(s_all), np.nan)
-    lam = np.zeros((r, big))
-    lam_m = np.zeros((r, big, big))
+    # modified Bryson-Frazier backward pass (8)
+    lam = np.zeros((r, big))                    # one adjoint per record
+    lam_m = np.zeros((big, big))                # shared: it does not depend on readings
     xs = np.empty((r, n_k, big))
-    ps_diag = np.empty((r, n_k, big))
-    rate_var = np.empty((r, n_k, n))
+    ps_diag = np.empty((n_k, big))
+    rate_var = np.empty((n_k, n))
     rates = model.rates
+    eye = np.eye(big)
     for k in range(n_k - 1, -1, -1):
-        pf = pf_all[:, k]
-        xs[:, k] = xf_all[:, k] - (pf @ lam[:, :, None])[:, :, 0]
-        pl = pf @ lam_m
-        ps_diag[:, k] = np.diagonal(pf, axis1=1, axis2=2) - np.sum(pl * pf, axis=2)
-        mp = rates @ pf                                         # (r, n, N)
-        rate_var[:, k] = (np.sum(mp * rates, axis=2)
-                          - np.sum((mp @ lam_m) * mp, axis=2))
+        pf = pf_all[k]
+        xs[:, k] = xf_all[:, k] - lam @ pf
+        ps_diag[k] = np.diagonal(pf) - np.sum((pf @ lam_m) * pf, axis=1)
+        mp = rates @ pf
+        rate_var[k] = np.sum(mp * rates, axis=1) - np.sum((mp @ lam_m) * mp, axis=1)
         if k == 0:
             break
-        for i in range(m - 1, -1, -1):
-            hi = h_rows[i]
-            gain = k_all[:, k, i]
-            lk = lam_m @ gain[:, :, None]                       # (r, N, 1)
-            klk = (gain[:, None, :] @ lk)[:, 0, 0]
-            w = v_all[:, k, i] * g_all[:, k, i]
-            lam = lam - hi * (np.sum(gain * lam, axis=1) + w)[:, None]
-            hl = hi[None, :, None] * lk.transpose(0, 2, 1)      # h (Lam K)'
-            lam_m = (lam_m - hl - hl.transpose(0, 2, 1)
-                     + (klk + g_all[:, k, i])[:, None, None] * h_outer[i])
-        if has_law:
-            fk = f_all[:, k - 1]
-        else:
-            fk = phis[0] if single else phis[batch.cls[:, k - 1]]
-        fkt = np.swapaxes(fk, -1, -2)
-        lam = (fkt @ lam[:, :, None])[:, :, 0] if fk.ndim == 3 else lam @ fk
-        lam_m = fkt @ lam_m @ fk
-    # the updates of step 0 are not needed: x_0|N uses lam~_0 only
+        hk, gain, s_inv = hks[k], gain_all[k], sinv_all[k]
+        lam = lam - (lam @ gain + v_all[:, k] @ s_inv) @ hk
+        c_k = eye - gain @ hk
+        lam_m = c_k.T @ lam_m @ c_k + hk.T @ s_inv @ hk
+        c = cls[k - 1]
+        lam = lam @ phis[c]
+        lam_m = phis_t[c] @ lam_m @ phis[c]
     law_s = np.zeros((r, n_k, n))
     if has_law:
         for k in range(n_k):
-            law_s[:, k] = _law_at(batch, k, xs[:, k, :n], n)[0]
-    rate = (xs @ rates.T + batch.u[..., :1] * model.b[:n, 0]
-            + (batch.u[..., 1:] + law_s) * model.inv_c)
-    pred = xs @ h.T + model.offset
-    out = dict(x=xs, x_filtered=xf_all, var=ps_diag, rate=rate, rate_var=rate_var,
-               innovation=innov, residual=batch.z - pred)
-    return total, loglik, out
+            law_s[:, k] = _law_at(group, k, xs[:, k, :n], n)
+    rate = (xs @ rates.T + group.u[..., :1] * model.b[:n, 0]
+            + (group.u[..., 1:] + law_s) * model.inv_c)
+    pred = xs @ model.h.T + model.offset
+    innov = np.where(seen, v_all / np.sqrt(s_diag), np.nan)
+    out = dict(x=xs, x_filtered=xf_all, var=np.broadcast_to(ps_diag, (r, n_k, big)),
+               rate=rate, rate_var=np.broadcast_to(rate_var, (r, n_k, n)),
+               innovation=innov, residual=np.where(seen, group.z - pred, np.nan))
+    return loglik, out
+
+
+def _loglik(model: _Model, steps: list[_Step], groups: list[_Group], q_scale: float,
+            p0: np.ndarray) -> float:
+    """log L(q), equation (7), over every group."""
+    return float(sum(_run(model, steps, g, q_scale, p0, smooth=False)[0].sum() for g in groups))
 
 
 # ---------------------------------------------------------------------------------------------
@@ -652,29 +617,39 @@ def kalman_smooth(network: Network, sensors: Sequence[LinearSensor],
         if not (math.isfinite(value) and value >= 0.0):
             raise ThermalError(f"{what} must be >= 0, got {value}")
     model = _model(network, sensors, noise_weights)
-    batch = _batch(model, records)
+    steps, groups = _groups(model, records)
     p0 = _initial_cov(model, initial_std_c, initial_power_std_w)
-    total, per_record, out = _run(model, batch, q, p0, smooth=True)
     n = model.n
-    results = []
-    for i, rec in enumerate(records):
-        k = int(batch.lengths[i])
-        arrays = dict(
-            time_s=np.asarray(rec.time_s, dtype=float).copy(),
-            temperature_c=out["x"][i, :k, :n].copy(),
-            temperature_std_c=np.sqrt(np.maximum(out["var"][i, :k, :n], 0.0)),
-            rate_c_per_s=out["rate"][i, :k].copy(),
-            rate_std_c_per_s=np.sqrt(np.maximum(out["rate_var"][i, :k], 0.0)),
-            heat_w=out["x"][i, :k, n:2 * n].copy(),
-            heat_std_w=np.sqrt(np.maximum(out["var"][i, :k, n:2 * n], 0.0)),
-            filtered_temperature_c=out["x_filtered"][i, :k, :n].copy(),
-            innovation=out["innovation"][i, :k].copy(),
-            residual_c=out["residual"][i, :k].copy())
-        for value in arrays.values():
-            value.flags.writeable = False
-        results.append(NodeEstimate(node_names=model.names, sensor_names=model.sensors,
-                                    log_likelihood=float(per_record[i]), **arrays))
+    results: list[NodeEstimate | None] = [None] * len(records)
+    total = 0.0
+    for group in groups:
+        per_record, out = _run(model, steps, group, q, p0, smooth=True)
+        total += float(per_record.sum())
+        for g, i in enumerate(group.members):
+            results[i] = _node_estimate(model, records[i], out, g, float(per_record[g]))
     return StateEstimate(records=tuple(results), q_w2_per_s=q, log_likelihood=total)
+
+
+def _node_estimate(model: _Model, rec: ThermalRecord, out: dict, i: int,
+                   log_likelihood: float) -> NodeEstimate:
+    """Record i of a group's smoothed arrays as a read-only :class:`NodeEstimate`."""
+    n = model.n
+    k = out["x"].shape[1]
+    arrays = dict(
+        time_s=np.asarray(rec.time_s, dtype=float).copy(),
+        temperature_c=out["x"][i, :k, :n].copy(),
+        temperature_std_c=np.sqrt(np.maximum(out["var"][i, :k, :n], 0.0)),
+        rate_c_per_s=out["rate"][i, :k].copy(),
+        rate_std_c_per_s=np.sqrt(np.maximum(out["rate_var"][i, :k], 0.0)),
+        heat_w=out["x"][i, :k, n:2 * n].copy(),
+        heat_std_w=np.sqrt(np.maximum(out["var"][i, :k, n:2 * n], 0.0)),
+        filtered_temperature_c=out["x_filtered"][i, :k, :n].copy(),
+        innovation=out["innovation"][i, :k].copy(),
+        residual_c=out["residual"][i, :k].copy())
+    for value in arrays.values():
+        value.flags.writeable = False
+    return NodeEstimate(node_names=model.names, sensor_names=model.sensors,
+                        log_likelihood=log_likelihood, **arrays)
 
 
 def fit_process_noise(network: Network, sensors: Sequence[LinearSensor],
@@ -682,7 +657,7 @@ def fit_process_noise(network: Network, sensors: Sequence[LinearSensor],
                       bounds_w2_per_s: tuple[float, float] = (1e-12, 1e-1),
                       noise_weights: Mapping[str, float] | None = None,
                       initial_std_c: float = 0.05, initial_power_std_w: float = 0.0,
-                      xatol_decades: float = 0.02) -> ProcessNoiseFit:
+                      xatol_decades: float = 0.05) -> ProcessNoiseFit:
     """The q of (2) that maximises the innovation likelihood (7) over all records.
 
     A bounded 1-D search in log10 q (:func:`scipy.optimize.minimize_scalar`, method
@@ -698,13 +673,13 @@ def fit_process_noise(network: Network, sensors: Sequence[LinearSensor],
     if not (0.0 < lo < hi and math.isfinite(hi)):
         raise ThermalError(f"bounds_w2_per_s must satisfy 0 < low < high, got {bounds_w2_per_s}")
     model = _model(network, sensors, noise_weights)
-    batch = _batch(model, records)
+    steps, groups = _groups(model, records)
     p0 = _initial_cov(model, initial_std_c, initial_power_std_w)
     count = [0]
 
     def loglik(log10_q: float) -> float:
         count[0] += 1
-        return _run(model, batch, 10.0 ** log10_q, p0, smooth=False)[0]
+        return _loglik(model, steps, groups, 10.0 ** log10_q, p0)
 
     a, b = math.log10(lo), math.log10(hi)
     res = minimize_scalar(lambda s: -loglik(s), bounds=(a, b), method="bounded",

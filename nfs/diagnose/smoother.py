@@ -18,8 +18,8 @@ variance of a uniform rounding error; Widrow & Kollar 2008, Quantization Noise, 
 The estimation runs at decimated knots (every ``decimate_s``, plus the last sample), with the
 chamber temperature, the turntable's moving fraction and the state-free thermal-effect
 powers averaged over each knot interval and held, and the state-dependent thermal effects
-(the TEC law) evaluated at the filtered estimate and held over the interval, linearised there
-by a central difference (an extended Kalman filter; thermal/estimate.py).  Temperatures come
+(the TEC law) evaluated at the filtered estimate and held over the interval (its slope left
+out of the covariance; thermal/estimate.py).  Temperatures come
 back to the run's own time base by cubic Hermite interpolation of the knot values and knot
 rates, and the rates there are the derivative of that interpolant (at the knots: the model
 rate A T + B u + C^-1 d at the smoothed state), so a drift effect that uses dT/dt sees the
@@ -53,9 +53,6 @@ DEFAULT_DECIMATE_S = 10.0
 #: Floor of a thermometer's error standard deviation [degC] when its noise and quantum are 0:
 #: the filter needs a positive measurement variance.
 _MIN_NOISE_C = 1e-3
-
-#: Step of the central difference of a state-dependent power law [K].
-_LAW_STEP_C = 1e-3
 
 
 @dataclass(frozen=True)
@@ -206,17 +203,12 @@ def _prepare(inst: Instrument, run: Run, decimate_s: float) -> _Prepared:
     if stateful:
         times, moves = t_knot.tolist(), moving_knot.tolist()
 
-        def law(k: int, temperature_c: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-            """Held power of the state-dependent effects and its central-difference Jacobian."""
+        def law(k: int, temperature_c: np.ndarray) -> np.ndarray:
+            """Held power of the state-dependent effects at knot k [W]."""
             p = np.zeros(n)
-            jac = np.zeros((n, n))
             for f, j, params in stateful:
-                x = float(temperature_c[j])
-                p[j] += f(times[k], x, moves[k], **params)
-                jac[j, j] += (f(times[k], x + _LAW_STEP_C, moves[k], **params)
-                              - f(times[k], x - _LAW_STEP_C, moves[k], **params)
-                              ) / (2.0 * _LAW_STEP_C)
-            return p, jac
+                p[j] += f(times[k], float(temperature_c[j]), moves[k], **params)
+            return p
 
     readings = np.column_stack([np.asarray(run[col], dtype=float)[knots]
                                 for col in THERMOMETERS.values()])
