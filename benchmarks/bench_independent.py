@@ -1,0 +1,119 @@
+"""Hit rate and false-alarm rate of ``nfs fit`` + ``nfs diagnose`` on runs the model did not make.
+
+The runs come from the independent generator of the tests (``tests/independent/generator.py``:
+a finite-difference coil of 8 radial layers, thermometers on mixes of nodes, its own TEC law,
+a Gauss-Markov bias, a cycling chamber; it imports nothing of ``nfs``).  Each set holds the 7
+start temperatures x 2.5 h at 1 Hz with one hidden effect, none, or one outside the library.
+For every set the package does what a user does with a real unit's chamber runs: fit the
+lumped model (:func:`nfs.diagnose.fit_model`, default free set), then diagnose
+(:func:`nfs.diagnose.diagnose`).
+
+Printed per hidden effect: how often the hidden effect is the top significant candidate (the
+first significant one that no other explains; goal >= 90 %), and for the clean and the
+outside-library sets how often anything is significant (goal <= 5 %); then the time per set.
+
+The model starts from the default instrument with the effects the generator's unit has in
+kind (``tec_power``, ``bias_temperature``, ``shupe_gradient``, ``shupe_rate``), so that each
+hidden one is missing from it.
+
+Run: ``python benchmarks/bench_independent.py [--seeds 3] [--effects magnetic,none]
+[--jobs 2]``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import tempfile
+import time
+import warnings
+from pathlib import Path
+
+from joblib import Parallel, delayed
+
+from nfs.diagnose import diagnose, fit_model
+from nfs.instrument import load_instrument
+from nfs.io.measurement import read_runs
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests" / "independent"))
+from generator import HIDDEN_EFFECTS, generate_set  # noqa: E402
+
+#: Effects of the default instrument that the generator's unit also has (in its own form).
+MODEL_EFFECTS = ("tec_power", "bias_temperature", "shupe_gradient", "shupe_rate")
+#: Hidden effect -> the target a correct answer names (None: any target).
+TARGETS = {"thermometer_lag": "fog", "acc_bias_temperature": "x", "aux_linear": "aux_osc_v"}
+
+
+def independent_model():
+    """The default instrument with only :data:`MODEL_EFFECTS`."""
+    inst = load_instrument("default")
+    return inst.with_effects([e for e in inst.effects if e.name in MODEL_EFFECTS])
+
+
+def one_set(hidden: str | None, seed: int) -> dict:
+    """Generate one set, fit, diagnose; the outcome."""
+    warnings.simplefilter("ignore")
+    t0 = time.perf_counter()
+    with tempfile.TemporaryDirectory() as tmp:
+        generate_set(tmp, hidden=hidden, seed=seed)
+        runs = read_runs(tmp)
+    t_gen = time.perf_counter() - t0
+    fit = fit_model(independent_model(), runs)
+    t_fit = time.perf_counter() - t0 - t_gen
+    d = diagnose(fit.instrument, runs)
+    t_diag = time.perf_counter() - t0 - t_gen - t_fit
+    own = [s for s in d.ranking if s.significant and s.explained_by is None]
+    top = own[0] if own else None
+    label = None if top is None else (top.effect if top.target is None
+                                      else f"{top.effect}:{top.target}")
+    if hidden in (None, "outside"):
+        ok = top is None
+    else:
+        want = TARGETS.get(hidden)
+        ok = top is not None and top.effect == hidden and (want is None or top.target == want)
+    return {"hidden": hidden or "none", "seed": seed, "top": label, "ok": ok,
+            "n_significant": len([s for s in d.ranking if s.significant]),
+            "verdict": d.verdict, "t_fit_s": t_fit, "t_diagnose_s": t_diag}
+
+
+def main(argv=None) -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--seeds", type=int, default=3, help="sets per hidden effect (seeds 1..N)")
+    ap.add_argument("--effects", default="",
+                    help="comma-separated hidden effects (default: all, 'none' for clean)")
+    ap.add_argument("--jobs", type=int, default=2, help="parallel sets (joblib)")
+    args = ap.parse_args(argv)
+    effects = ([e.strip() for e in args.effects.split(",") if e.strip()] if args.effects
+               else ["none", *HIDDEN_EFFECTS])
+    cases = [(None if e == "none" else e, s) for e in effects for s in range(1, args.seeds + 1)]
+    t0 = time.perf_counter()
+    rows = Parallel(n_jobs=args.jobs)(delayed(one_set)(h, s) for h, s in cases)
+    wall = time.perf_counter() - t0
+    print(f"{'hidden':26s} {'seed':>4s}  {'ok':3s} top significant (n significant)")
+    for r in rows:
+        print(f"{r['hidden']:26s} {r['seed']:4d}  {'yes' if r['ok'] else 'NO ':3s} "
+              f"{r['top']} ({r['n_significant']})")
+    print()
+    hits = [r for r in rows if r["hidden"] not in ("none", "outside")]
+    nulls = [r for r in rows if r["hidden"] in ("none", "outside")]
+    for name in dict.fromkeys(r["hidden"] for r in rows):
+        sub = [r for r in rows if r["hidden"] == name]
+        what = "flags nothing" if name in ("none", "outside") else "hidden effect on top"
+        print(f"{name:26s} {what}: {sum(r['ok'] for r in sub)}/{len(sub)}")
+    if hits:
+        print(f"hit rate (hidden effect is the top significant candidate): "
+              f"{sum(r['ok'] for r in hits)}/{len(hits)} = "
+              f"{100 * sum(r['ok'] for r in hits) / len(hits):.0f} % (goal >= 90 %)")
+    if nulls:
+        fa = sum(not r["ok"] for r in nulls)
+        print(f"false alarms (clean and outside-library sets flag something): {fa}/{len(nulls)}"
+              f" = {100 * fa / len(nulls):.0f} % (goal <= 5 %)")
+    tf = sorted(r["t_fit_s"] for r in rows)
+    td = sorted(r["t_diagnose_s"] for r in rows)
+    print(f"per set (with {args.jobs} sets at once on this machine): fit median "
+          f"{tf[len(tf) // 2]:.1f} s, diagnose median {td[len(td) // 2]:.1f} s; "
+          f"{len(rows)} sets in {wall:.0f} s")
+
+
+if __name__ == "__main__":
+    main()
