@@ -25,7 +25,8 @@ the smoothed d_j says where, and how much, heat the network lacks.
 Discretisation, exact for held inputs over a step h (solve.py, equation (5) for Phi and
 Gamma; Van Loan 1978, IEEE TAC 23(3), theorem 1, for the process noise):
 
-    x_k+1 = x_k + (Phi - I) x_k + Gamma u_k + w_k,   E[w_k w_k'] = Q_d = int_0^h e^{As} G Q G' e^{A's} ds
+    x_k+1 = x_k + (Phi - I) x_k + Gamma u_k + w_k,
+    E[w_k w_k'] = Q_d = int_0^h e^{As} G Q G' e^{A's} ds,   Q = q diag(r_j)
     expm([[-A, G Q G'], [0, A']] h) = [[., Phi^-1 Q_d], [0, Phi']]                          (5)
 
 A state-dependent power p(T_k) (a TEC law), held over the step as the simulator holds it,
@@ -449,11 +450,15 @@ def _initial_cov(model: _Model, initial_std_c: float, initial_power_std_w: float
 def _law_at(group: _Group, k: int, temps: np.ndarray, n: int) -> np.ndarray:
     """Held extra power (r, n) [W] of the group's state-dependent laws at step k."""
     p = np.zeros((temps.shape[0], n))
-    for q, law in enumerate(group.laws):
-        if law is not None:
-            p[q] = law(k, temps[q])
+    try:
+        for q, law in enumerate(group.laws):
+            if law is not None:
+                p[q] = law(k, temps[q])
+    except (TypeError, ValueError):
+        raise ThermalError(f"power_law must return an array of shape ({n},) of numbers, got "
+                           f"{np.shape(law(k, temps[q]))} at sample {k}") from None
     if not np.isfinite(p).all():
-        raise ThermalError(f"power_law is not finite (or not of shape ({n},)) at sample {k}")
+        raise ThermalError(f"power_law is not finite at sample {k}")
     return p
 
 

@@ -253,3 +253,19 @@ def test_bad_record_shape():
     with pytest.raises(ThermalError, match="unknown node"):
         kalman_smooth(one_node(), [LinearSensor("t", {"x": 1.0}, 0.1)], [rec],
                       q_w2_per_s=0.0)
+
+
+def test_records_together_equal_records_alone(truths):
+    """Invariant: smoothing records together (one shares its covariance with a copy, one is
+    shorter, one has a gap) gives each the same estimate as smoothing it alone."""
+    t, _, z = truths[0]
+    t, z = t[:400], z[:400]
+    gap = z.copy()
+    gap[50:80] = np.nan
+    recs = [record(t, z), record(t, z + 0.05), record(t[:250], z[:250]), record(t, gap)]
+    together = kalman_smooth(one_node(), SENSOR, recs, q_w2_per_s=Q_TRUE).records
+    for rec, est in zip(recs, together):
+        alone = kalman_smooth(one_node(), SENSOR, [rec], q_w2_per_s=Q_TRUE).records[0]
+        np.testing.assert_allclose(est.temperature_c, alone.temperature_c, rtol=0, atol=1e-12)
+        np.testing.assert_allclose(est.temperature_std_c, alone.temperature_std_c, rtol=1e-12)
+        assert est.log_likelihood == pytest.approx(alone.log_likelihood, rel=1e-12)
