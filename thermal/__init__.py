@@ -10,9 +10,9 @@ smoother, thermal/estimate.py).
 from thermal.network import CHAMBER, Link, Network, Node
 from thermal.solve import ThermalResult, simulate
 from thermal.estimate import (LinearSensor, NodeEstimate, ProcessNoiseFit, StateEstimate,
-                              ThermalRecord, estimate_states, fit_process_noise,
-                              kalman_smooth)
+                              StatePower, ThermalRecord, estimate_states,
+                              fit_process_noise, kalman_smooth)
 
 __all__ = ["CHAMBER", "Node", "Link", "Network", "simulate", "ThermalResult",
-           "LinearSensor", "ThermalRecord", "NodeEstimate", "ProcessNoiseFit",
+           "LinearSensor", "ThermalRecord", "StatePower", "NodeEstimate", "ProcessNoiseFit",
            "StateEstimate", "kalman_smooth", "fit_process_noise", "estimate_states"]
