@@ -355,6 +355,8 @@ def effect_alternative(inst: Instrument, effect: str, target: str | None = None
         free.append(p.name)
         bounds.append((-hi if lo is None else lo, hi))
     e = make_effect(effect, params)
+    if any(x.label == e.label for x in inst.effects):
+        raise NfsError(f"effect_alternative: instrument '{inst.name}' has {e.label} already")
     return StructuralAlternative(
         name=e.label, kind="effect", description=f"adds the effect {e.label}",
         instrument=inst.with_effects(list(inst.effects) + [e]),

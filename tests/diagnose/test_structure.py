@@ -188,6 +188,8 @@ def test_effect_alternative_is_one_sided(default):
     assert a.bounds[0][0] == 0.0
     lag = effect_alternative(default, "thermometer_lag", "fog")
     assert lag.bounds[0][0] == 0.0
+    with pytest.raises(NfsError, match="already"):
+        effect_alternative(default, "tec_power")
 
 
 def test_bad_input(default):
