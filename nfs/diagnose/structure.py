@@ -50,7 +50,7 @@ of :func:`nfs.diagnose.fit.fit_model` (model readings minus ``temp_fog_c``, ``te
    the all-runs fit, r + Z beta, from per-run Gram matrices (the linear approximation of
    leave-one-out, Hastie, Tibshirani and Friedman, "The Elements of Statistical Learning",
    2nd ed., 2009, section 7.10; Efron and Tibshirani, "An Introduction to the Bootstrap",
-   1993, section 11.5).  In each fold, directions of the column-scaled Gram matrix whose
+   1993, chapter 11).  In each fold, directions of the column-scaled Gram matrix whose
    eigenvalue is below 1e-6 of the largest are not fitted (a truncated-SVD solve): the
    other start temperatures do not determine them, and fitting them would let one fold's
    noise swing the held-out prediction (leaving out the only run above the TEC set point
@@ -62,9 +62,11 @@ of :func:`nfs.diagnose.fit.fit_model` (model readings minus ``temp_fog_c``, ``te
    beats the model when its CV RMS is lower by more than :data:`CV_DROP`.
 
 Adequacy.  Per thermometer and stage (start-up: t < ``startup_s`` = 3600 s after power-on;
-stable: after) the model's held-out (CV) residual RMS is compared with the thermometer's noise floor
-sqrt(noise_c^2 + quantum_c^2 / 12) [K] from the instrument (white noise plus uniform
-rounding error, Widrow and Kollar, "Quantization Noise", 2008, eq. (4.15)).  The floor is
+stable: after) the model's held-out (CV) residual RMS is compared with the thermometer's
+noise floor sqrt(noise_c^2 + quantum_c^2 / 12) [K] from the instrument: white noise plus a
+rounding error of variance q^2/12 (the pseudo-quantisation-noise model of Widrow and Kollar,
+"Quantization Noise", Cambridge University Press, 2008; only approximate here, the 0.01 K
+noise dithers the 0.0625 K quantum weakly, which the 1.5x factor covers).  The floor is
 not measured from the residual's high-frequency part: with the default 0.0625 K quantum and
 0.01 K noise, consecutive samples of a slowly moving temperature round to the same level,
 so a difference-based estimate comes out far below the true per-sample error.  The
@@ -461,9 +463,11 @@ class AlternativeScore:
     cv_channels_after_k: dict[str, dict[str, float]]
     """Held-out residual RMS with the alternative {thermometer: {stage: K}}."""
     refined: bool
-    """True: fitted to convergence; False: one Gauss-Newton step from its start (screened)."""
+    """True: fitted (variable projection, then chord steps) and its RMS evaluated; False:
+    screened only (one linearised Gauss-Newton step from its start; its numbers and RMS
+    are those of the linearised residual)."""
     instrument: Instrument = field(repr=False, compare=False)
-    """The fitted alternative instrument (model parameters moved by their linear step)."""
+    """The fitted alternative instrument (the model's parameters moved with it)."""
 
     @property
     def cv_drop(self) -> float:
@@ -525,7 +529,8 @@ class ThermalAdequacy:
                 "message": self.message, "time_s": self.time_s,
                 "n_evaluations": self.n_evaluations,
                 "channels": [{"thermometer": c.thermometer, "stage": c.stage,
-                              "rms_k": c.rms_k, "cv_rms_k": c.cv_rms_k, "floor_k": c.floor_k, "ratio": c.ratio,
+                              "rms_k": c.rms_k, "cv_rms_k": c.cv_rms_k,
+                              "floor_k": c.floor_k, "ratio": c.ratio,
                               "n_knots": c.n_knots, "adequate": c.adequate}
                              for c in self.channels],
                 "best": None if self.best is None else self.best.name,
@@ -748,14 +753,16 @@ def _fit_model(prob: _Problem, inst: Instrument, chord_steps: int = 4) -> _Model
 
 def _score(prob: _Problem, model: _Model, alt: StructuralAlternative, refine: bool,
            cv_model: float, rms_model: dict, max_nfev: int,
-           u_start: np.ndarray | None = None, chord_steps: int = 3) -> tuple[AlternativeScore, np.ndarray]:
+           u_start: np.ndarray | None = None, chord_steps: int = 3
+           ) -> tuple[AlternativeScore, np.ndarray]:
     """Screen or fit one alternative; (score, its fitted u).
 
     Screening: the residual and its Jacobian at the start u_0 (1 + k evaluations); the
     alternative's numbers and the model's move by the bounded linear fit, the CV and the
     RMS are those of the linearised residual.  Refinement: variable projection from
-    ``u_start`` to convergence, then the same linear step, and the RMS of the residual
-    evaluated there (the linearised one if the evaluation came out worse).
+    ``u_start`` (at most ``max_nfev`` evaluations besides the Jacobians), then up to
+    ``chord_steps`` chord steps of all numbers, each kept when the evaluated residual falls;
+    the CV is taken on the residual linearised at the last evaluated point.
     """
     tr = _Transform(alt.start, alt.bounds)
 
