@@ -20,6 +20,7 @@ from scipy.stats import binom, kstest
 from nfs.errors import InputError
 from nfs.noise import (
     cholesky_lower,
+    fit_window_noise,
     gyro_noise_dph,
     ljung_box_q,
     rest_window_segments,
@@ -189,7 +190,7 @@ def test_false_alarm_rate_on_clean_noise_over_2000_seeds(factor: np.ndarray) -> 
     # 10-32 (alpha 0.01) and 76-126 (alpha 0.05) of 2000, and both p-values uniform
     # (Kolmogorov-Smirnov p > 0.001).  Measured: Q 14/2000 (0.70 %) and 95/2000 (4.75 %);
     # variance test 12/2000 (0.60 %) and 97/2000 (4.85 %); ``consistent`` 7/2000 (0.35 %)
-    # and 88/2000 (4.4 %); KS p 0.29 (Q) and 0.77 (variance).  About 40 s.
+    # and 88/2000 (4.4 %); KS p 0.29 (Q) and 0.77 (variance).  About 30 s of CPU.
     results = [whiteness_test(_residuals(seed), factors=[factor] * N_RUNS)
                for seed in range(1000, 3000)]
     _assert_calibrated(results)
@@ -205,7 +206,7 @@ def test_false_alarm_rate_with_rate_random_walk_and_a_fitted_model() -> None:
     # shared slope: 9 columns) and passed as ``design``; 99 % binomial intervals 0-8 and
     # 6-25 of 300.  Measured: Q 1/300 (0.3 %) and 16/300 (5.3 %); variance test 3/300
     # (1.0 %) and 15/300 (5.0 %); ``consistent`` 3/300 and 16/300; KS p 0.92 and 0.37.
-    # About 20 s.
+    # About 15 s of CPU.
     cov = window_mean_covariance(STARTS, LENGTHS, FS_HZ, window=WINDOW,
                                  rrw_deg_per_h_per_rth_h=0.002, **NOISE)
     low = cholesky_lower(cov)
@@ -283,3 +284,96 @@ def test_bad_input_raises_input_error() -> None:
     with pytest.raises(InputError, match=r"design\[0\] must have 30 rows"):
         whiteness_test(e, cov, design=[np.ones((20, 1)), np.ones((20, 1))])
     assert ljung_box_q([np.zeros(10)], 3)[0] == 0.0      # no variance: no autocorrelation
+
+
+# ---------------------------------------------------------------------------------------------
+# the noise model fitted to the window means
+
+def _gaussian_loglik(parts: list[np.ndarray], covs: list[np.ndarray]) -> float:
+    """-1/2 sum_r (log det Sigma_r + e_r^T Sigma_r^-1 e_r + n_r log 2 pi), by Cholesky."""
+    total = 0.0
+    for e, c in zip(parts, covs):
+        low = np.linalg.cholesky(c)
+        u = np.linalg.solve(low, e)
+        total -= 0.5 * (2.0 * np.sum(np.log(np.diag(low))) + u @ u
+                        + e.size * math.log(2.0 * math.pi))
+    return total
+
+
+def test_fitted_noise_is_the_maximum_of_the_gaussian_likelihood() -> None:
+    # Oracle: the Gaussian log-likelihood computed directly (Cholesky of the full covariance,
+    # no eigendecomposition): it equals the fit's log_likelihood to 1e-9 and is lower at
+    # N +- 2 % and B +- 10 %.  Two runs of 200 windows with different layouts (the second's
+    # windows shifted by 5 samples).
+    fs = 1.0
+    segs = [(np.arange(0, 2000, 10), np.full(200, 10), None),
+            (np.arange(5, 2005, 10), np.full(200, 10), None)]
+    rng = np.random.default_rng(17)
+    parts = []
+    for starts, lengths, _ in segs:
+        y = gyro_noise_dph(2100, fs, rng=rng, **NOISE)
+        csum = np.concatenate([[0.0], np.cumsum(y)])
+        parts.append((csum[starts + lengths] - csum[starts]) / lengths)
+    fit = fit_window_noise(parts, segs, fs)
+
+    def loglik(arw: float, b: float) -> float:
+        covs = [window_mean_covariance(s, m, fs, arw_deg_per_rth_h=arw, bias_instability_dph=b)
+                for s, m, _ in segs]
+        return _gaussian_loglik(parts, covs)
+
+    best = loglik(fit.arw_deg_per_rth_h, fit.bias_instability_dph)
+    assert fit.log_likelihood == pytest.approx(best, rel=1e-9)
+    for fn, fb in ((1.02, 1.0), (0.98, 1.0), (1.0, 1.1), (1.0, 0.9)):
+        assert loglik(fn * fit.arw_deg_per_rth_h, fb * fit.bias_instability_dph) < best
+    assert fit.n == 400
+
+
+def test_fitted_noise_recovers_the_generator_setting_and_voids_the_scale_test() -> None:
+    # Oracle: the setting (N 0.0003 deg/sqrt(h), B 0.002 deg/h) of the reference case, seed 0;
+    # over 20 seeds the fit scatters by 1.1 % (N) and 5.4 % (B), so N within 5 % and B within
+    # 25 %.  At the maximum sum u^2 = n exactly (the profile in N^2), so the variance ratio is
+    # 1 to rounding: the scale test needs coefficients known beforehand.
+    parts = _residuals(0)
+    fit = fit_window_noise(parts, [(STARTS, LENGTHS, WINDOW)] * N_RUNS, FS_HZ)
+    assert fit.arw_deg_per_rth_h == pytest.approx(0.0003, rel=0.05)
+    assert fit.bias_instability_dph == pytest.approx(0.002, rel=0.25)
+    cov = window_mean_covariance(STARTS, LENGTHS, FS_HZ, window=WINDOW,
+                                 arw_deg_per_rth_h=fit.arw_deg_per_rth_h,
+                                 bias_instability_dph=fit.bias_instability_dph)
+    res = whiteness_test(parts, [cov] * N_RUNS)
+    assert res.variance_ratio == pytest.approx(1.0, abs=1e-9)
+    assert res.white
+
+
+def test_wrong_noise_coefficients_fail_the_scale_test(factor: np.ndarray) -> None:
+    # Oracle: a known alternative.  The reference residuals tested against N 5 % too high:
+    # the whitened variance is 0.92 (sigma of the ratio sqrt(2/5908) = 0.018), so the scale
+    # test rejects.  Measured over 100 seeds (0-99), rejections at alpha = 0.01 of the scale
+    # test: N x0.95 100 %, N x1.05 100 %, B x0.8 59 %, B x1.25 76 % (and of Q: 3, 3, 35,
+    # 19 %); T_c 1800 s or 7200 s instead of 3600 s: 0-3 %, as with the true model.
+    cov = window_mean_covariance(STARTS, LENGTHS, FS_HZ, window=WINDOW,
+                                 arw_deg_per_rth_h=0.000315, bias_instability_dph=0.002)
+    res = whiteness_test(_residuals(0), [cov] * N_RUNS)
+    assert res.variance_ratio == pytest.approx(0.92, abs=0.04)
+    assert not res.unit_variance and not res.consistent
+
+
+@pytest.mark.slow
+def test_false_alarm_rate_with_the_noise_fitted_to_the_same_residual() -> None:
+    # Oracle: the null distribution, seeds 0-199 of the reference case, N and B fitted by
+    # fit_window_noise to each seed's own residual; the Ljung-Box rejections at alpha = 0.01
+    # and 0.05 must lie in the 99 % binomial interval (0-6 and 3-19 of 200).  Measured:
+    # 2/200 (1.0 %) and 8/200 (4.0 %); the fits scatter by 1.1 % (N, mean 0.0002999) and
+    # 5.5 % (B, mean 0.002008); the variance ratio is 1 at every fit.  About 160 s of CPU.
+    segs = [(STARTS, LENGTHS, WINDOW)] * N_RUNS
+    results = []
+    for seed in range(200):
+        parts = _residuals(seed)
+        fit = fit_window_noise(parts, segs, FS_HZ)
+        cov = window_mean_covariance(STARTS, LENGTHS, FS_HZ, window=WINDOW,
+                                     arw_deg_per_rth_h=fit.arw_deg_per_rth_h,
+                                     bias_instability_dph=fit.bias_instability_dph)
+        results.append(whiteness_test(parts, [cov] * N_RUNS))
+    for alpha in (0.01, 0.05):
+        lo, hi = binom.interval(0.99, 200, alpha)
+        assert lo <= sum(r.p_value < alpha for r in results) <= hi
