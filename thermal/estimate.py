@@ -76,7 +76,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from scipy.linalg import expm
-from scipy.optimize import minimize_scalar
+from scipy.optimize import minimize, minimize_scalar
 
 from nfs.errors import ThermalError
 from thermal.network import Network, index_of
@@ -237,6 +237,10 @@ class ProcessNoiseFit:
     exceeds 2.706, the 5 % point of its null distribution 1/2 chi^2_0 + 1/2 chi^2_1 for a
     variance on the boundary (Self & Liang 1987, JASA 82(398), case 5): the readings show a
     network error."""
+
+    initial_power_std_w: float
+    """Standard deviation of the unmodelled heat at t_0 [W] the likelihood was maximised
+    with: the one given, or its estimate when ``initial_power_bounds_w`` was given."""
 
     n_evaluations: int
     """Filter runs of the search."""
@@ -662,6 +666,7 @@ def fit_process_noise(network: Network, sensors: Sequence[LinearSensor],
                       bounds_w2_per_s: tuple[float, float] = (1e-12, 1e-1),
                       noise_weights: Mapping[str, float] | None = None,
                       initial_std_c: float = 0.05, initial_power_std_w: float = 0.0,
+                      initial_power_bounds_w: tuple[float, float] | None = None,
                       xatol_decades: float = 0.05) -> ProcessNoiseFit:
     """The q of (2) that maximises the innovation likelihood (7) over all records.
 
@@ -671,41 +676,67 @@ def fit_process_noise(network: Network, sensors: Sequence[LinearSensor],
     of log10 q-hat is 1 / sqrt(-d^2 log L / d(log10 q)^2), the curvature by central
     differences (the asymptotic variance of a maximum-likelihood estimate).
 
+    With ``initial_power_bounds_w`` the standard deviation of the unmodelled heat at t_0 is
+    estimated too: after the 1-D search, a bounded Nelder-Mead search over (log10 q,
+    log10 of that standard deviation) (:func:`scipy.optimize.minimize`), about three times
+    the filter runs.
+
     Parameters are those of :func:`kalman_smooth`; ``bounds_w2_per_s`` is the search
-    interval of q [W^2/s] (both > 0) and ``xatol_decades`` the tolerance in log10 q.
+    interval of q [W^2/s] (both > 0) and ``xatol_decades`` the tolerance in log10.
     """
-    lo, hi = (float(b) for b in bounds_w2_per_s)
-    if not (0.0 < lo < hi and math.isfinite(hi)):
-        raise ThermalError(f"bounds_w2_per_s must satisfy 0 < low < high, got {bounds_w2_per_s}")
+    lo, hi = _log_bounds(bounds_w2_per_s, "bounds_w2_per_s")
     model = _model(network, sensors, noise_weights)
     steps, groups = _groups(model, records)
-    p0 = _initial_cov(model, initial_std_c, initial_power_std_w)
+    covs: dict[float, np.ndarray] = {}
     count = [0]
 
-    def loglik(log10_q: float) -> float:
+    def loglik(log10_q: float, power_std_w: float) -> float:
         count[0] += 1
-        return _loglik(model, steps, groups, 10.0 ** log10_q, p0)
+        if power_std_w not in covs:
+            covs[power_std_w] = _initial_cov(model, initial_std_c, power_std_w)
+        return _loglik(model, steps, groups, 10.0 ** log10_q, covs[power_std_w])
 
-    a, b = math.log10(lo), math.log10(hi)
-    res = minimize_scalar(lambda s: -loglik(s), bounds=(a, b), method="bounded",
-                          options={"xatol": xatol_decades})
-    best, best_ll = float(res.x), float(-res.fun)
-    ll_lo = loglik(a)
+    def best_q(power_std_w: float) -> tuple[float, float]:
+        res = minimize_scalar(lambda e: -loglik(e, power_std_w), bounds=(lo, hi),
+                              method="bounded", options={"xatol": xatol_decades})
+        return float(res.x), float(-res.fun)
+
+    power_std = float(initial_power_std_w)
+    best, best_ll = best_q(power_std)
+    if initial_power_bounds_w is not None:
+        p_lo, p_hi = _log_bounds(initial_power_bounds_w, "initial_power_bounds_w")
+        start = np.array([min(max(best, lo + 1.0), hi - 1.0), 0.5 * (p_lo + p_hi)])
+        simplex = np.array([start, start + [1.0, 0.0], start + [0.0, 1.0]])
+        res = minimize(lambda e: -loglik(e[0], 10.0 ** e[1]), start, method="Nelder-Mead",
+                       bounds=[(lo, hi), (p_lo, p_hi)],
+                       options={"xatol": xatol_decades, "fatol": 0.1,
+                                "initial_simplex": simplex})
+        best, power_std, best_ll = float(res.x[0]), 10.0 ** float(res.x[1]), float(-res.fun)
+    ll_lo = loglik(lo, power_std)
     if ll_lo >= best_ll:
-        best, best_ll = a, ll_lo
-    at_lo = best - a < 2.0 * xatol_decades
-    at_hi = b - best < 2.0 * xatol_decades
+        best, best_ll = lo, ll_lo
+    at_lo = best - lo < 2.0 * xatol_decades
+    at_hi = hi - best < 2.0 * xatol_decades
     stderr = math.inf
     if not (at_lo or at_hi):
         step = 0.1
-        curv = (loglik(best + step) - 2.0 * best_ll + loglik(best - step)) / step ** 2
+        curv = (loglik(best + step, power_std) - 2.0 * best_ll
+                + loglik(best - step, power_std)) / step ** 2
         if curv < 0.0:
             stderr = 1.0 / math.sqrt(-curv)
     return ProcessNoiseFit(q_w2_per_s=10.0 ** best, log10_stderr=stderr, log_likelihood=best_ll,
-                           log_likelihood_zero=ll_lo, bounds_w2_per_s=(lo, hi),
+                           log_likelihood_zero=ll_lo, bounds_w2_per_s=(10.0 ** lo, 10.0 ** hi),
                            at_lower_bound=bool(at_lo), at_upper_bound=bool(at_hi),
                            significant=bool(2.0 * (best_ll - ll_lo) > _LR_CRITICAL),
-                           n_evaluations=count[0])
+                           initial_power_std_w=power_std, n_evaluations=count[0])
+
+
+def _log_bounds(bounds: tuple[float, float], what: str) -> tuple[float, float]:
+    """log10 of a search interval 0 < low < high, or a ThermalError naming it."""
+    lo, hi = (float(b) for b in bounds)
+    if not (0.0 < lo < hi and math.isfinite(hi)):
+        raise ThermalError(f"{what} must satisfy 0 < low < high, got {bounds}")
+    return math.log10(lo), math.log10(hi)
 
 
 def estimate_states(network: Network, sensors: Sequence[LinearSensor],
@@ -713,18 +744,23 @@ def estimate_states(network: Network, sensors: Sequence[LinearSensor],
                     q_w2_per_s: float | None = None,
                     bounds_w2_per_s: tuple[float, float] = (1e-12, 1e-1),
                     noise_weights: Mapping[str, float] | None = None,
-                    initial_std_c: float = 0.05, initial_power_std_w: float = 0.0
+                    initial_std_c: float = 0.05, initial_power_std_w: float = 0.0,
+                    initial_power_bounds_w: tuple[float, float] | None = None
                     ) -> StateEstimate:
     """:func:`fit_process_noise` (unless ``q_w2_per_s`` is given), then :func:`kalman_smooth`.
 
     The records share one q: the network's error is a property of the unit, not of a run.
+    ``initial_power_bounds_w`` (with q estimated) estimates the initial heat's standard
+    deviation too, and the smoother uses the estimate.
     """
     fit = None
     if q_w2_per_s is None:
         fit = fit_process_noise(network, sensors, records, bounds_w2_per_s=bounds_w2_per_s,
                                 noise_weights=noise_weights, initial_std_c=initial_std_c,
-                                initial_power_std_w=initial_power_std_w)
+                                initial_power_std_w=initial_power_std_w,
+                                initial_power_bounds_w=initial_power_bounds_w)
         q_w2_per_s = fit.q_w2_per_s
+        initial_power_std_w = fit.initial_power_std_w
     out = kalman_smooth(network, sensors, records, q_w2_per_s=q_w2_per_s,
                         noise_weights=noise_weights, initial_std_c=initial_std_c,
                         initial_power_std_w=initial_power_std_w)

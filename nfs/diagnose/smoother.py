@@ -237,7 +237,8 @@ def smooth_runs(inst: Instrument, runs: Sequence[Run], *,
                 decimate_s: float = DEFAULT_DECIMATE_S, q_w2_per_s: float | None = None,
                 bounds_w2_per_s: tuple[float, float] = (1e-12, 1e-1),
                 noise_weights: Mapping[str, float] | None = None,
-                initial_std_c: float = 0.05, initial_power_std_w: float = 0.0
+                initial_std_c: float = 0.05, initial_power_std_w: float = 0.0,
+                initial_power_bounds_w: tuple[float, float] | None = None
                 ) -> RunSmoothing:
     """Node temperatures of ``runs`` estimated from their thermometers through ``inst``'s network.
 
@@ -257,7 +258,16 @@ def smooth_runs(inst: Instrument, runs: Sequence[Run], *,
     initial_std_c : float
         Standard deviation of every node temperature about T0 at power-on [K].
     initial_power_std_w : float
-        Standard deviation of the unmodelled heat of every node at power-on [W].
+        Standard deviation of the unmodelled heat of every node at power-on [W].  The
+        default 0 lets the unmodelled heat grow from zero (a wrong capacity or conductance
+        errs only once the unit warms); a heat source the model lacks is present from
+        power-on and is found at the right node only with a prior here (0.3 W: a tenth of
+        a typical node power), see tests/diagnose/test_smoother.py.
+    noise_weights : mapping node -> float, optional
+        Relative spectral densities of the unmodelled heat (default 1 at every node).
+    initial_power_bounds_w : (float, float), optional
+        Estimate the unmodelled heat's standard deviation at power-on by maximum likelihood
+        within these bounds [W] too (with q; about three times the filter runs).
 
     Returns
     -------
@@ -280,7 +290,8 @@ def smooth_runs(inst: Instrument, runs: Sequence[Run], *,
         est = estimate_states(inst.network, sensors, [p.record for p in prepared],
                               q_w2_per_s=q_w2_per_s, bounds_w2_per_s=bounds_w2_per_s,
                               noise_weights=noise_weights, initial_std_c=initial_std_c,
-                              initial_power_std_w=initial_power_std_w)
+                              initial_power_std_w=initial_power_std_w,
+                              initial_power_bounds_w=initial_power_bounds_w)
     except ThermalError as exc:
         raise NfsError(f"smooth_runs: {exc}") from None
     out = []
