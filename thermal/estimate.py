@@ -47,8 +47,8 @@ Filter (Simon 2006, equations 5.19):
 A missing reading (NaN) zeroes its row of H at that step.
 
 Log-likelihood by the prediction-error decomposition (Harvey 1989, Forecasting, Structural
-Time Series Models and the Kalman Filter, equation 3.4.7; Shumway & Stoffer 2017, Time
-Series Analysis and Its Applications, equation 6.62):
+Time Series Models and the Kalman Filter, section 3.4; Shumway & Stoffer 2017, Time
+Series Analysis and Its Applications, section 6.3; equation numbers not checked):
 
     log L(q) = -1/2 sum_k [log det S_k + v_k' S_k^-1 v_k + m_k log 2 pi]                  (7)
 
@@ -235,7 +235,7 @@ class ProcessNoiseFit:
     significant: bool
     """True when the likelihood-ratio statistic 2 (log L(q-hat) - log L(lower bound))
     exceeds 2.706, the 5 % point of its null distribution 1/2 chi^2_0 + 1/2 chi^2_1 for a
-    variance on the boundary (Self & Liang 1987, JASA 82(398), case 5): the readings show a
+    variance on the boundary (Self & Liang 1987, JASA 82(398), 605-610): the readings show a
     network error."""
 
     initial_power_std_w: float

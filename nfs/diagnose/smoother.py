@@ -13,17 +13,24 @@ Each thermometer of the instrument is a :class:`thermal.estimate.LinearSensor`: 
 weights normalised (:meth:`nfs.sensors.ThermometerModel.sensed`), its lag followed by the
 ``thermometer_lag`` effects on it (lags in series, as :func:`nfs.sensors.thermometer_reading`
 applies them), its offset, and a white error of variance noise_c^2 + quantum_c^2 / 12 (the
-variance of a uniform rounding error; Widrow & Kollar 2008, Quantization Noise, eq. 4.12).
+variance of a uniform rounding error, Bennett 1948, Bell Syst. Tech. J. 27(3), 446; white
+only while the reading moves by a quantum or more between knots: on a flat stretch the
+rounding error is correlated and the innovations show it).
 
 The estimation runs at decimated knots (every ``decimate_s``, plus the last sample), with the
 chamber temperature, the turntable's moving fraction and the state-free thermal-effect
 powers averaged over each knot interval and held, and the state-dependent thermal effects
 (the TEC law) evaluated at the filtered estimate and held over the interval (its slope left
-out of the covariance; thermal/estimate.py).  Temperatures come
-back to the run's own time base by cubic Hermite interpolation of the knot values and knot
-rates, and the rates there are the derivative of that interpolant (at the knots: the model
-rate A T + B u + C^-1 d at the smoothed state), so a drift effect that uses dT/dt sees the
-derivative of the temperatures it is given.
+out of the covariance; thermal/estimate.py).  Temperatures come back to the run's own time
+base by cubic Hermite interpolation of the knot values and knot rates, and the rates there
+are the derivative of that interpolant (at the knots: the model rate A T + B u + C^-1 d at
+the smoothed state), so a drift effect that uses dT/dt sees the derivative of the
+temperatures it is given.
+
+What the thermometers cannot tell: no thermometer sees the coil's inner layers, and the FOG
+thermometer reads a weighted mean of the electronics and coil_outer, so how the unmodelled
+heat splits among those nodes comes from the network's dynamics and the prior, not from a
+reading.  The figures of tests/diagnose/test_smoother.py show what that costs.
 """
 
 from __future__ import annotations
@@ -255,14 +262,16 @@ def smooth_runs(inst: Instrument, runs: Sequence[Run], *,
     q_w2_per_s : float, optional
         Process-noise scale [W^2/s]; by default its maximum-likelihood estimate over all runs
         within ``bounds_w2_per_s``.
+    bounds_w2_per_s : (float, float)
+        Search interval of q [W^2/s].
     initial_std_c : float
         Standard deviation of every node temperature about T0 at power-on [K].
     initial_power_std_w : float
         Standard deviation of the unmodelled heat of every node at power-on [W].  The
         default 0 lets the unmodelled heat grow from zero (a wrong capacity or conductance
         errs only once the unit warms); a heat source the model lacks is present from
-        power-on and is found at the right node only with a prior here (0.3 W: a tenth of
-        a typical node power), see tests/diagnose/test_smoother.py.
+        power-on and is found at the right node only with a prior here (e.g. 0.3 W, against
+        node powers of 0.45-7 W), see tests/diagnose/test_smoother.py.
     noise_weights : mapping node -> float, optional
         Relative spectral densities of the unmodelled heat (default 1 at every node).
     initial_power_bounds_w : (float, float), optional
