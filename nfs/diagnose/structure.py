@@ -52,11 +52,12 @@ of :func:`nfs.diagnose.fit.fit_model` (model readings minus ``temp_fog_c``, ``te
    2nd ed., 2009, section 7.10; Efron and Tibshirani, "An Introduction to the Bootstrap",
    1993, chapter 11).  Checked against the exact CV, fit_model refitting every fold: with a
    hidden 0.3 W/K link on 4 start temperatures, 34.9 vs 34.1 mK for the model and 20.8
-   vs 20.6 mK for the link alternative (tests/diagnose/test_structure.py).  In each fold, directions of the column-scaled Gram matrix whose
-   eigenvalue is below 1e-6 of the largest are not fitted (a truncated-SVD solve): the
-   other start temperatures do not determine them, and fitting them would let one fold's
-   noise swing the held-out prediction (leaving out the only run above the TEC set point
-   leaves c_c so determined).  A CV, not an information criterion: the thermometer noise
+   vs 20.6 mK for the link alternative (tests/diagnose/test_structure.py).  In each fold,
+   directions of the column-scaled Gram matrix whose eigenvalue is below 1e-6 of the
+   largest are not fitted (a truncated-SVD solve): the other start temperatures do not
+   determine them, and fitting them would let one fold's noise swing the held-out
+   prediction (leaving out the 54 C run leaves the TEC slope above its set point, c_c, to
+   the 28 C run alone).  A CV, not an information criterion: the thermometer noise
    floor is known, but a wrong structure is absorbed *in-sample* by the model's 20 free
    parameters (with a hidden 0.3 W/K link, the default refitted to 4 start temperatures
    sits at 1.0x its floor in-sample and 1.7x out of sample), so only the held-out
