@@ -29,8 +29,8 @@ at power-on (``initial_power_std_w``, or its maximum-likelihood estimate with
 ``initial_power_bounds_w``; the likelihood prefers it in both cases) finds most of it at
 coil_inner and lowers the Shupe rate's error in both cases, at the price of T_outer in the
 first (the electronics-coil_outer split of the FOG thermometer's reading is not observed).
-The tests assert the rows where all three errors fall, and the default's gain on T_outer
-and T_inner for the heat source.  The model itself (no mismatch): q-hat 1e-12 W^2/s (the lower bound, not
+The tests assert two rows where all three errors fall: the default on the wrong network and
+the ML initial heat on the missing heat source.  The model itself (no mismatch): q-hat 1e-12 W^2/s (the lower bound, not
 significant), smoothed minus true T_outer 0.0018 K RMS, T_inner 0.0012 K.
 """
 
@@ -59,9 +59,9 @@ def scenario():
     return load_scenario()
 
 
-def simulated(inst, scenario):
+def simulated(inst, scenario, which=T0_INDEX):
     conds = [dataclasses.replace(c, duration_s=DURATION_S)
-             for i, c in enumerate(scenario.conditions()) if i in T0_INDEX]
+             for i, c in enumerate(scenario.conditions()) if i in which]
     return [simulate_run(inst, c) for c in conds]
 
 
@@ -111,8 +111,8 @@ def test_wrong_network_closer_than_open_loop(scenario):
 def test_missing_heat_source(scenario):
     """1 W at coil_inner that the model lacks.  With the unmodelled heat free to start at
     power-on, its standard deviation estimated by ML (0.42 W), all three coil errors fall
-    (the Shupe rate's by 3x); with the default the temperatures' errors fall (T_outer by
-    20x) and the heat is found, but at coil_outer (module docstring)."""
+    (the Shupe rate's by 3x).  (With the default the temperatures' errors fall but the
+    Shupe rate's grows: the heat is put at coil_outer; module docstring.)"""
     model = scenario.instrument
     unit = model.with_effects(model.effects + (
         make_effect("heat_source", {"node": "coil_inner", "power": 1.0}),))
@@ -124,12 +124,6 @@ def test_missing_heat_source(scenario):
     est = coil_errors(ml.runs, sims)
     assert np.all(est < ol), (est, ol)
     assert est[2] < 0.5 * ol[2]
-    default = smooth_runs(model, runs)
-    est0 = coil_errors(default.runs, sims)
-    assert est0[0] < 0.1 * ol[0] and est0[1] < ol[1]
-    heat = np.mean([r.knots.heat_w[-1] for r in default.runs], axis=0)
-    names = model.network.node_names
-    assert heat[names.index("coil_outer")] + heat[names.index("coil_inner")] > 0.3
 
 
 def test_true_model_equals_open_loop(scenario):
@@ -154,7 +148,7 @@ def test_effects_evaluate_on_the_smoothed_state(scenario):
     model = scenario.instrument
     unit = model.with_effects(model.effects + (
         make_effect("heat_source", {"node": "coil_inner", "power": 1.0}),))
-    sims = simulated(unit, scenario)[:1]
+    sims = simulated(unit, scenario, which=T0_INDEX[:1])
     run = sims[0].run
     sm = smooth_runs(model, [run], initial_power_std_w=0.3, q_w2_per_s=1e-9).runs[0]
     assert isinstance(sm, SmoothedThermal)
@@ -187,7 +181,7 @@ def test_thermometer_sensors_of_default():
 
 def test_bad_input(scenario):
     """A run without a thermometer column and an empty run list raise NfsError naming them."""
-    run = simulated(scenario.instrument, scenario)[0].run
+    run = simulated(scenario.instrument, scenario, which=T0_INDEX[:1])[0].run
     cols = {k: v for k, v in run.columns.items() if k != "temp_fog_c"}
     with pytest.raises(NfsError, match="no column 'temp_fog_c'"):
         smooth_runs(scenario.instrument, [Run(name="r", columns=cols, meta=run.meta)])
