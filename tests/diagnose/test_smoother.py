@@ -30,8 +30,9 @@ at power-on (``initial_power_std_w``, or its maximum-likelihood estimate with
 coil_inner and lowers the Shupe rate's error in both cases, at the price of T_outer in the
 first (the electronics-coil_outer split of the FOG thermometer's reading is not observed).
 The tests assert two rows where all three errors fall: the default on the wrong network and
-the ML initial heat on the missing heat source.  The model itself (no mismatch): q-hat 1e-12 W^2/s (the lower bound, not
-significant), smoothed minus true T_outer 0.0018 K RMS, T_inner 0.0012 K.
+the ML initial heat on the missing heat source.  The model itself (no mismatch): q-hat
+1e-12 W^2/s (the lower bound, not significant), smoothed minus true T_outer 0.0018 K RMS,
+T_inner 0.0012 K.
 """
 
 from __future__ import annotations
