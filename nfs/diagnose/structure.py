@@ -882,7 +882,8 @@ def _message(channels: Sequence[ChannelFit], structural: Sequence[AlternativeSco
 
 
 def thermal_adequacy(inst: Instrument, runs: Sequence[Run],
-                     alternatives: Sequence[StructuralAlternative] | None = None, *,
+                     alternatives: Sequence[StructuralAlternative]
+                     | Callable[[Instrument], Sequence[StructuralAlternative]] | None = None, *,
                      decimate_s: float = DEFAULT_DECIMATE_S, factor: float = ADEQUACY_FACTOR,
                      startup_s: float = STARTUP_S, refine_top: int = REFINE_TOP,
                      max_nfev: int = 6) -> ThermalAdequacy:
@@ -894,10 +895,13 @@ def thermal_adequacy(inst: Instrument, runs: Sequence[Run],
         The model, best already fitted (``nfs fit``); its thermal stage is polished here.
     runs : sequence of Run
         Measured runs with at least two distinct start temperatures.
-    alternatives : sequence of StructuralAlternative, optional
-        Default :func:`structural_alternatives` of the refitted model.  Given ones should be
-        built on the fitted model (their other numbers are taken as they are); kind
-        ``effect`` ones (:func:`effect_alternative`) are scored but never ``best``.
+    alternatives : sequence of StructuralAlternative, or a callable, optional
+        Default :func:`structural_alternatives` of the refitted model.  A callable is
+        called with the refitted model and returns the alternatives (the way to add named
+        candidates, ``lambda m: structural_alternatives(m) + [effect_alternative(m,
+        "heat_source", "coil_outer")]``); a sequence is used as given, so it should be
+        built on a fitted model.  Kind ``effect`` alternatives are scored but never
+        ``best``.
     decimate_s : float
         Spacing of the residual grid [s].
     factor : float
@@ -934,7 +938,12 @@ def thermal_adequacy(inst: Instrument, runs: Sequence[Run],
                                 rms_model[1][name][stage], _floor_k(model.inst, name),
                                 counts[name][stage], factor)
                      for name in prob.names for stage in STAGES)
-    alts = (structural_alternatives(model.inst) if alternatives is None else list(alternatives))
+    if alternatives is None:
+        alts = structural_alternatives(model.inst)
+    elif callable(alternatives):
+        alts = list(alternatives(model.inst))
+    else:
+        alts = list(alternatives)
     screened = []
     for alt in alts:
         s, u = _score(prob, model, alt, False, cv_model, rms_model, max_nfev)

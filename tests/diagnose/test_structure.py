@@ -46,8 +46,9 @@ def _runs(inst):
 
 @pytest.fixture(scope="module")
 def own(default):
-    alts = structural_alternatives(default) + [
-        effect_alternative(default, "heat_source", "coil_outer")]
+    def alts(model):
+        return structural_alternatives(model) + [
+            effect_alternative(model, "heat_source", "coil_outer")]
     return thermal_adequacy(default, _runs(default), alts)
 
 
