@@ -171,7 +171,7 @@ def _window_mean(x: np.ndarray, knots: np.ndarray) -> np.ndarray:
 
 
 def _prepare(inst: Instrument, run: Run, decimate_s: float) -> _Prepared:
-    for col in ("time_s", "moving", *THERMOMETERS.values()):
+    for col in ("time_s", "position_deg", "moving", *THERMOMETERS.values()):
         if col not in run.columns:
             raise InputError(f"run '{run.name}' has no column '{col}', which the thermal "
                              "smoother needs", file=run.path, column=col)
@@ -254,9 +254,9 @@ def smooth_runs(inst: Instrument, runs: Sequence[Run], *,
     inst : Instrument
         The model (network, thermometers, thermal and thermometer effects).
     runs : sequence of Run
-        Measured runs with ``time_s``, ``moving`` and the three thermometer columns (and
-        ``temp_chamber_c`` when the chamber was not held at T0); each starts soaked at its
-        ``start_temperature_c``.
+        Measured runs with ``time_s``, ``position_deg``, ``moving`` and the three thermometer
+        columns (and ``temp_chamber_c`` when the chamber was not held at T0); each starts
+        soaked at its ``start_temperature_c``.
     decimate_s : float
         Spacing of the estimation knots [s].
     q_w2_per_s : float, optional
