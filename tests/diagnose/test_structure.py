@@ -66,7 +66,8 @@ def test_alternatives_of_the_default(default):
     """Oracle: the default network (physics.md section 2) - 4 splits (coil_outer,
     coil_inner, housing, board), 2 inserts (the FOG thermometer's nodes to the housing),
     the 4 unlinked pairs of electronics, board, coil nodes and housing, 3 thermometer
-    shares; each split halves the capacity and keeps the energy-free structure."""
+    shares; each split halves the capacity, and a split or an insert at its start keeps
+    the steady state of every original node (steady_state, physics.md section 2)."""
     alts = structural_alternatives(default)
     names = {a.name for a in alts}
     assert {"split coil_outer", "split coil_inner", "split housing", "split board",
