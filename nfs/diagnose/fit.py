@@ -866,8 +866,15 @@ def write_fitted_model(result: FitResult, path: str | Path) -> Path:
         if p in result.unidentifiable:
             flags.append("NOT IDENTIFIABLE")
         flag = f"  [{', '.join(flags)}]" if flags else ""
+        shift = result.prior_shift.get(p, math.nan)
+        moved = f", {shift:+.2f} prior widths" if math.isfinite(shift) else ""
         lines.append(f"#   {p} = {v:.6g} +- {result.stderr.get(p, math.nan):.3g}"
-                     f"; start {result.initial_params[p]:.6g}{flag}")
+                     f"; start {result.initial_params[p]:.6g}{moved}{flag}")
+    if result.noise is not None:
+        n = result.noise
+        lines.append(f"# gyro noise from the Allan deviation of the drift residual at rest: "
+                     f"arw {n.arw_deg_per_rth_h:.3g}, bias instability "
+                     f"{n.bias_instability_dph:.3g}, rrw {n.rrw_deg_per_h_per_rth_h:.3g}")
     for s, rep in result.stages.items():
         lines.append(f"# {s} stage: {'converged' if rep.converged else 'NOT CONVERGED'} "
                      f"after {rep.nfev} evaluations, cost {rep.cost:.6g} on "

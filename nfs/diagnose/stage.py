@@ -20,7 +20,11 @@ from scipy.optimize import least_squares
 
 from .prior import Prior
 
-__all__ = ["StageReport", "solve_stage"]
+__all__ = ["StageReport", "solve_stage", "CHI2_SETTLED"]
+
+#: A stage whose data rows have a reduced chi-square at most this fits to its noise: no other
+#: start is tried, and the data rows keep their stated noise level beside the prior.
+CHI2_SETTLED = 1.5
 
 
 @dataclass(frozen=True)
@@ -40,7 +44,8 @@ class StageReport:
     cost_start: float
     """0.5 sum r^2 at the start (weighted residuals)."""
     cost: float
-    """0.5 sum r^2 at the solution (data rows plus prior rows: the MAP cost)."""
+    """0.5 sum r^2 at the solution (data rows, divided by :attr:`noise_scale`, plus the prior
+    rows: the MAP cost)."""
     n_residuals: int
     """m, the number of data residuals (the prior rows not counted)."""
     time_s: float
@@ -53,16 +58,22 @@ class StageReport:
     n_starts: int = 1
     """Starts tried (the preset, then its perturbations while the best solution was not
     settled); the lowest cost was kept."""
+    noise_scale: float = 1.0
+    """The data rows were divided by this beside the prior rows in the final solve: the RMS
+    of the weighted data residual when it stayed above 1 (the model's error counted as
+    noise); 1: the stated noise levels held."""
 
 
 def solve_stage(name: str, fun, x0: np.ndarray, lb: np.ndarray, ub: np.ndarray,
-           max_nfev: int | None, paths: Sequence[str], prior: Prior | None = None,
-           extra_starts: Sequence[np.ndarray] = ()):
+                max_nfev: int | None, paths: Sequence[str], prior: Prior | None = None,
+                extra_starts: Sequence[np.ndarray] = ()):
     """Minimise 0.5 |r|^2 over the box [lb, ub], r = ``fun(x)`` (the data rows, divided by
     their noise level) followed by the rows of ``prior``.
 
     From ``x0``, then from each of ``extra_starts`` while the best solution is not settled
-    (:func:`_settled`); the solution of lowest cost is kept.  Standard errors: see
+    (:func:`_settled`); the solution of lowest cost is kept.  With a prior and a data
+    residual above its stated noise, the data rows are divided by their RMS and the solve
+    repeated from there (:attr:`StageReport.noise_scale`).  Standard errors: see
     :func:`_errors`.
 
     Returns
@@ -91,13 +102,27 @@ def solve_stage(name: str, fun, x0: np.ndarray, lb: np.ndarray, ub: np.ndarray,
         if best is None or res.cost < best.cost:
             best = res
     res = best
+    # With a prior, the data rows must carry their real noise level for the two kinds of row
+    # to weigh right: when the residual stays above the stated noise (the model's own error
+    # counts as noise to the prior), divide the data rows by the residual's RMS in noise
+    # units (an empirical-Bayes estimate of the noise scale) and solve once more from there.
+    noise_scale = 1.0
+    if use_prior and _chi2(res, m) > CHI2_SETTLED:
+        noise_scale = math.sqrt(_chi2(res, m))
+
+        def scaled(x):
+            return np.concatenate([fun(x) / noise_scale, prior.rows(x)])
+
+        res = least_squares(scaled, res.x, bounds=(lb, ub), method="trf", x_scale="jac",
+                            max_nfev=max_nfev)
+        nfev += int(res.nfev)
     cost_prior = float(0.5 * np.sum(res.fun[m:] ** 2))
     report = StageReport(name=name, free=tuple(paths), converged=bool(res.status > 0),
                          message=str(res.message), nfev=nfev,
                          cost_start=float(0.5 * r_start @ r_start), cost=float(res.cost),
                          n_residuals=int(m), time_s=time.perf_counter() - t0,
                          n_prior=int(res.fun.size - m), cost_prior=cost_prior,
-                         n_starts=tried)
+                         n_starts=tried, noise_scale=noise_scale)
     jac = np.asarray(res.jac, dtype=float)
     stderr, unident = _errors(jac[:m], res.fun[:m], paths,
                               prior.jacobian() if use_prior else None)
@@ -108,13 +133,16 @@ def solve_stage(name: str, fun, x0: np.ndarray, lb: np.ndarray, ub: np.ndarray,
     return res, report, stderr, unident, at
 
 
+def _chi2(res, m: int) -> float:
+    """Reduced chi-square of the data rows (the first m) of a solution."""
+    return float(res.fun[:m] @ res.fun[:m]) / max(m - res.x.size, 1)
+
+
 def _settled(res, m: int, lb: np.ndarray, ub: np.ndarray) -> bool:
     """A solution no other start needs to challenge: the data rows at their noise level
-    (reduced chi-square <= 1.5; a lower minimum could only fit noise) and no parameter on a
-    bound."""
-    n = res.x.size
-    chi2 = float(res.fun[:m] @ res.fun[:m]) / max(m - n, 1)
-    return chi2 <= 1.5 and not np.any(res.active_mask != 0)
+    (reduced chi-square <= :data:`CHI2_SETTLED`; a lower minimum could only fit noise) and
+    no parameter on a bound."""
+    return _chi2(res, m) <= CHI2_SETTLED and not np.any(res.active_mask != 0)
 
 
 def _errors(jac: np.ndarray, r: np.ndarray, paths: Sequence[str],
