@@ -65,22 +65,22 @@ The recursions are written here rather than taken from filterpy or pykalman: nei
 discretises a continuous model exactly with Van Loan's process noise, neither is a
 dependency of the package, and running all records at once as stacked NumPy arrays (one
 Python loop over the steps, not one per record, and one covariance for all) is what makes
-seven 2.5 h runs smooth in a fraction of a second.
+seven 2.5 h runs smooth in a fraction of a second.  They live in :mod:`thermal.kalman`; this
+module holds the inputs, the results and the functions to call.
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
-from scipy.linalg import expm
 from scipy.optimize import minimize, minimize_scalar
 
 from nfs.errors import ThermalError
+from thermal import kalman
 from thermal.network import Network, index_of
-from thermal.solve import step_matrices
 
 __all__ = ["LinearSensor", "ThermalRecord", "StatePower", "NodeEstimate", "ProcessNoiseFit",
            "StateEstimate", "kalman_smooth", "fit_process_noise", "estimate_states"]
@@ -88,8 +88,6 @@ __all__ = ["LinearSensor", "ThermalRecord", "StatePower", "NodeEstimate", "Proce
 #: A held state-dependent heat source of one record: ``law(k, temperature_c)`` at sample k
 #: from the node temperatures (n,) [degC] -> extra power per node (n,) [W].
 StatePower = Callable[[int, np.ndarray], np.ndarray]
-
-_LOG_2PI = math.log(2.0 * math.pi)
 
 #: 5 % critical value of the boundary likelihood-ratio test, 1/2 chi^2_0 + 1/2 chi^2_1
 #: (the 90 % point of chi^2_1).
@@ -264,324 +262,6 @@ class StateEstimate:
 
 
 # ---------------------------------------------------------------------------------------------
-# The augmented model
-
-@dataclass(frozen=True)
-class _Model:
-    """Matrices of (1)-(4) for x = [T, d, y]."""
-
-    n: int
-    a: np.ndarray           # (N, N)
-    b: np.ndarray           # (N, 1 + n)
-    g_noise: np.ndarray     # (N, n): w enters the d rows, scaled by sqrt(r_j)
-    h: np.ndarray           # (m, N)
-    offset: np.ndarray      # (m,)
-    r: np.ndarray           # (m,) measurement variances [K^2]
-    lag_from_t: np.ndarray  # (N - 2n, n): equilibrium lag states = lag_from_t @ T
-    inv_c: np.ndarray       # (n,)
-    p_const: np.ndarray     # (n,)
-    names: tuple[str, ...]
-    sensors: tuple[str, ...]
-    rates: np.ndarray = field(repr=False, default=None)  # (n, N): dT/dt = rates @ x + B u
-
-
-def _model(network: Network, sensors: Sequence[LinearSensor],
-           noise_weights: Mapping[str, float] | None) -> _Model:
-    names = network.node_names
-    n = len(names)
-    if not sensors:
-        raise ThermalError("state estimation needs at least one sensor")
-    n_lag = sum(len(s.lags_s) for s in sensors)
-    big = 2 * n + n_lag
-    a_t, b_t = network.matrices()
-    inv_c = 1.0 / network.capacity_j_per_k
-    a = np.zeros((big, big))
-    a[:n, :n] = a_t
-    a[:n, n:2 * n] = np.diag(inv_c)
-    b = np.zeros((big, 1 + n))
-    b[:n] = b_t
-    h = np.zeros((len(sensors), big))
-    lag_from_t = np.zeros((n_lag, n))
-    row = 2 * n
-    for m, s in enumerate(sensors):
-        w = np.zeros(n)
-        for node, weight in s.weights.items():
-            w[index_of(names, node)] += float(weight)
-        src = None                      # the state the next lag reads; None: h_m . T
-        for tau in s.lags_s:
-            if src is None:
-                a[row, :n] = w / tau
-            else:
-                a[row, src] = 1.0 / tau
-            a[row, row] = -1.0 / tau
-            lag_from_t[row - 2 * n] = w
-            src = row
-            row += 1
-        if src is None:
-            h[m, :n] = w
-        else:
-            h[m, src] = 1.0
-    weights = np.ones(n)
-    if noise_weights is not None:
-        weights = np.zeros(n)
-        for node, r_j in noise_weights.items():
-            r_j = float(r_j)
-            if not (math.isfinite(r_j) and r_j >= 0.0):
-                raise ThermalError(f"noise weight of node {node!r} must be >= 0, got {r_j}")
-            weights[index_of(names, node)] = r_j
-    g_noise = np.zeros((big, n))
-    g_noise[n:2 * n] = np.diag(np.sqrt(weights))
-    return _Model(n=n, a=a, b=b, g_noise=g_noise, h=h,
-                  offset=np.array([s.offset_c for s in sensors]),
-                  r=np.array([s.noise_std_c ** 2 for s in sensors]), lag_from_t=lag_from_t,
-                  inv_c=inv_c, p_const=network.node_power_w, names=names,
-                  sensors=tuple(s.name for s in sensors), rates=a[:n].copy())
-
-
-@dataclass(frozen=True)
-class _Step:
-    """Discrete matrices for one step h."""
-
-    phi: np.ndarray
-    phi_minus_i: np.ndarray
-    gamma: np.ndarray
-    q_unit: np.ndarray       # Q_d for q = 1 [W^2/s]
-
-
-def _discretise(model: _Model, h_s: float) -> _Step:
-    """Phi, Gamma by solve.py's (5) and Q_d by Van Loan's (5) of this module."""
-    mats = step_matrices(model.a, model.b, h_s)
-    big = model.a.shape[0]
-    van_loan = np.zeros((2 * big, 2 * big))
-    van_loan[:big, :big] = -model.a
-    van_loan[:big, big:] = model.g_noise @ model.g_noise.T
-    van_loan[big:, big:] = model.a.T
-    e = expm(van_loan * h_s)
-    q_d = e[big:, big:].T @ e[:big, big:]
-    return _Step(phi=mats.phi, phi_minus_i=mats.phi_minus_i, gamma=mats.gamma,
-                 q_unit=0.5 * (q_d + q_d.T))
-
-
-# ---------------------------------------------------------------------------------------------
-# Records, stacked
-
-@dataclass
-class _Group:
-    """Records that share their length, steps and missing readings, so one covariance,
-    one gain sequence and one smoother covariance serve them all: (r, n_k, ...) arrays."""
-
-    members: list[int]
-    cls: np.ndarray          # (n_k - 1,) step class of each interval
-    seen: np.ndarray         # (n_k, m) True where the readings exist
-    z: np.ndarray            # (r, n_k, m), 0 where missing
-    u: np.ndarray            # (r, n_k, 1 + n) without the state-dependent power
-    x0: np.ndarray           # (r, N)
-    laws: list[StatePower | None]
-
-
-def _check_record(rec: ThermalRecord, i: int, n: int, m: int) -> tuple[np.ndarray, ...]:
-    t = np.asarray(rec.time_s, dtype=float)
-    if t.ndim != 1 or t.size < 2:
-        raise ThermalError(f"record {i}: time_s must be 1-D with at least 2 samples, got "
-                           f"shape {t.shape}")
-    if not np.all(np.isfinite(t)) or np.any(np.diff(t) <= 0.0):
-        raise ThermalError(f"record {i}: time_s must be finite and strictly increasing")
-    z = np.asarray(rec.readings_c, dtype=float)
-    if z.shape != (t.size, m):
-        raise ThermalError(f"record {i}: readings_c must have shape ({t.size}, {m}), got "
-                           f"{z.shape}")
-    amb = np.broadcast_to(np.asarray(rec.ambient_c, dtype=float), t.shape)
-    if not np.all(np.isfinite(amb)):
-        raise ThermalError(f"record {i}: ambient_c is not finite")
-    power = np.zeros((t.size, n)) if rec.power_w is None else np.asarray(rec.power_w, float)
-    if power.shape != (t.size, n) or not np.all(np.isfinite(power)):
-        raise ThermalError(f"record {i}: power_w must be finite with shape ({t.size}, {n}), "
-                           f"got shape {power.shape}")
-    try:
-        t0 = np.broadcast_to(np.asarray(rec.initial_c, dtype=float), (n,))
-    except ValueError:
-        raise ThermalError(f"record {i}: initial_c must be a scalar or have shape ({n},)") \
-            from None
-    if not np.all(np.isfinite(t0)):
-        raise ThermalError(f"record {i}: initial_c is not finite")
-    return t, z, amb, power, t0
-
-
-def _groups(model: _Model, records: Sequence[ThermalRecord]) -> tuple[list[_Step], list[_Group]]:
-    """The discrete matrices of every distinct step and the records grouped by (length,
-    steps, missing readings)."""
-    if not records:
-        raise ThermalError("state estimation needs at least one record")
-    n, m = model.n, model.h.shape[0]
-    checked = [_check_record(rec, i, n, m) for i, rec in enumerate(records)]
-    keys = np.unique(np.round(np.concatenate([np.diff(c[0]) for c in checked]), 9))
-    steps = [_discretise(model, float(h)) for h in keys]
-    by_key: dict[tuple, list[int]] = {}
-    classes = []
-    for q, (t, zq, *_rest) in enumerate(checked):
-        cls = np.searchsorted(keys, np.round(np.diff(t), 9))
-        classes.append(cls)
-        key = (t.size, cls.tobytes(), np.isfinite(zq).tobytes())
-        by_key.setdefault(key, []).append(q)
-    groups = []
-    for members in by_key.values():
-        first = checked[members[0]]
-        seen = np.isfinite(first[1])
-        z = np.stack([np.where(seen, checked[q][1], 0.0) for q in members])
-        u = np.stack([np.column_stack([checked[q][2], model.p_const + checked[q][3]])
-                      for q in members])
-        x0 = np.stack([np.concatenate([checked[q][4], np.zeros(n),
-                                       model.lag_from_t @ checked[q][4]]) for q in members])
-        groups.append(_Group(members=members, cls=classes[members[0]], seen=seen, z=z, u=u,
-                             x0=x0, laws=[records[q].power_law for q in members]))
-    return steps, groups
-
-
-def _initial_cov(model: _Model, initial_std_c: float, initial_power_std_w: float) -> np.ndarray:
-    """P_0: T_j independent with initial_std_c, d_j with initial_power_std_w, lags in
-    equilibrium with T (y = L T, so their covariance follows from T's)."""
-    n = model.n
-    big = model.a.shape[0]
-    jac = np.zeros((big, 2 * n))
-    jac[:n, :n] = np.eye(n)
-    jac[n:2 * n, n:] = np.eye(n)
-    jac[2 * n:, :n] = model.lag_from_t
-    base = np.diag(np.concatenate([np.full(n, initial_std_c ** 2),
-                                   np.full(n, initial_power_std_w ** 2)]))
-    return jac @ base @ jac.T
-
-
-def _law_at(group: _Group, k: int, temps: np.ndarray, n: int) -> np.ndarray:
-    """Held extra power (r, n) [W] of the group's state-dependent laws at step k."""
-    p = np.zeros((temps.shape[0], n))
-    try:
-        for q, law in enumerate(group.laws):
-            if law is not None:
-                p[q] = law(k, temps[q])
-    except (TypeError, ValueError):
-        raise ThermalError(f"power_law must return an array of shape ({n},) of numbers, got "
-                           f"{np.shape(law(k, temps[q]))} at sample {k}") from None
-    if not np.isfinite(p).all():
-        raise ThermalError(f"power_law is not finite at sample {k}")
-    return p
-
-
-def _run(model: _Model, steps: list[_Step], group: _Group, q_scale: float, p0: np.ndarray,
-         smooth: bool):
-    """Filter (6) with the likelihood (7) and, when ``smooth``, the smoother (8), for a group.
-
-    The covariance recursion does not depend on the readings, so it runs once for the
-    group (N x N arrays) while the means run for all its records at once (r x N).  A
-    missing reading zeroes its row of H and gets S_mm = 1, v_m = 0: it then adds nothing to
-    the update, to (7) or to (8).  Returns the per-record log-likelihoods (r,) and, with
-    ``smooth``, a dict of smoothed arrays.
-    """
-    n = model.n
-    m, big = model.h.shape
-    r, n_k = group.z.shape[:2]
-    cls = group.cls.tolist()
-    seen = group.seen
-    phis = [s.phi for s in steps]
-    phis_t = [s.phi.T.copy() for s in steps]
-    phims_t = [s.phi_minus_i.T.copy() for s in steps]
-    gammas_t = [s.gamma.T.copy() for s in steps]
-    qds = [q_scale * s.q_unit for s in steps]
-    has_law = any(law is not None for law in group.laws)
-    patterns: dict[bytes, np.ndarray] = {}
-    hks = [patterns.setdefault(row.tobytes(), model.h * row[:, None]) for row in seen]
-    r_diag = np.where(seen, model.r, 1.0)
-    offset = model.offset * seen                # (n_k, m)
-    diag = np.arange(m)
-
-    logdet = 0.0
-    quad = np.zeros(r)
-    v_all = np.zeros((r, n_k, m))               # innovations v (0 where unseen)
-    s_diag = np.ones((n_k, m))                  # diagonal of S (1 where unseen)
-    x = group.x0.copy()
-    p = p0.copy()
-    if smooth:
-        xf_all = np.empty((r, n_k, big))
-        pf_all = np.empty((n_k, big, big))
-        gain_all = np.empty((n_k, big, m))
-        sinv_all = np.empty((n_k, m, m))
-    for k in range(n_k):
-        hk = hks[k]
-        pht = p @ hk.T
-        s = hk @ pht
-        s[diag, diag] += r_diag[k]
-        s_inv = np.linalg.inv(s)
-        gain = pht @ s_inv
-        v = group.z[:, k] - x @ hk.T - offset[k]
-        sv = v @ s_inv
-        quad += np.sum(sv * v, axis=1)
-        logdet += math.log(np.linalg.det(s))
-        x += v @ gain.T
-        p -= gain @ pht.T
-        p = 0.5 * (p + p.T)
-        v_all[:, k] = v
-        s_diag[k] = s[diag, diag]
-        if smooth:
-            xf_all[:, k] = x
-            pf_all[k] = p
-            gain_all[k] = gain
-            sinv_all[k] = s_inv
-        if k == n_k - 1:
-            break
-        c = cls[k]
-        uk = group.u[:, k]
-        if has_law:
-            uk = uk.copy()
-            uk[:, 1:] += _law_at(group, k, x[:, :n], n)
-        x = x + x @ phims_t[c] + uk @ gammas_t[c]
-        p = phis[c] @ p @ phis_t[c] + qds[c]
-    loglik = -0.5 * (quad + logdet + seen.sum() * _LOG_2PI)
-    if not smooth:
-        return loglik, None
-
-    # modified Bryson-Frazier backward pass (8)
-    lam = np.zeros((r, big))                    # one adjoint per record
-    lam_m = np.zeros((big, big))                # shared: it does not depend on readings
-    xs = np.empty((r, n_k, big))
-    ps_diag = np.empty((n_k, big))
-    rate_var = np.empty((n_k, n))
-    rates = model.rates
-    eye = np.eye(big)
-    for k in range(n_k - 1, -1, -1):
-        pf = pf_all[k]
-        xs[:, k] = xf_all[:, k] - lam @ pf
-        ps_diag[k] = np.diagonal(pf) - np.sum((pf @ lam_m) * pf, axis=1)
-        mp = rates @ pf
-        rate_var[k] = np.sum(mp * rates, axis=1) - np.sum((mp @ lam_m) * mp, axis=1)
-        if k == 0:
-            break
-        hk, gain, s_inv = hks[k], gain_all[k], sinv_all[k]
-        lam = lam - (lam @ gain + v_all[:, k] @ s_inv) @ hk
-        c_k = eye - gain @ hk
-        lam_m = c_k.T @ lam_m @ c_k + hk.T @ s_inv @ hk
-        c = cls[k - 1]
-        lam = lam @ phis[c]
-        lam_m = phis_t[c] @ lam_m @ phis[c]
-    law_s = np.zeros((r, n_k, n))
-    if has_law:
-        for k in range(n_k):
-            law_s[:, k] = _law_at(group, k, xs[:, k, :n], n)
-    rate = (xs @ rates.T + group.u[..., :1] * model.b[:n, 0]
-            + (group.u[..., 1:] + law_s) * model.inv_c)
-    pred = xs @ model.h.T + model.offset
-    innov = np.where(seen, v_all / np.sqrt(s_diag), np.nan)
-    out = dict(x=xs, x_filtered=xf_all, var=np.broadcast_to(ps_diag, (r, n_k, big)),
-               rate=rate, rate_var=np.broadcast_to(rate_var, (r, n_k, n)),
-               innovation=innov, residual=np.where(seen, group.z - pred, np.nan))
-    return loglik, out
-
-
-def _loglik(model: _Model, steps: list[_Step], groups: list[_Group], q_scale: float,
-            p0: np.ndarray) -> float:
-    """log L(q), equation (7), over every group."""
-    return float(sum(_run(model, steps, g, q_scale, p0, smooth=False)[0].sum() for g in groups))
-
-
-# ---------------------------------------------------------------------------------------------
 # Public functions
 
 def _check_scale(q_w2_per_s: float) -> float:
@@ -625,21 +305,21 @@ def kalman_smooth(network: Network, sensors: Sequence[LinearSensor],
                         ("initial_power_std_w", initial_power_std_w)):
         if not (math.isfinite(value) and value >= 0.0):
             raise ThermalError(f"{what} must be >= 0, got {value}")
-    model = _model(network, sensors, noise_weights)
-    steps, groups = _groups(model, records)
-    p0 = _initial_cov(model, initial_std_c, initial_power_std_w)
+    model = kalman.build_model(network, sensors, noise_weights)
+    steps, groups = kalman.group_records(model, records)
+    p0 = kalman.initial_cov(model, initial_std_c, initial_power_std_w)
     n = model.n
     results: list[NodeEstimate | None] = [None] * len(records)
     total = 0.0
     for group in groups:
-        per_record, out = _run(model, steps, group, q, p0, smooth=True)
+        per_record, out = kalman.run_group(model, steps, group, q, p0, smooth=True)
         total += float(per_record.sum())
         for g, i in enumerate(group.members):
             results[i] = _node_estimate(model, records[i], out, g, float(per_record[g]))
     return StateEstimate(records=tuple(results), q_w2_per_s=q, log_likelihood=total)
 
 
-def _node_estimate(model: _Model, rec: ThermalRecord, out: dict, i: int,
+def _node_estimate(model: kalman.Model, rec: ThermalRecord, out: dict, i: int,
                    log_likelihood: float) -> NodeEstimate:
     """Record i of a group's smoothed arrays as a read-only :class:`NodeEstimate`."""
     n = model.n
@@ -685,16 +365,16 @@ def fit_process_noise(network: Network, sensors: Sequence[LinearSensor],
     interval of q [W^2/s] (both > 0) and ``xatol_decades`` the tolerance in log10.
     """
     lo, hi = _log_bounds(bounds_w2_per_s, "bounds_w2_per_s")
-    model = _model(network, sensors, noise_weights)
-    steps, groups = _groups(model, records)
+    model = kalman.build_model(network, sensors, noise_weights)
+    steps, groups = kalman.group_records(model, records)
     covs: dict[float, np.ndarray] = {}
     count = [0]
 
     def loglik(log10_q: float, power_std_w: float) -> float:
         count[0] += 1
         if power_std_w not in covs:
-            covs[power_std_w] = _initial_cov(model, initial_std_c, power_std_w)
-        return _loglik(model, steps, groups, 10.0 ** log10_q, covs[power_std_w])
+            covs[power_std_w] = kalman.initial_cov(model, initial_std_c, power_std_w)
+        return kalman.loglik(model, steps, groups, 10.0 ** log10_q, covs[power_std_w])
 
     def best_q(power_std_w: float) -> tuple[float, float]:
         res = minimize_scalar(lambda e: -loglik(e, power_std_w), bounds=(lo, hi),
