@@ -19,8 +19,8 @@ import math
 import numpy as np
 import pytest
 
-from nfs.diagnose.compare import (CHANNELS, CONSISTENT_RATIO, Comparison, compare,
-                                  write_report)
+from nfs.diagnose.compare import CHANNELS, CONSISTENT_RATIO, Comparison, compare
+from nfs.diagnose.compare_report import write_report
 from nfs.effects import make_effect
 from nfs.errors import NfsError
 from nfs.experiment import simulate_run
