@@ -164,3 +164,16 @@ def test_model_drift_dph_is_the_simulators_drift(scenario):
             - OMEGA_IE_DPH * math.sin(math.radians(cond.latitude_deg)) * acc_x)
     got = model_drift_dph(inst, sim.context, cond.latitude_deg)
     np.testing.assert_allclose(got, want, rtol=0, atol=1e-12)
+
+
+def test_at_bound_advice_and_unsoaked_runs(scenario, runs):
+    # Oracle: the 3 K shift of the FOG thermometer lies outside the +-2 K offset box and
+    # makes both runs start 3 K from their soak temperature: the bound must come with the
+    # offset's advice, and both runs must be named as not soaked (left out of the anchor).
+    shifted = [_shift(r, "temp_fog_c", 3.0) for r in runs[:2]]
+    res = fit_model(scenario.instrument, shifted, ["thermometers.fog.offset_c"],
+                    stages=("thermal",))
+    assert "not soaked" in res.bound_advice["thermometers.fog.offset_c"]
+    assert res.soak is not None and res.soak.unsoaked == tuple(r.name for r in shifted)
+    for r in shifted:
+        assert any(r.name in w and "not soaked" in w for w in res.warnings)
