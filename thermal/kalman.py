@@ -228,7 +228,7 @@ def law_at(group: Group, k: int, temps: np.ndarray, n: int) -> np.ndarray:
     except (TypeError, ValueError):
         raise ThermalError(f"power_law must return an array of shape ({n},) of numbers, got "
                            f"{np.shape(law(k, temps[q]))} at sample {k}") from None
-    if not np.isfinite(p).all():
+    if k == 0 and not np.isfinite(p).all():
         raise ThermalError(f"power_law is not finite at sample {k}")
     return p
 
@@ -302,6 +302,8 @@ def run_group(model: Model, steps: list[Step], group: Group, q_scale: float, p0:
         x = x + x @ phims_t[c] + uk @ gammas_t[c]
         p = phis[c] @ p @ phis_t[c] + qds[c]
     log_l = -0.5 * (quad + logdet + seen.sum() * _LOG_2PI)
+    if not np.all(np.isfinite(log_l)):
+        raise ThermalError("the filter diverged (a power law or an input is not finite)")
     if not smooth:
         return log_l, None
 

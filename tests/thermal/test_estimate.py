@@ -269,3 +269,18 @@ def test_records_together_equal_records_alone(truths):
         np.testing.assert_allclose(est.temperature_c, alone.temperature_c, rtol=0, atol=1e-12)
         np.testing.assert_allclose(est.temperature_std_c, alone.temperature_std_c, rtol=1e-12)
         assert est.log_likelihood == pytest.approx(alone.log_likelihood, rel=1e-12)
+
+
+def test_bad_power_law():
+    """A power law of the wrong shape, or one that turns non-finite mid-record, raises
+    ThermalError (not a NumPy traceback)."""
+    t = np.arange(0.0, 200.0, 10.0)
+    z = np.full((t.size, 1), AMB)
+    wrong = ThermalRecord(t, z, np.full(t.size, AMB), AMB,
+                          power_law=lambda k, temp: np.zeros(3))
+    with pytest.raises(ThermalError, match="shape"):
+        kalman_smooth(one_node(), SENSOR, [wrong], q_w2_per_s=0.0)
+    late_nan = ThermalRecord(t, z, np.full(t.size, AMB), AMB,
+                             power_law=lambda k, temp: np.array([np.nan if k > 5 else 0.0]))
+    with pytest.raises(ThermalError, match="not finite"):
+        kalman_smooth(one_node(), SENSOR, [late_nan], q_w2_per_s=0.0)
