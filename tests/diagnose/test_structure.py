@@ -16,11 +16,10 @@ import math
 import numpy as np
 import pytest
 
-from nfs.diagnose.structure import (ADEQUACY_FACTOR, beats_structure, effect_alternative,
-                                    free_link, insert_node, one_sided, physical_lower,
+from nfs.diagnose.adequacy import ADEQUACY_FACTOR, beats_structure, one_sided, thermal_adequacy
+from nfs.diagnose.structure import (effect_alternative, free_link, insert_node, physical_lower,
                                     set_thermometer_fraction, split_node,
-                                    structural_alternatives, thermal_adequacy,
-                                    thermometer_weight)
+                                    structural_alternatives, thermometer_weight)
 from nfs.diagnose.fit import _prepare_thermal, _thermal_residual_parts, default_free, fit_model
 from nfs.errors import NfsError
 from nfs.experiment import simulate_run
