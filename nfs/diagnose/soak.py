@@ -2,17 +2,21 @@
 
 A start-up run begins with the unpowered instrument soaked in the chamber at T0 until uniform
 (physics.md section 1): at t = 0 every node, so every thermometer's sensed temperature, is at
-T0.  A thermometer's reading there is T0 + offset (+ noise, quantisation), so its offset is
+T0.  A thermometer's reading there is T0 + offset (+ noise, quantisation).  Over the first W
+seconds (:data:`DEFAULT_WINDOW_S`) the instrument already warms; the model predicts the shape
+of that warming, w(t) = m(t) - T0 with m the model's noise-free, offset-free reading through
+the thermometer's lag, but the unit may warm faster or slower than the model (a preset is not
+the unit: an independent unit's thermometers warmed 5x slower than the preset's in the first
+minute).  So each run's readings y are fitted by linear least squares with
 
-    offset = mean_{t < W} (reading - model reading without offset)                   [K]
+    y(t) = T0 + offset + a w(t),    t < W                                           [degC]
 
-over the first W seconds (:data:`DEFAULT_WINDOW_S`), where the model reading (noise-free, no
-offset, through the thermometer's lag) carries the little warming the model predicts in that
-window (it starts at exactly T0).  Averaging over W = 60 s of 1 Hz readings beats down the
-white noise; the quantisation step (0.0625 K) is dithered by the noise and by the warming,
-and averaging over the runs (each at another T0) spreads the remaining rounding error.  A run
-whose estimate lies more than ``tolerance_k`` from 0 was most likely not soaked (or its T0 in
-the header is wrong): it is reported by name and left out of the anchor.
+(a free: the model's shape, the unit's amplitude), and the offset is averaged over the runs.
+Fitting 60 s of 1 Hz readings beats down the white noise; the quantisation step (0.0625 K) is
+dithered by the noise and by the warming, and averaging over the runs (each at another T0)
+spreads the remaining rounding error.  A run whose estimate lies more than ``tolerance_k``
+from 0 was most likely not soaked (or its T0 in the header is wrong): it is reported by name
+and left out of the anchor.
 """
 
 from __future__ import annotations
@@ -93,8 +97,7 @@ def soak_offsets(inst: Instrument, runs: Sequence[Run], *, window_s: float = DEF
     Parameters
     ----------
     inst : Instrument
-        The model whose warming over the window is subtracted (the preset is good enough:
-        the window is short and the lag keeps the readings near T0).
+        The model whose shape of warming over the window is fitted (its amplitude is free).
     runs : sequence of Run
         Runs with ``time_s``, ``moving`` and the three thermometer columns.
     window_s : float
@@ -122,10 +125,18 @@ def soak_offsets(inst: Instrument, runs: Sequence[Run], *, window_s: float = DEF
         n = max(1, int(np.count_nonzero(t - t[0] < window_s)))
         model = _model_readings(inst, run, n)
         est = {}
+        t0_c = run.meta.start_temperature_c
         for name, col in THERMOMETERS.items():
             y = np.asarray(run[col], dtype=float)[:n]
             ok = np.isfinite(y)
-            est[name] = float(np.mean(y[ok] - model[name][ok])) if ok.any() else math.nan
+            if not ok.any():
+                est[name] = math.nan
+                continue
+            warming = model[name][ok] - t0_c
+            # columns 1 and w(t); lstsq gives the plain mean when the model predicts no warming
+            design = np.column_stack([np.ones(warming.size), warming])
+            coef, *_ = np.linalg.lstsq(design, y[ok] - t0_c, rcond=None)
+            est[name] = float(coef[0])
         per_run[run.name] = est
         n_used[run.name] = n
         bad = {k: v for k, v in est.items() if abs(v) > tolerance_k}

@@ -68,3 +68,20 @@ def test_bad_input(setup):
     cols = {k: v for k, v in runs[0].columns.items() if k != "temp_fog_c"}
     with pytest.raises(NfsError, match="temp_fog_c"):
         soak_offsets(inst, [replace(runs[0], columns=cols)])
+
+
+def test_unit_warming_slower_than_the_model(setup):
+    # Oracle: the same hidden offsets on a unit whose powers are a third of the preset's (it
+    # warms 3x slower in the first minute): the fitted amplitude of the model's warming
+    # absorbs it and the offsets still come back within 0.02 K.
+    inst, _ = setup
+    sc = load_scenario()
+    slow = set_params(inst, {**{f"thermometers.{k}.offset_c": v for k, v in OFFSETS.items()},
+                             "thermal.nodes.electronics.power_w": 4.0 / 3,
+                             "thermal.nodes.board.power_w": 7.0 / 3,
+                             "thermal.nodes.qfa_x.power_w": 0.15,
+                             "thermal.nodes.qfa_y.power_w": 0.5 / 3})
+    runs = [simulate_run(slow, replace(c, duration_s=120.0)).run for c in sc.conditions()]
+    anchor = soak_offsets(inst, runs)
+    for k, v in OFFSETS.items():
+        assert anchor.offset_c[k] == pytest.approx(v, abs=0.02), k
