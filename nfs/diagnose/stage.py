@@ -71,7 +71,8 @@ def solve_stage(name: str, fun, x0: np.ndarray, lb: np.ndarray, ub: np.ndarray,
     their noise level) followed by the rows of ``prior``.
 
     From ``x0``, then from each of ``extra_starts`` while the best solution is not settled
-    (:func:`_settled`); the solution of lowest cost is kept.  With a prior and a data
+    (:func:`_settled`), each extra start with a third of ``max_nfev``; the solution of
+    lowest cost is kept.  With a prior and a data
     residual above its stated noise, the data rows are divided by their RMS and the solve
     repeated from there (:attr:`StageReport.noise_scale`).  Standard errors: see
     :func:`_errors`.
@@ -96,8 +97,10 @@ def solve_stage(name: str, fun, x0: np.ndarray, lb: np.ndarray, ub: np.ndarray,
     for xs in [x0, *[np.clip(x, lb, ub) for x in extra_starts]]:
         if best is not None and _settled(best, m, lb, ub):
             break
+        # an extra start only has to show a lower basin: a third of the evaluations
+        budget = max_nfev if best is None or max_nfev is None else max(10, max_nfev // 3)
         res = least_squares(total, xs, bounds=(lb, ub), method="trf", x_scale="jac",
-                            max_nfev=max_nfev)
+                            max_nfev=budget)
         nfev, tried = nfev + int(res.nfev), tried + 1
         if best is None or res.cost < best.cost:
             best = res
