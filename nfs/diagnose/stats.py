@@ -17,7 +17,10 @@ distribution has run-level degrees of freedom:
   Z_r^T f(H_rr) = f(G_r A^-1) Z_r^T (A = sum G_r) this needs only p x p matrices.
 - :meth:`ClusteredFit.test`: Wald test of a set of coefficients.  One coefficient: t with
   the Bell-McCaffrey degrees of freedom (Cameron & Miller 2015, sec. VI.D; capped at G - 1),
-  two- or one-sided; several: F(k, G - 1) on W / k (Cameron & Miller 2015, sec. VI.D).
+  two- or one-sided; k coefficients: Hotelling's T^2 approximation F(k, eta - k + 1)
+  (Pustejovsky & Tipton 2018, J. Bus. Econ. Stat. 36(4) 672), eta the smallest
+  Bell-McCaffrey dof of the k coefficients (at most G - 1; Cameron & Miller's F(k, G - 1)
+  ignores that the covariance itself rests on G runs, and a TEC's slopes on fewer).
 - :func:`group_cv_rms`: leave-one-group-out RMS (a group: the runs of one start
   temperature); with several candidate designs (the grid points of a shape parameter) each
   fold chooses the design on its training runs only.
@@ -33,7 +36,7 @@ from typing import Sequence
 import numpy as np
 from scipy.stats import chi2, f as f_dist, t as t_dist
 
-__all__ = ["RunGrams", "run_grams", "solve", "ClusteredFit", "clustered_fit",
+__all__ = ["RunGrams", "run_grams", "augmented_grams", "solve", "ClusteredFit", "clustered_fit",
            "group_cv_rms", "holm"]
 
 #: Largest per-run leverage eigenvalue kept in the CR2 correction (a run that alone
@@ -74,6 +77,18 @@ def run_grams(ys: Sequence[np.ndarray], Zs: Sequence[np.ndarray]) -> RunGrams:
                     np.array([Z.T @ y for Z, y in zip(Zs, ys)]),
                     np.array([float(y @ y) for y in ys]),
                     np.array([y.size for y in ys], dtype=float))
+
+
+def augmented_grams(base: RunGrams, ys: Sequence[np.ndarray], Xs: Sequence[np.ndarray],
+                    cols: Sequence[np.ndarray]) -> RunGrams:
+    """The Gram matrices of [X_r, C_r] from those of X_r (``base``): only the blocks of the
+    added columns C_r are computed (X_r^T C_r, C_r^T C_r, C_r^T y_r)."""
+    XC = np.array([X.T @ C for X, C in zip(Xs, cols)])
+    CC = np.array([C.T @ C for C in cols])
+    Cy = np.array([C.T @ y for C, y in zip(cols, ys)])
+    gram = np.concatenate([np.concatenate([base.gram, XC], 2),
+                           np.concatenate([np.swapaxes(XC, 1, 2), CC], 2)], 1)
+    return RunGrams(gram, np.concatenate([base.moment, Cy], 1), base.yy, base.n)
 
 
 def solve(gram: np.ndarray, moment: np.ndarray) -> np.ndarray:
@@ -132,7 +147,8 @@ class ClusteredFit:
 
         One coefficient: t = b / se against Student's t with :meth:`dof` degrees of freedom,
         two-sided (``sign`` = 0) or one-sided toward ``sign`` (+1: the alternative b > 0).
-        Several: F = b^T V^-1 b / k against F(k, G - 1).
+        Several (k): Hotelling's approximation, F = (eta - k + 1) / (eta k) b^T V^-1 b
+        against F(k, eta - k + 1), eta the smallest dof of the k coefficients (<= G - 1).
         """
         idx = list(idx)
         b = self.beta[idx]
@@ -149,22 +165,28 @@ class ClusteredFit:
             p = float(2.0 * t_dist.sf(abs(t), nu)) if sign == 0 else float(
                 t_dist.sf(sign * t, nu))
             return t, p, nu
-        nu = float(self.n_clusters - 1)
+        # Hotelling's T^2 approximation with eta degrees of freedom in the covariance:
+        # F = (eta - k + 1) / (eta k) W ~ F(k, eta - k + 1) (Pustejovsky & Tipton 2018,
+        # J. Bus. Econ. Stat. 36(4) 672, sec. 3.2), with eta the smallest Bell-McCaffrey
+        # dof of the k coefficients: conservative when one coefficient rests on few runs (a
+        # TEC's heating and cooling slopes each act on the runs on one side of its set point)
+        eta = min(self.dof(np.eye(self.beta.size)[i]) for i in idx)
         w = float(b @ np.linalg.pinv(V, hermitian=True) @ b)
-        return w / k, float(f_dist.sf(w / k, k, nu)), nu
+        d2 = eta - k + 1.0
+        if d2 <= 0.0:
+            return 0.0, 1.0, d2
+        F = d2 / (eta * k) * w
+        return F, float(f_dist.sf(F, k, d2)), d2
 
     def se(self) -> np.ndarray:
         """Standard errors of ``beta``."""
         return np.sqrt(np.maximum(np.diag(self.cov), 0.0))
 
-    def half_width(self, level: float = 0.95) -> np.ndarray:
-        """Half-widths of the t intervals of each coefficient (each with its own dof)."""
-        out = np.empty(self.beta.size)
-        for j in range(self.beta.size):
-            c = np.zeros(self.beta.size)
-            c[j] = 1.0
-            out[j] = t_dist.ppf(0.5 + level / 2.0, self.dof(c))
-        return out * self.se()
+    def half_width(self, j: int, level: float = 0.95) -> float:
+        """Half-width of the t interval of ``beta[j]`` (Bell-McCaffrey dof)."""
+        c = np.zeros(self.beta.size)
+        c[j] = 1.0
+        return float(t_dist.ppf(0.5 + level / 2.0, self.dof(c)) * self.se()[j])
 
 
 def clustered_fit(grams: RunGrams) -> ClusteredFit:
@@ -211,21 +233,21 @@ def group_cv_rms(designs: Sequence[RunGrams], groups: np.ndarray,
     """
     groups = np.asarray(groups)
     w = np.ones(len(groups)) if weights is None else np.asarray(weights, dtype=float)
-    tot, cnt, chosen = 0.0, 0.0, []
-    for grp in np.unique(groups[w > 0]):
-        out = np.where((groups == grp) & (w > 0), w, 0.0)
-        wt = np.where(out > 0, 0.0, w)
-        if not (wt > 0).any():
-            continue
-        best, best_sse = 0, None
-        for k, g in enumerate(designs):
-            beta = solve(np.tensordot(wt, g.gram, 1), wt @ g.moment)
-            sse = g.sse(beta)
-            if best_sse is None or sse @ wt < best_sse @ wt:
-                best, best_sse = k, sse
-        chosen.append(best)
-        tot += float(best_sse @ out)
-        cnt += float(designs[0].n @ out)
+    folds = np.unique(groups[w > 0])
+    out = np.where((groups[None, :] == folds[:, None]) & (w > 0), w, 0.0)   # (F, R)
+    train = np.where(out > 0, 0.0, w[None, :])
+    ok = train.sum(1) > 0
+    out, train = out[ok], train[ok]
+    sse_out, sse_train = [], []
+    for g in designs:  # all folds of a design at once
+        beta = solve(np.einsum("fr,rpq->fpq", train, g.gram), train @ g.moment)
+        sse = g.sse(beta)                                                     # (F, R)
+        sse_out.append(np.sum(sse * out, 1))
+        sse_train.append(np.sum(sse * train, 1))
+    best = np.argmin(np.array(sse_train), axis=0)                             # (F,)
+    tot = float(np.array(sse_out)[best, np.arange(best.size)].sum())
+    cnt = float(np.sum(out @ designs[0].n))
+    chosen = best
     rms = math.sqrt(max(tot, 0.0) / cnt) if cnt else math.nan
     return rms, np.array(chosen, dtype=int)
 

@@ -1,0 +1,89 @@
+"""Add a candidate effect to a model and refit it (``nfs diagnose --apply NAME[:TARGET]``)."""
+
+from __future__ import annotations
+
+from typing import Any, Sequence
+
+import numpy as np
+
+from ..effects import get_effect
+from ..errors import NfsError
+from ..instrument import Instrument
+from ..io.measurement import Run
+from .candidates import (FAST_KINDS, SHAPE_GRID, Candidate, effect_of, split_parameters,
+                         targets)
+from .design import (PreparedRun, bare_instrument, fit_shapes, model_drift_paths,
+                     prepare_runs, startup_heading_rmse)
+from .fit import (DEFAULT_DECIMATE_S, FitResult, _drift_context, _prepare_drift, default_free,
+                  fit_model, model_drift_dph)
+
+__all__ = ["apply_candidate"]
+
+#: Start value of a thermal effect's time constant [s] (the thermal fit refines it).
+_THERMAL_STARTS = {"tau": 20.0}
+
+
+def apply_candidate(inst: Instrument, runs: Sequence[Run], name: str,
+                    target: str | None = None, *, decimate_s: float = DEFAULT_DECIMATE_S
+                    ) -> tuple[Instrument, FitResult, dict[str, Any]]:
+    """Add effect ``name`` (on ``target``) to ``inst``, refit, and report before/after.
+
+    Gyro and accelerometer effects: the drift stage refits the model's drift coefficients and
+    the new effect's coefficients and shape parameters (shapes started at the best point of
+    :data:`SHAPE_GRID`).  Thermal and thermometer effects: both stages, default free set plus
+    the new effect's parameters.  Returns (new instrument, FitResult, report) where the report
+    holds ``rms_before``/``rms_after`` per channel (before = the model as given) and the
+    pooled start-up ``heading_rmse_before_deg``/``heading_rmse_after_deg``.
+
+    Raises NfsError for an unknown effect or target (listing the valid ones) or an effect
+    the model already has on that target.
+    """
+    runs = list(runs)
+    if not runs:
+        raise NfsError("apply_candidate: no runs")
+    spec = get_effect(name)  # EffectError (an NfsError) listing the valid names
+    valid = targets(spec, inst, runs)
+    if target not in valid:
+        shown = ", ".join("(none)" if v is None else v for v in valid) or "(none)"
+        raise NfsError(f"effect '{name}' has no target '{target}'; valid targets: {shown}")
+    if any(e.name == name and e.target_value == target for e in inst.effects):
+        raise NfsError(f"the model already has '{name}'" + (f" on '{target}'" if target else ""))
+    coefs, shapes, missing = split_parameters(spec)
+    c = Candidate(name, target, spec.kind, tuple(coefs), tuple(shapes), tried=True)
+    starts: dict[str, float] = {k: 0.0 for k in coefs}
+    if spec.kind in FAST_KINDS:
+        preps, _ = prepare_runs(inst, runs, decimate_s)
+        best, _ = fit_shapes(c, preps, bare_instrument(inst))
+        starts.update(best)
+    else:
+        for s in shapes:
+            starts[s] = _THERMAL_STARTS.get(s, SHAPE_GRID.get(s, (1.0,))[0])
+    e = effect_of(c, starts)
+    new = inst.with_effects(list(inst.effects) + [e])
+    new_paths = [f"effects.{e.label}.{p}" for p in coefs + shapes]
+    if spec.kind in FAST_KINDS:
+        result = fit_model(new, runs, free=model_drift_paths(inst) + new_paths, stages=("drift",),
+                           decimate_s=decimate_s)
+    else:
+        free = list(dict.fromkeys(default_free(new) + new_paths))
+        result = fit_model(new, runs, free=free, stages=("thermal", "drift"),
+                           decimate_s=decimate_s)
+    fitted = result.instrument
+
+    def heading(model: Instrument) -> float:
+        preps_m = []
+        full = []
+        for run in runs:
+            rd = _prepare_drift(run, decimate_s, False, "raw")
+            ctx = _drift_context(model, rd)
+            p = PreparedRun(run, rd, ctx, rd.cond.latitude_deg, rd.measured["drift_dph"],
+                      np.zeros(0), np.zeros((0, 0)), np.zeros((0, 0)))
+            preps_m.append(p)
+            full.append(model_drift_dph(model, ctx, p.lat))
+        return startup_heading_rmse(preps_m, full)
+
+    report = {"effect": name, "target": target, "rms_before": dict(result.rms_before),
+              "rms_after": dict(result.rms_after),
+              "heading_rmse_before_deg": heading(inst),
+              "heading_rmse_after_deg": heading(fitted), "warnings": list(result.warnings)}
+    return fitted, result, report

@@ -1,0 +1,186 @@
+"""The candidates of :func:`nfs.diagnose.diagnose`: every registered effect the model lacks.
+
+A candidate is one effect on one target (a node, an accelerometer axis, a thermometer, a
+measured ``aux_*`` column).  Its float parameters split into *coefficients* (entering the
+model linearly, started at 0) and *shape* parameters (time constants, angles, periods:
+chosen on :data:`SHAPE_GRID`).  Thermal and thermometer candidates are linearised at zero,
+so their time constants become coefficients (:mod:`nfs.diagnose.design`).
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from dataclasses import dataclass
+from typing import Sequence
+
+from ..effects import available_effects, get_effect, make_effect
+from ..effects.registry import EffectInstance, EffectSpec
+from ..effects.thermometer import THERMOMETERS
+from ..instrument import Instrument
+from ..io.measurement import Run
+
+__all__ = ["Candidate", "candidates", "SHAPE_GRID", "FAST_KINDS", "shape_grid",
+           "target_parameter", "split_parameters", "aux_columns", "targets", "effect_of"]
+
+#: Grid of the shape (nonlinear) parameters of the built-in effects; a shape parameter not
+#: named here is held at its default.  A candidate's test pays for the choice over the grid
+#: (Bonferroni over its grid points, :mod:`nfs.diagnose.diagnose`).
+SHAPE_GRID: dict[str, tuple[float, ...]] = {
+    "tau": (60.0, 150.0, 300.0, 600.0, 1200.0),
+    "D_mag": (0.0, 45.0, 90.0, 135.0),
+    "T_p": (2.0, 5.0, 10.0, 20.0),
+    "phi": (0.0, math.pi / 2),
+}
+#: Kinds scored on the drift window means (the others on the thermometers).
+FAST_KINDS = ("gyro", "accelerometer")
+
+_SHAPE_UNITS = ("s", "K", "deg", "rad")
+_FIXED_UNITS = ("degC", "channel unit")
+
+
+@dataclass(frozen=True)
+class Candidate:
+    """One effect on one target that the model lacks."""
+
+    effect: str
+    """Registry name."""
+    target: str | None
+    """Value of the effect's target parameter (node, axis, thermometer, channel) or None."""
+    kind: str
+    """The effect's kind (gyro, accelerometer, thermal, thermometer)."""
+    coefficients: tuple[str, ...]
+    """Parameters that enter linearly (start 0)."""
+    shapes: tuple[str, ...]
+    """Nonlinear parameters, chosen on :data:`SHAPE_GRID`."""
+    tried: bool
+    """False when :func:`~nfs.diagnose.diagnose` does not score it (see ``reason``)."""
+    reason: str = ""
+    """Why it is not tried."""
+
+    @property
+    def label(self) -> str:
+        """``effect`` or ``effect:target``."""
+        return self.effect if self.target is None else f"{self.effect}:{self.target}"
+
+    @property
+    def channel(self) -> str:
+        """Where it is scored: ``drift_dph`` or ``thermometers`` (the three, in K)."""
+        return "drift_dph" if self.kind in FAST_KINDS else "thermometers"
+
+
+def target_parameter(spec: EffectSpec) -> str | None:
+    """The parameter that says where ``spec`` acts: its declared target, or ``channel`` for
+    an effect (a user's) with a ``channel`` name parameter and no declared target."""
+    if spec.target is not None:
+        return spec.target
+    if any(p.name == "channel" and p.type is str for p in spec.parameters):
+        return "channel"
+    return None
+
+
+def split_parameters(spec: EffectSpec) -> tuple[list[str], list[str], list[str]]:
+    """(coefficients, shapes, required parameters without a start value) of ``spec``."""
+    coefs, shapes, missing = [], [], []
+    for p in spec.parameters:
+        if p.type is not float or p.name == spec.target:
+            continue
+        if p.unit in _FIXED_UNITS:
+            if p.required:
+                missing.append(p.name)
+        elif p.unit in _SHAPE_UNITS:
+            if p.name not in SHAPE_GRID and p.default is None:
+                missing.append(p.name)
+            else:
+                shapes.append(p.name)
+        else:
+            coefs.append(p.name)
+    return coefs, shapes, missing
+
+
+def aux_columns(runs: Sequence[Run]) -> tuple[list[str], dict[str, list[str]]]:
+    """(``aux_*`` columns present in every run, {column: runs that lack it} for the others)."""
+    names = list(dict.fromkeys(c for r in runs for c in r.columns if c.startswith("aux_")))
+    full = [c for c in names if all(c in r.columns for r in runs)]
+    partial = {c: [r.name for r in runs if c not in r.columns] for c in names if c not in full}
+    return full, partial
+
+
+def targets(spec: EffectSpec, inst: Instrument, runs: Sequence[Run]) -> list[str | None]:
+    """The targets of ``spec`` a candidate can take with ``inst`` and ``runs``."""
+    t = target_parameter(spec)
+    if t is None:
+        return [None]
+    if t == "node":
+        par = spec.parameter(t)
+        return ([None] if not par.required else []) + list(inst.network.node_names)
+    if t == "axis":
+        return ["x", "y"]
+    if t == "thermometer":
+        return list(THERMOMETERS)
+    if t == "channel":
+        return list(aux_columns(runs)[0])
+    opt = spec.parameter(t).optional
+    return [None] if opt else []
+
+
+def candidates(inst: Instrument, runs: Sequence[Run]) -> list[Candidate]:
+    """Every registered effect on every target that ``inst`` does not have.
+
+    Targets: ``node`` -> every thermal node, and None (the effect's default node, e.g. the
+    coil mean) when the node parameter is optional; ``axis`` -> x, y; ``thermometer`` ->
+    fog, acc_x, acc_y; ``channel`` -> every ``aux_*`` column present in all runs, declared
+    under the model's ``[[aux]]`` or not (a column missing from some runs gives a candidate
+    with ``tried = False`` naming those runs).  Thermal and thermometer candidates are
+    linearised at zero: their time constants [s] become coefficients.  Candidates
+    :func:`~nfs.diagnose.diagnose` cannot score (the y accelerometer, parameters without a
+    start value) have ``tried = False``.
+    """
+    present = set()
+    for e in inst.effects:
+        tp = target_parameter(e.spec)
+        present.add((e.name, None if tp is None else e.params.get(tp)))
+    _, partial = aux_columns(runs)
+    out = []
+    for name in available_effects():
+        spec = get_effect(name)
+        if spec.kind == "null":
+            continue
+        coefs, shapes, missing = split_parameters(spec)
+        if spec.kind not in FAST_KINDS:
+            # linearised at zero (module docstring): time constants become coefficients
+            coefs, shapes = coefs + [s for s in shapes if spec.parameter(s).unit == "s"], []
+        for target in targets(spec, inst, runs):
+            if (name, target) in present:
+                continue
+            reason = ""
+            if spec.kind == "accelerometer" and target != "x":
+                reason = "acts on acc_y_g only, which does not enter the drift"
+            elif missing:
+                reason = "no start value for " + ", ".join(missing)
+            elif not coefs:
+                reason = "no linear coefficient to fit"
+            out.append(Candidate(name, target, spec.kind, tuple(coefs), tuple(shapes),
+                                 tried=not reason, reason=reason))
+        if target_parameter(spec) == "channel":
+            for col, lacking in partial.items():
+                out.append(Candidate(name, col, spec.kind, tuple(coefs), tuple(shapes),
+                                     tried=False, reason=(
+                                         f"column '{col}' is missing from run(s) "
+                                         + ", ".join(lacking))))
+    return out
+
+
+def shape_grid(c: Candidate) -> list[dict[str, float]]:
+    """The grid points of the shape parameters of ``c`` ([{}] when it has none)."""
+    spec = get_effect(c.effect)
+    values = [SHAPE_GRID.get(s) or (spec.parameter(s).default,) for s in c.shapes]
+    return [dict(zip(c.shapes, v)) for v in itertools.product(*values)]
+
+
+def effect_of(c: Candidate, values: dict[str, float]) -> EffectInstance:
+    """The effect instance of candidate ``c`` with parameter ``values``."""
+    params = dict(values)
+    if c.target is not None:
+        params[target_parameter(get_effect(c.effect))] = c.target
+    return make_effect(c.effect, params)
