@@ -736,6 +736,9 @@ def fit_model(inst: Instrument, runs: Sequence[Run], free: Iterable[str] | None 
     initial_params = {p: get_param(inst, p) for p in paths}
     if n_starts < 1:
         raise NfsError(f"fit_model: n_starts must be >= 1, got {n_starts}")
+    if isinstance(prior, str) and prior != "default":
+        raise NfsError(f"fit_model: prior must be 'default', a mapping of widths or None, "
+                       f"got '{prior}'")
     use_prior = prior is not None and math.isfinite(prior_scale)
     pr = (build_prior(inst, paths, initial_params, None if prior == "default" else prior,
                       prior_scale) if use_prior else None)
@@ -761,7 +764,7 @@ def fit_model(inst: Instrument, runs: Sequence[Run], free: Iterable[str] | None 
         x0 = np.array([start[p] for p in sp])
         extra = perturbed_starts(sp, x0, lb, ub)[:n_starts - 1] if name == "thermal" else []
         res, rep, se, un, at = solve_stage(name, fun, x0, lb, ub, max_nfev, sp,
-                                      None if pr is None else pr.subset(sp), extra)
+                                           None if pr is None else pr.subset(sp), extra)
         stage_reports[name] = rep
         stderr.update(se)
         unident.update(un)

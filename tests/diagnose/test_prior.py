@@ -97,3 +97,12 @@ def test_no_prior_is_plain_least_squares(scenario):
     for p, v in zip(free, ref.x):
         assert abs(off.params[p] - v) <= 0.05 * off.stderr[p], p
 
+
+
+def test_bad_prior_arguments(scenario):
+    inst = scenario.instrument
+    run = simulate_run(inst, replace(scenario.conditions()[0], duration_s=60.0)).run
+    with pytest.raises(NfsError, match="prior must be"):
+        fit_model(inst, [run], ["thermometers.fog.lag_s"], stages=("thermal",), prior="wide")
+    with pytest.raises(NfsError, match="n_starts"):
+        fit_model(inst, [run], ["thermometers.fog.lag_s"], stages=("thermal",), n_starts=0)
