@@ -271,7 +271,7 @@ def _cmd_diagnose(args) -> int:
         return 0
     if not args.quiet:
         print(f"diagnosing {inst.name} on {len(runs)} run(s)...", file=sys.stderr)
-    d = diagnose(inst, runs, random_state=args.seed)
+    d = diagnose(inst, runs, random_state=args.seed, alpha=args.alpha)
     print("| rank | effect | target | channel | significant | CV RMS before | after | "
           "coefficient |")
     print("|---:|---|---|---|---|---:|---:|---|")
@@ -450,9 +450,10 @@ def build_parser() -> argparse.ArgumentParser:
     dg = sub.add_parser("diagnose", help="which physical effect the model is missing",
                         description="Try every registered effect the model lacks (on each of "
                                     "its possible targets), refit, and rank them by the drop "
-                                    "of the leave-one-run-out residual (drift, or the "
-                                    "thermometers for thermal effects); mark the "
-                                    "significant ones; report what stays unexplained. With "
+                                    "of the leave-one-start-temperature-out residual (drift, "
+                                    "or the thermometers for thermal effects); mark the "
+                                    "significant ones (a test clustered by run, Holm over "
+                                    "all candidates); report what stays unexplained. With "
                                     "--apply NAME[:TARGET], add that effect, refit and write "
                                     "the new model.")
     _runs_and_model(dg)
@@ -462,6 +463,9 @@ def build_parser() -> argparse.ArgumentParser:
     dg.add_argument("-o", "--output", default=None, help="new model TOML (with --apply)")
     dg.add_argument("--top", type=int, default=10, help="rows of the printed ranking")
     dg.add_argument("--seed", type=int, default=0, help="seed of the run bootstrap")
+    dg.add_argument("--alpha", type=float, default=0.05,
+                    help="family-wise error rate of Holm's procedure over all scored "
+                         "candidates (default 0.05)")
     dg.add_argument("-q", "--quiet", action="store_true")
     dg.set_defaults(func=_cmd_diagnose)
 
