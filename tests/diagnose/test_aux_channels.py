@@ -41,15 +41,18 @@ def clean_runs():
     return _runs(hidden=False)
 
 
-def test_instrument_names_a_measured_channel_it_does_not_simulate():
-    """Oracle: the TOML round trip (to_dict -> instrument_from_dict) of a fitted model with
-    aux_linear on an undeclared channel gives the same effect; simulating it raises one
-    EffectError naming the effect, the channel and the fix."""
+def test_instrument_names_a_measured_channel_it_does_not_simulate(tmp_path):
+    """Oracle: the TOML round trip (to_toml -> file -> load_instrument) of a fitted model
+    with aux_linear on an undeclared channel gives the same effect; simulating it raises
+    one EffectError naming the effect, the channel and the fix."""
     default = load_instrument("default")
     fitted = default.with_effects(list(default.effects) + [make_effect(
         "aux_linear", {"channel": "aux_source_current_ma", "k": K})])
-    back = instrument_from_dict(fitted.to_dict())
+    path = tmp_path / "fitted.toml"
+    path.write_text(fitted.to_toml(), encoding="utf-8")
+    back = load_instrument(path)
     assert back.effect("aux_linear:aux_source_current_ma").params["k"] == K
+    assert instrument_from_dict(fitted.to_dict()).to_dict() == back.to_dict()
     cond = load_scenario().conditions()[0]
     with pytest.raises(EffectError, match=r"aux_linear:aux_source_current_ma.*"
                                           r"declare it under \[\[aux\]\]"):
