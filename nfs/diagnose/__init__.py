@@ -5,7 +5,10 @@
 - :mod:`~nfs.diagnose.compare`: the model beside measured runs, channel by channel, with
   "where it fails" in words; :mod:`~nfs.diagnose.compare_report`: its report and figures;
 - :mod:`~nfs.diagnose.diagnose`: which registered effect the model is missing, ranked, and
-  adding it.
+  adding it; its candidates (:mod:`~nfs.diagnose.candidates`), design matrices
+  (:mod:`~nfs.diagnose.design`), run-level statistics (:mod:`~nfs.diagnose.stats`:
+  clustered tests, grouped CV, Holm), :mod:`~nfs.diagnose.apply` and
+  :mod:`~nfs.diagnose.unexplained`.
 """
 
 from .compare import Comparison, compare
