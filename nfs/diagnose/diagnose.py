@@ -119,7 +119,7 @@ class CandidateScore:
     """Leave-one-start-temperature-out RMS of the held-out residual, model alone (drift
     window means [deg/h] or thermometers [K], see ``channel``)."""
     cv_rms_after: float
-    """The same with the candidate [deg/h]."""
+    """The same with the candidate (its shape chosen on each fold's training runs)."""
     correlation: float
     """Partial correlation of the baseline residual with the candidate's signature."""
     coefficient: dict[str, float]
