@@ -271,7 +271,9 @@ def _cmd_diagnose(args) -> int:
         return 0
     if not args.quiet:
         print(f"diagnosing {inst.name} on {len(runs)} run(s)...", file=sys.stderr)
-    d = diagnose(inst, runs, random_state=args.seed, alpha=args.alpha)
+    d = diagnose(inst, runs, random_state=args.seed, alpha=args.alpha,
+                 node_temperatures=args.node_temperatures,
+                 check_structure=not args.no_structure)
     print("| rank | effect | target | channel | significant | CV RMS before | after | "
           "coefficient |")
     print("|---:|---|---|---|---|---:|---:|---|")
@@ -284,6 +286,15 @@ def _cmd_diagnose(args) -> int:
         print(f"| {i} | {row['effect']} | {row['target'] or ''} | {row['channel']} | {sig} | "
               f"{row['cv_rms_before']:.4g} | {row['cv_rms_after']:.4g} | {coef} |")
     print(d.verdict)
+    w = d.unexplained["ljung_box"]
+    what = "against the gyro noise model" if w["whitened"] else "(plain: the model has no noise)"
+    print(f"residual {what}: Ljung-Box p = {w['p_value']:.2g}, variance ratio "
+          f"{w['variance_ratio']:.3g}: "
+          + ("consistent with noise" if w["consistent"] else "not the noise alone"))
+    if d.thermal_structure is not None and d.thermal_structure.adequate:
+        print("thermal structure: adequate (every thermometer within "
+              f"{d.thermal_structure.factor:g}x its noise floor, no generic alternative "
+              "better)")
     if d.not_tried:
         print(f"{len(d.not_tried)} candidate(s) not scored (reasons in --json 'not_tried')")
     if args.json:
@@ -466,7 +477,15 @@ def build_parser() -> argparse.ArgumentParser:
     dg.add_argument("--alpha", type=float, default=0.05,
                     help="family-wise error rate of Holm's procedure over all scored "
                          "candidates (default 0.05)")
-    dg.add_argument("-q", "--quiet", action="store_true")
+    dg.add_argument("--node-temperatures", choices=("smoothed", "model"), default="smoothed",
+                    help="node temperatures the drift candidates are evaluated on: estimated "
+                         "from the measured thermometers through the model's network "
+                         "(smoothed, default) or the model's open-loop solution (model)")
+    dg.add_argument("--no-structure", action="store_true",
+                    help="skip setting the model's thermal structure against generic "
+                         "alternatives (one more node, a free link, a moved thermometer)")
+    dg.add_argument("-q", "--quiet", action="store_true",
+                    help="no progress line on standard error")
     dg.set_defaults(func=_cmd_diagnose)
 
     pr = sub.add_parser("preset", help="print a built-in instrument preset (TOML)",

@@ -281,9 +281,19 @@ def run_group(model: Model, steps: list[Step], group: Group, q_scale: float, p0:
         v = group.z[:, k] - x @ hk.T - offset[k]
         sv = v @ s_inv
         quad += np.sum(sv * v, axis=1)
-        logdet += math.log(np.linalg.det(s))
+        sign, ld = np.linalg.slogdet(s)
+        if sign <= 0:  # the innovation covariance lost its definiteness: no likelihood
+            raise ThermalError("innovation covariance is not positive definite (process "
+                               "noise scale out of range)")
+        logdet += ld
         x += v @ gain.T
-        p -= gain @ pht.T
+        # Joseph's form (P = (I - K H) P (I - K H)^T + K R K^T; Bucy & Joseph 1968, ch. 4;
+        # Grewal & Andrews, Kalman Filtering, 4th ed., sec. 4.2): the covariance stays
+        # symmetric positive semi-definite in floating point, which the short form
+        # P - K H P does not guarantee over hundreds of steps with a large process noise.
+        ikh = -gain @ hk
+        ikh[np.diag_indices_from(ikh)] += 1.0
+        p = ikh @ p @ ikh.T + (gain * r_diag[k]) @ gain.T
         p = 0.5 * (p + p.T)
         v_all[:, k] = v
         s_diag[k] = s[diag, diag]
@@ -346,6 +356,15 @@ def run_group(model: Model, steps: list[Step], group: Group, q_scale: float, p0:
 
 def loglik(model: Model, steps: list[Step], groups: list[Group], q_scale: float,
            p0: np.ndarray) -> float:
-    """log L(q), equation (7), over every group."""
+    """log L(q), equation (7), over every group (-inf where the filter's innovation
+    covariance is not positive definite: such a q cannot be the maximum)."""
+    try:
+        return _loglik(model, steps, groups, q_scale, p0)
+    except ThermalError:
+        return -math.inf
+
+
+def _loglik(model: Model, steps: list[Step], groups: list[Group], q_scale: float,
+            p0: np.ndarray) -> float:
     return float(sum(run_group(model, steps, g, q_scale, p0, smooth=False)[0].sum()
                      for g in groups))

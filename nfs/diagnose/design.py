@@ -29,6 +29,8 @@ from scipy.optimize import least_squares
 
 from ..effects.registry import EffectInstance
 from ..effects import get_effect
+from ..errors import NfsError
+from ..experiment import effect_context
 from ..instrument import Instrument
 from ..io.measurement import Run
 from ..northfind import heading_rmse, north_find
@@ -38,7 +40,7 @@ from .fit import (_block, _drift_context, _prepare_drift, _prepare_thermal,
 from .params import fit_bounds, get_param, set_params
 from .stats import run_grams, solve
 
-__all__ = ["PreparedRun", "prepare_runs", "bare_instrument", "model_drift_paths",
+__all__ = ["PreparedRun", "prepare_runs", "drift_context_on", "bare_instrument", "model_drift_paths",
            "candidate_columns", "grid_columns", "fit_shapes", "startup_heading_rmse",
            "refit_heading_rmse", "ThermalDesign", "thermal_design",
            "thermal_candidate_columns", "same_signature", "thermal_step_instrument"]
@@ -53,7 +55,8 @@ class PreparedRun:
     rd: Any
     """Its drift-stage preparation (:func:`nfs.diagnose.fit._prepare_drift`)."""
     ctx: Any
-    """Effect context from the model's thermal solution."""
+    """Effect context: on the model's open-loop thermal solution or on smoothed node
+    temperatures (:func:`prepare_runs`)."""
     lat: float
     """Latitude [deg]."""
     y: np.ndarray
@@ -99,15 +102,33 @@ def _unit_effects(e: EffectInstance, coefs: Sequence[str]) -> list[EffectInstanc
     return out
 
 
-def prepare_runs(inst: Instrument, runs: Sequence[Run], decimate_s: float
-                 ) -> tuple[list[PreparedRun], list[str]]:
-    """Every run on the drift channel, and the model's drift parameter paths (its columns)."""
+def drift_context_on(inst: Instrument, rd: Any, thermal: Any):
+    """The effect context of a prepared run on given node temperatures ``thermal`` (a
+    :class:`thermal.ThermalResult` or :class:`nfs.diagnose.smoother.SmoothedThermal` on the
+    run's own time base) instead of the model's open-loop solution."""
+    t = rd.cond.time_s
+    if np.shape(thermal.time_s) != t.shape:
+        raise NfsError(f"run '{rd.run.name}': node temperatures on {np.size(thermal.time_s)} "
+                       f"samples for a run of {t.size}")
+    _, moving = rd.cond.turntable(t)
+    return effect_context(inst, thermal, rd.azimuth, rd.projection, moving, rd.aux)
+
+
+def prepare_runs(inst: Instrument, runs: Sequence[Run], decimate_s: float,
+                 thermal: Sequence[Any] | None = None) -> tuple[list[PreparedRun], list[str]]:
+    """Every run on the drift channel, and the model's drift parameter paths (its columns).
+
+    The drift effects are evaluated on the model's open-loop node temperatures, or on
+    ``thermal`` (one per run, e.g. the smoothed node temperatures of
+    :func:`nfs.diagnose.smoother.smooth_runs`) when given.
+    """
     paths = model_drift_paths(inst)
     zero = set_params(inst, {p: 0.0 for p in paths})
     out = []
-    for run in runs:
+    for i, run in enumerate(runs):
         rd = _prepare_drift(run, decimate_s, False, "raw")
-        ctx = _drift_context(inst, rd)
+        ctx = (_drift_context(inst, rd) if thermal is None
+               else drift_context_on(inst, rd, thermal[i]))
         lat = rd.cond.latitude_deg
         offset = model_drift_dph(zero, ctx, lat)
         cols = [np.ones_like(offset)]

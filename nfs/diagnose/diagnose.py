@@ -47,11 +47,27 @@ test rejects at ``alpha`` (descriptive, not part of the rule); ``heading_rmse_be
 minus the fitted model drift without / with the candidate (for the top
 :data:`HEADING_TOP` candidates and every significant one).
 
+Node temperatures of the drift candidates.  A real unit's thermal network is never the
+model's, so the model's open-loop node temperatures (simulated from the chamber
+temperature) are wrong in ways that a drift candidate can mimic: the drift misfit would be
+blamed on whatever candidate follows the thermal error.  By default
+(``node_temperatures="smoothed"``) the drift columns are evaluated on node temperatures
+estimated from the measured thermometers through the model's network, a Kalman filter and
+smoother whose unmodelled heat has its scale fitted by maximum likelihood
+(:func:`nfs.diagnose.smoother.smooth_runs`); on runs the model explains the scale goes to
+zero and the smoothed states are the open-loop ones.
+
 Thermal and thermometer candidates (``heat_source``, ``motor_heat``, ``tec_power`` on each
 node, ``thermometer_lag`` on each thermometer) are scored on the thermometers (``channel =
 "thermometers"``) with one Gauss-Newton step of the thermal refit.  A candidate whose
 columns lie in the span of the model's (a heat source at a node whose power the model fits)
-is listed under ``not_tried`` with the model parameter it duplicates.
+is listed under ``not_tried`` with the model parameter it duplicates.  A thermal candidate
+must also beat the generic structural alternatives of the network (one more node, a free
+link, a thermometer that sits elsewhere; :mod:`nfs.diagnose.structure`), scored with it on
+the same leave-one-start-temperature-out thermometer residual within its physical bounds
+(a power >= 0 W, a lag >= 0 s; :func:`nfs.diagnose.adequacy.thermal_adequacy`): a named
+heat source that only fits because the network is wrong is then not significant, and the
+verdict says the thermal structure does not fit, where, and what to change.
 
 Ranking: significant thermometer candidates first (a missing thermal effect also shows in
 the drift, a missing gyro effect never shows in the thermometers), then by the relative CV
@@ -78,6 +94,7 @@ import numpy as np
 from ..errors import NfsError
 from ..instrument import Instrument
 from ..io.measurement import Run
+from .adequacy import ThermalAdequacy, beats_structure, thermal_adequacy
 from .apply import apply_candidate
 from .candidates import SHAPE_GRID, Candidate, candidates
 from .design import (PreparedRun, bare_instrument, candidate_columns, fit_shapes,
@@ -85,12 +102,20 @@ from .design import (PreparedRun, bare_instrument, candidate_columns, fit_shapes
                      same_signature, startup_heading_rmse, thermal_candidate_columns,
                      thermal_design, thermal_step_instrument)
 from .fit import DEFAULT_DECIMATE_S, FitResult, fit_model
+from .smoother import smooth_runs
 from .stats import (RunGrams, augmented_grams, clustered_fit, group_cv_rms, holm,
                     run_grams, solve)
+from .structure import effect_alternative, structural_alternatives
 from .unexplained import unexplained
 
 __all__ = ["Candidate", "CandidateScore", "Diagnosis", "candidates", "diagnose",
-           "apply_candidate", "SHAPE_GRID", "CV_DROP", "HEADING_TOP", "ONE_SIDED"]
+           "apply_candidate", "SHAPE_GRID", "CV_DROP", "HEADING_TOP", "ONE_SIDED",
+           "NODE_TEMPERATURES"]
+
+#: Where the drift candidates' node temperatures come from: ``smoothed`` (estimated from the
+#: measured thermometers through the model's network, :mod:`nfs.diagnose.smoother`) or
+#: ``model`` (the model's open-loop solution from the chamber temperature).
+NODE_TEMPERATURES = ("smoothed", "model")
 
 #: A significant candidate is ``explained_by`` the top one when, refitted with the top one
 #: in the model, it drops the CV RMS by less than this fraction (not used for significance).
@@ -184,6 +209,15 @@ class Diagnosis:
     """Wall time [s]."""
     alpha: float = 0.05
     """Family-wise error rate of the significance rule."""
+    thermal_structure: ThermalAdequacy | None = None
+    """Does the model's thermal structure fit the thermometers (per thermometer and stage,
+    against its noise floor), and the generic structural alternatives it was set against
+    (:func:`nfs.diagnose.adequacy.thermal_adequacy`); None when not checked."""
+    node_temperatures: dict[str, Any] | None = None
+    """Where the drift candidates' node temperatures came from (``source``: ``smoothed`` or
+    ``model``) and, smoothed, the unmodelled-heat scale q [W^2/s], whether it is
+    significant (the thermometers need heat the network does not give) and the thermometer
+    residual RMS of the smoothed states [K]."""
 
     @property
     def significant(self) -> list[CandidateScore]:
@@ -191,28 +225,43 @@ class Diagnosis:
 
     @property
     def verdict(self) -> str:
-        """One sentence: the significant candidates, or that none is."""
+        """What fails, whether the thermal structure is adequate, and which effect to add with
+        its coefficient and 95 % interval (or that none is significant)."""
+        parts = []
+        ts = self.thermal_structure
+        if ts is not None and not ts.adequate:
+            parts.append("thermal structure: " + ts.message)
         sig = self.significant
         if not sig:
-            return ("no candidate is significant: the missing effect (if any) is not in the "
-                    "library; see 'unexplained'")
+            parts.append("no candidate is significant: the missing effect (if any) is not in "
+                         "the library; see 'unexplained'")
+            return "; ".join(parts)
+
         def name(s):
             return s.effect if s.target is None else f"{s.effect}:{s.target}"
+
+        def coef(s):
+            return ", ".join(f"{k} = {v:.3g} [{s.interval[k][0]:.3g}, {s.interval[k][1]:.3g}]"
+                             for k, v in s.coefficient.items() if k in s.interval)
+
         own = [s for s in sig if s.explained_by is None]
-        out = "significant: " + ", ".join(f"{name(s)} (Holm p {s.holm_p:.2g}, CV RMS "
-                                          f"-{100 * s.cv_drop:.0f} % on {s.channel})"
-                                          for s in own)
+        parts.append("add " + "; ".join(f"{name(s)} ({coef(s)}; Holm p {s.holm_p:.2g}, CV "
+                                        f"RMS -{100 * s.cv_drop:.0f} % on {s.channel})"
+                                        for s in own))
         by = [s for s in sig if s.explained_by is not None]
         if by:
-            out += (f"; also significant alone but explained by {by[0].explained_by}: "
-                    + ", ".join(name(s) for s in by))
-        return out
+            parts.append(f"also significant alone but explained by {by[0].explained_by}: "
+                         + ", ".join(name(s) for s in by))
+        return "; ".join(parts)
 
     def to_dict(self) -> dict[str, Any]:
         return {"ranking": [s.to_dict() for s in self.ranking],
                 "verdict": self.verdict,
                 "not_tried": [{"effect": c.effect, "target": c.target, "reason": c.reason}
                               for c in self.not_tried],
+                "thermal_structure": (None if self.thermal_structure is None
+                                      else self.thermal_structure.to_dict()),
+                "node_temperatures": self.node_temperatures,
                 "unexplained": self.unexplained, "alpha": self.alpha, "time_s": self.time_s}
 
 
@@ -370,7 +419,8 @@ def _explained_by_top(ranking: list[CandidateScore], scored: list[_Scored], grou
 # Diagnose
 
 def diagnose(inst: Instrument, runs: Sequence[Run], *, n_boot: int = 20, alpha: float = 0.05,
-             random_state=0, decimate_s: float = DEFAULT_DECIMATE_S) -> Diagnosis:
+             random_state=0, decimate_s: float = DEFAULT_DECIMATE_S,
+             node_temperatures: str = "smoothed", check_structure: bool = True) -> Diagnosis:
     """Score every candidate effect the model lacks (module docstring for the method).
 
     Parameters
@@ -388,6 +438,12 @@ def diagnose(inst: Instrument, runs: Sequence[Run], *, n_boot: int = 20, alpha: 
         Seed of the run resampling.
     decimate_s : float
         Window of the drift means [s].
+    node_temperatures : ``"smoothed"`` or ``"model"``
+        Node temperatures the drift candidates are evaluated on (:data:`NODE_TEMPERATURES`).
+    check_structure : bool
+        Set the model's thermal structure against generic alternatives
+        (:func:`nfs.diagnose.adequacy.thermal_adequacy`); a thermal candidate is then
+        significant only if it also beats every structural alternative.
 
     The cross-validation leaves one start temperature out (one run, when all runs start
     at the same temperature).  Raises NfsError for fewer than 2 runs.
@@ -400,9 +456,20 @@ def diagnose(inst: Instrument, runs: Sequence[Run], *, n_boot: int = 20, alpha: 
     groups = np.unique([r.meta.start_temperature_c for r in runs], return_inverse=True)[1]
     if groups.max() < 1:  # one start temperature: leave one run out
         groups = np.arange(len(runs))
+    if node_temperatures not in NODE_TEMPERATURES:
+        raise NfsError(f"diagnose: node_temperatures must be one of "
+                       f"{', '.join(NODE_TEMPERATURES)}, got {node_temperatures!r}")
     paths = model_drift_paths(inst)
     baseline = fit_model(inst, runs, free=paths, stages=("drift",), decimate_s=decimate_s)
-    preps, paths = prepare_runs(inst, runs, decimate_s)
+    node_info: dict[str, Any] = {"source": node_temperatures}
+    smoothed = None
+    if node_temperatures == "smoothed":
+        sm = smooth_runs(inst, runs, decimate_s=decimate_s)
+        smoothed = sm.runs
+        node_info.update(q_w2_per_s=sm.q_w2_per_s,
+                         significant=bool(sm.fit.significant) if sm.fit is not None else None,
+                         thermometer_rms_c=dict(sm.thermometer_rms_c))
+    preps, paths = prepare_runs(inst, runs, decimate_s, thermal=smoothed)
     bare = bare_instrument(inst)
     rng = np.random.default_rng(random_state)
     boot = [rng.integers(0, len(runs), len(runs)) for _ in range(n_boot)]
@@ -422,6 +489,16 @@ def diagnose(inst: Instrument, runs: Sequence[Run], *, n_boot: int = 20, alpha: 
                 continue
             scored.append(_score_drift(c, drift, preps, bare, grid, alpha))
     thermal_cands = [c for c in cands if c.tried and c.channel == "thermometers"]
+    adequacy = None
+    if check_structure:
+        def alternatives(model: Instrument):
+            """The generic alternatives and every thermal candidate, scored alike."""
+            return structural_alternatives(model) + [effect_alternative(
+                model, c.effect, c.target) for c in thermal_cands]
+
+        adequacy = thermal_adequacy(inst, runs, alternatives)
+        effect_cv = {a.name: a.cv_rms_after_k for a in adequacy.alternatives
+                     if a.kind == "effect"}
     ts = thermal_design(inst, runs, decimate_s) if thermal_cands else None
     channels = {"drift_dph": drift}
     if ts is not None:
@@ -443,6 +520,11 @@ def diagnose(inst: Instrument, runs: Sequence[Run], *, n_boot: int = 20, alpha: 
             s.score, holm_p=float(a), significant=bool(r and s.score.cv_rms_after
                                                        < s.score.cv_rms_before)))
                   for s, r, a in zip(scored, reject, adj)]
+        if adequacy is not None:  # a thermal candidate must also beat the structure's rivals
+            scored = [s if s.candidate.channel != "thermometers" or not s.score.significant
+                      else replace(s, score=replace(s.score, significant=beats_structure(
+                          effect_cv.get(s.candidate.label, math.nan), adequacy)))
+                      for s in scored]
     # Thermometers are upstream of the drift: significant thermometer candidates rank first;
     # within each group, by the relative drop of the CV RMS.
     scored.sort(key=lambda s: (not (s.score.significant and s.score.channel == "thermometers"),
@@ -484,6 +566,7 @@ def diagnose(inst: Instrument, runs: Sequence[Run], *, n_boot: int = 20, alpha: 
     ranking = _explained_by_top(ranking, scored, groups, channels, bare, after_thermal)
     return Diagnosis(ranking=tuple(ranking), not_tried=tuple(not_tried),
                      unexplained=unexplained(
-                         preps, [y - X @ beta_model for y, X in zip(drift.ys, drift.Xs)],
+                         inst, preps, [y - X @ beta_model for y, X in zip(drift.ys, drift.Xs)],
                          decimate_s), baseline=baseline,
-                     time_s=time.perf_counter() - t0, alpha=alpha)
+                     time_s=time.perf_counter() - t0, alpha=alpha,
+                     thermal_structure=adequacy, node_temperatures=node_info)

@@ -34,7 +34,7 @@ from dataclasses import dataclass
 from typing import Sequence
 
 import numpy as np
-from scipy.stats import chi2, f as f_dist, t as t_dist
+from scipy.stats import f as f_dist, t as t_dist
 
 __all__ = ["RunGrams", "run_grams", "augmented_grams", "solve", "ClusteredFit", "clustered_fit",
            "group_cv_rms", "holm"]
@@ -268,20 +268,3 @@ def holm(p_values: Sequence[float], alpha: float) -> tuple[np.ndarray, np.ndarra
     adj = np.empty(m)
     adj[order] = adj_sorted
     return adj <= alpha, adj
-
-
-def _ljung_box(parts: list[np.ndarray], lags: int = 20) -> dict[str, float]:
-    """Ljung-Box Q on the residual window means, autocorrelations pooled within runs
-    (Ljung & Box 1978, Biometrika 65(2) 297, eq. (2.1)): Q = n (n+2) sum r_k^2 / (n-k)."""
-    x = [p - np.mean(np.concatenate(parts)) for p in parts]
-    n = sum(p.size for p in x)
-    den = sum(float(p @ p) for p in x)
-    q = 0.0
-    r = []
-    for k in range(1, lags + 1):
-        rk = sum(float(p[k:] @ p[:-k]) for p in x if p.size > k) / den if den > 0 else 0.0
-        r.append(rk)
-        q += rk * rk / (n - k)
-    q *= n * (n + 2)
-    return {"Q": q, "lags": lags, "p_value": float(chi2.sf(q, lags)), "n": n,
-            "white": bool(chi2.sf(q, lags) >= 0.01), "acf": r[:5]}
