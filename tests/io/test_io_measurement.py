@@ -12,7 +12,6 @@ Oracles:
 from __future__ import annotations
 
 import datetime as dt
-import time
 
 import numpy as np
 import pytest
@@ -612,21 +611,6 @@ def test_failed_write_keeps_previous_files(tmp_path):
 
 
 @pytest.mark.slow
-def test_speed(tmp_path):
-    runs = [make_run(name=f"run_{k}", n=9000, seed=k) for k in range(7)]
-    write_s = min(_timed(lambda: [write_run(run, tmp_path) for run in runs])
-                  for _ in range(3))
-    read_s = min(_timed(read_run, tmp_path / "run_0.csv") for _ in range(5))
-    print(f"write 7 runs: {write_s:.3f} s, read one: {read_s * 1e3:.1f} ms")
-    assert read_s < 0.05
-    # about 0.5 s on a slow shared 2-core VM, dominated by repr(float) (~0.5 us a value)
-    assert write_s < 1.0
-
-
-def _timed(function, *args):
-    start = time.perf_counter()
-    function(*args)
-    return time.perf_counter() - start
 
 
 def test_check_columns_alone():
