@@ -300,7 +300,7 @@ def main(argv=None) -> None:
     print(f"{len(counts)} groups x {counts.min()}-{counts.max()} samples (one every "
           f"{decimate_s:g} s), {X.shape[1]} features, std(y) {np.std(y):.4g}; "
           f"built in {time.perf_counter() - t0:.1f} s; n_jobs={args.n_jobs}")
-    print(f"ranges: " + ", ".join(f"{k} [{lo:g}, {hi:g}] (log)" for k, (lo, hi) in
+    print("ranges: " + ", ".join(f"{k} [{lo:g}, {hi:g}] (log)" for k, (lo, hi) in
                                   RANGES.items()))
     ssa, t_ssa = part1(X, y, groups, args.budget, args.n_jobs, args.seed)
     part2(X, y, groups, args.budget, args.n_jobs, args.seed, ssa, t_ssa)

@@ -10,14 +10,13 @@ contribution separately, the noise, and the measurement as it would be written t
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any, Callable
 
 import numpy as np
 
 import thermal
 
-from .constants import T_REF_C
 from .effects import EffectContext, EffectInstance
 from .effects.thermometer import THERMOMETERS
 from .errors import EffectError
@@ -144,6 +143,22 @@ def _streams(seed) -> dict[str, np.random.Generator]:
     return {n: np.random.default_rng(s) for n, s in zip(names, seq.spawn(len(names)))}
 
 
+def thermal_effects(inst: Instrument) -> list[tuple[EffectInstance, int, dict[str, Any]]]:
+    """Each thermal effect of ``inst`` with the index of the node it heats and its call
+    parameters (``node`` resolved: the gyro's source when the effect does not name one)."""
+    names = inst.network.node_names
+    out = []
+    for e in inst.effects:
+        if e.spec.kind != "thermal":
+            continue
+        node = e.params.get("node") or inst.gyro.source
+        params = dict(e.params)
+        if "node" in params:
+            params["node"] = node
+        out.append((e, names.index(node), params))
+    return out
+
+
 def thermal_power(inst: Instrument, time_s: np.ndarray, moving: np.ndarray):
     """The heat input of the thermal effects: (power, terms, stateful).
 
@@ -152,19 +167,11 @@ def thermal_power(inst: Instrument, time_s: np.ndarray, moving: np.ndarray):
     holds each state-free effect's power by label; ``stateful`` lists the state-dependent
     effects (effect, node index, params) to evaluate on the solution afterwards.
     """
-    names = inst.network.node_names
-    n = len(names)
+    n = len(inst.network.node_names)
     fixed = np.zeros((len(time_s), n))
     stateful: list[tuple[EffectInstance, int, dict[str, Any]]] = []
     terms: dict[str, np.ndarray] = {}
-    for e in inst.effects:
-        if e.spec.kind != "thermal":
-            continue
-        node = e.params.get("node") or inst.gyro.source
-        j = names.index(node)
-        params = dict(e.params)
-        if "node" in params:
-            params["node"] = node
+    for e, j, params in thermal_effects(inst):
         if e.spec.state_dependent:
             stateful.append((e, j, params))
         else:

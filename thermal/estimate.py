@@ -308,7 +308,6 @@ def kalman_smooth(network: Network, sensors: Sequence[LinearSensor],
     model = kalman.build_model(network, sensors, noise_weights)
     steps, groups = kalman.group_records(model, records)
     p0 = kalman.initial_cov(model, initial_std_c, initial_power_std_w)
-    n = model.n
     results: list[NodeEstimate | None] = [None] * len(records)
     total = 0.0
     for group in groups:

@@ -22,7 +22,6 @@ Names
 from __future__ import annotations
 
 import fnmatch
-from dataclasses import dataclass
 from typing import Iterable, Sequence
 
 import numpy as np

@@ -17,10 +17,9 @@ Protocol (seed 004, done on equal terms):
 from __future__ import annotations
 
 import dataclasses
-import time
 import warnings
 from dataclasses import dataclass, field
-from typing import Any, Callable, Sequence
+from typing import Any, Callable
 
 import numpy as np
 from sklearn.exceptions import ConvergenceWarning

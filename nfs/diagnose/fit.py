@@ -79,7 +79,7 @@ from thermal.solve import step_matrices
 from ..constants import OMEGA_IE_DPH
 from ..effects.thermometer import THERMOMETERS
 from ..errors import InputError, NfsError
-from ..experiment import thermal_power, conditions_from_run, effect_context
+from ..experiment import conditions_from_run, effect_context, thermal_effects, thermal_power
 from ..instrument import Instrument
 from ..io.atomic import atomic_write_text
 from ..io.measurement import Run
@@ -367,14 +367,7 @@ def _simulate_knots(inst: Instrument, data: list[_ThermalRun]) -> list[_Knots]:
         return out  # type: ignore[return-value]
     a, b = net.matrices()
     p_const = net.node_power_w
-    effects = []
-    for e in inst.effects:
-        if e.spec.kind == "thermal":
-            node = e.params.get("node") or inst.gyro.source
-            params = dict(e.params)
-            if "node" in params:
-                params["node"] = node
-            effects.append((e, names.index(node), params))
+    effects = thermal_effects(inst)
     for h, members in groups.items():
         mats = step_matrices(a, b, h)
         step = mats.phi_minus_i.T

@@ -34,7 +34,7 @@ import math
 from dataclasses import fields, replace
 from typing import Iterable, Mapping
 
-from thermal import Link, Network, Node
+from thermal import Link, Network
 
 from ..errors import NfsError
 

@@ -47,7 +47,7 @@ from thermal.network import index_of
 
 from ..effects.thermometer import THERMOMETERS
 from ..errors import InputError, NfsError, ThermalError
-from ..experiment import conditions_from_run
+from ..experiment import conditions_from_run, thermal_effects
 from ..instrument import Instrument
 from ..io.measurement import Run
 
@@ -193,14 +193,7 @@ def _prepare(inst: Instrument, run: Run, decimate_s: float) -> _Prepared:
     t_knot, moving_knot = t[knots], _window_mean(moving, knots)
     fixed = np.zeros((t.size, n))
     stateful = []
-    for e in inst.effects:
-        if e.spec.kind != "thermal":
-            continue
-        node = e.params.get("node") or inst.gyro.source
-        j = names.index(node)
-        params = dict(e.params)
-        if "node" in params:
-            params["node"] = node
+    for e, j, params in thermal_effects(inst):
         if e.spec.state_dependent:
             stateful.append((e.spec.function, j, params))
         else:

@@ -85,7 +85,7 @@ def solve_stage(name: str, fun, x0: np.ndarray, lb: np.ndarray, ub: np.ndarray,
     t0 = time.perf_counter()
     x0 = np.clip(x0, lb, ub)
     r0 = fun(x0)
-    m, n = r0.size, x0.size
+    m = r0.size
     use_prior = prior is not None and bool(prior.active.any())
 
     def total(x):

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from nfs.compensate.features import (FEATURE_SETS, FeatureError, compute_features,
+from nfs.compensate.features import (FeatureError, compute_features,
                                      rate_k_per_min, resolve_features)
 from nfs.io.measurement import Run, RunMeta
 

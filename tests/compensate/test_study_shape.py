@@ -9,7 +9,6 @@ methods (about 30 s); the tuners keep the default budget of 30 evaluations (at 1
 tuned SVR rows scatter between 0.008 and 0.018 deg, see the closing notes of the issue).
 """
 
-import dataclasses
 
 import numpy as np
 import pytest

@@ -3,11 +3,10 @@
 import re
 from pathlib import Path
 
-import numpy as np
 import pytest
 
-from nfs.effects import (EffectContext, available_effects, get_effect, load_effects_file,
-                         make_effect, register_effect, Parameter)
+from nfs.effects import (available_effects, get_effect, load_effects_file,
+                         make_effect, register_effect)
 from nfs.errors import EffectError
 
 #: Oracle: the contract table of ../shared/spec/effects.md, copied here so the test does not
