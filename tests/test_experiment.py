@@ -1,6 +1,5 @@
 """The experiment chain: decomposition into named terms, ablation, determinism, physics."""
 
-import dataclasses
 
 import numpy as np
 import pytest
