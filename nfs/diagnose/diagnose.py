@@ -229,9 +229,12 @@ class Diagnosis:
         its coefficient and 95 % interval (or that none is significant)."""
         parts = []
         ts = self.thermal_structure
-        if ts is not None and not ts.adequate:
-            parts.append("thermal structure: " + ts.message)
         sig = self.significant
+        # a significant thermal candidate beat every structural alternative: it is the
+        # thermal model's missing piece, and the structure's misfit is its signature
+        if ts is not None and not ts.adequate and not any(
+                s.channel == "thermometers" for s in sig):
+            parts.append("thermal structure: " + ts.message)
         if not sig:
             parts.append("no candidate is significant: the missing effect (if any) is not in "
                          "the library; see 'unexplained'")

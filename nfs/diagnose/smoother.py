@@ -57,6 +57,10 @@ __all__ = ["SmoothedThermal", "RunSmoothing", "smooth_runs", "thermometer_sensor
 #: Default spacing of the estimation knots [s].
 DEFAULT_DECIMATE_S = 10.0
 
+#: Lags shorter than this fraction of the knot interval are left out of the sensors
+#: (:func:`thermometer_sensors`).
+_MIN_LAG_FRACTION = 0.1
+
 #: Floor of a thermometer's error standard deviation [degC] when its noise and quantum are 0:
 #: the filter needs a positive measurement variance.
 _MIN_NOISE_C = 1e-3
@@ -129,8 +133,13 @@ def _norm_weights(model) -> dict[str, float]:
     return {node: w / total for node, w in model.nodes.items()}
 
 
-def thermometer_sensors(inst: Instrument) -> list[LinearSensor]:
+def thermometer_sensors(inst: Instrument, min_lag_s: float = 0.0) -> list[LinearSensor]:
     """The instrument's thermometers as linear sensors, in the order of ``THERMOMETERS``.
+
+    A lag shorter than ``min_lag_s`` [s] is left out: its reading follows the sensed
+    temperature within tau dT/dt (5e-4 K for 1 s at 0.03 K/min), below the thermometer's
+    noise, and a state that relaxes in a fraction of a knot interval makes the filter's
+    covariance recursion ill-conditioned (a fitted lag that ran towards 0 s did).
 
     Raises
     ------
@@ -148,7 +157,7 @@ def thermometer_sensors(inst: Instrument) -> list[LinearSensor]:
     out = []
     for name in THERMOMETERS:
         model = inst.thermometers[name]
-        lags = ([model.lag_s] if model.lag_s > 0 else []) + [t for t in extra[name] if t > 0]
+        lags = [t for t in [model.lag_s, *extra[name]] if t > 0 and t >= min_lag_s]
         std = math.sqrt(model.noise_c ** 2 + model.quantum_c ** 2 / 12.0)
         out.append(LinearSensor(name=name, weights=_norm_weights(model),
                                 noise_std_c=max(std, _MIN_NOISE_C), lags_s=tuple(lags),
@@ -286,7 +295,7 @@ def smooth_runs(inst: Instrument, runs: Sequence[Run], *,
         raise NfsError("smooth_runs: no runs")
     if not (math.isfinite(decimate_s) and decimate_s > 0):
         raise NfsError(f"smooth_runs: decimate_s must be > 0, got {decimate_s}")
-    sensors = thermometer_sensors(inst)
+    sensors = thermometer_sensors(inst, min_lag_s=_MIN_LAG_FRACTION * decimate_s)
     prepared = [_prepare(inst, run, decimate_s) for run in runs]
     try:
         est = estimate_states(inst.network, sensors, [p.record for p in prepared],

@@ -171,7 +171,10 @@ def _check_top(d, name):
     others = [s for s in d.significant[1:] if s.channel == top.channel]
     assert all(s.explained_by for s in others), [
         (s.effect, s.target) for s in others if not s.explained_by]
-    assert d.verdict.startswith(f"significant: {top.effect}")
+    # the verdict names the effect to add, with its coefficient and interval
+    label = top.effect if top.target is None else f"{top.effect}:{top.target}"
+    assert d.verdict.startswith(f"add {label} (")
+    assert "[" in d.verdict and "Holm p" in d.verdict
     # the fitted coefficients' intervals (CR2, clustered by run) hold the true values
     # (10 % slack: the interval is at the refined shape, one of several near-equivalent)
     for p, v in params.items():
