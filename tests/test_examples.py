@@ -3,6 +3,8 @@
 import importlib.util
 from pathlib import Path
 
+import pytest
+
 ROOT = Path(__file__).resolve().parents[1]
 
 
@@ -13,14 +15,19 @@ def load(name):
     return mod
 
 
+@pytest.mark.slow
 def test_missing_effect_example(tmp_path):
-    """Oracle: the hidden magnetic bias (m = 0.012 deg/h, 1.9x the drift noise floor) is the
-    top and only significant candidate; adding it brings the gyro drift residual down to the
-    noise floor (RMS at least halved) and the per-position spread below 3 standard errors;
-    the heading RMSE does not get worse."""
+    """Runs of the independent generator (not our simulator) with a hidden magnetic bias
+    (m = 0.012 deg/h, D_mag = 40 deg; 1.2x the drift noise floor).  Oracle: the hidden
+    effect is the top significant candidate, its fitted m and D_mag intervals hold the truth;
+    adding it brings the gyro drift residual's excess over its noise floor down by at least
+    half and the per-position spread below 3 standard errors; the heading RMSE does not get
+    worse.  About 4 min on two cores (the thermal fit of a network that is not the unit's)."""
     r = load("missing_effect").main(tmp_path)
-    assert r["top"] == "magnetic" and r["significant"] == ["magnetic"]
-    assert r["rms_after"] <= 0.5 * r["rms_before"]
-    assert r["rms_after"] <= 1.5 * r["floor"]
+    assert r["top"] == "magnetic", r["verdict"]
+    lo, hi = r["interval"]["m"]
+    assert lo <= r["truth"]["params"]["m"] <= hi
+    excess = lambda rms: max(rms * rms - r["floor"] ** 2, 0.0) ** 0.5  # noqa: E731
+    assert excess(r["rms_after"]) <= 0.5 * excess(r["rms_before"])
     assert r["position_ratio_before"] > 3 > r["position_ratio_after"]
     assert r["heading_after_deg"] <= r["heading_before_deg"] * 1.001
