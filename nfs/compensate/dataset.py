@@ -48,7 +48,7 @@ class DriftDataset:
     def validation_groups(self) -> np.ndarray:
         """Fold id of every sample for tuning: its run's start temperature.
 
-        Validation leaves one start temperature out (issue 3, part 4): with several
+        Validation leaves one start temperature out: with several
         start-ups per temperature, leaving one run out would keep its twins (same T0, same
         thermal history) in the training folds and reward hyperparameters that interpolate
         between them instead of generalising across temperatures.  When every run has the

@@ -1,4 +1,4 @@
-"""Beyond the paper (issue 3, part 6): the best method's start-up heading RMSE within 1.3x of
+"""Beyond the paper: the best method's start-up heading RMSE within 1.3x of
 the stable-stage RMSE at every one of the 7 start temperatures.
 
 Measured on scenarios/startup_7temps_precise.toml (30 test and 3 training start-ups per

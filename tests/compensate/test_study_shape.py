@@ -6,7 +6,7 @@ SSA-SVR 0.0101 deg vs 0.0209 before (ratio 0.48), every SVR variant ahead of BP.
 SSA-SVR mean <= 0.6 x before; each SVR-family mean below BP's; every compensated mean above
 the white-noise floor.  Reduced: 3 test start-ups per temperature instead of 5, 6 of the 11
 methods (about 30 s); the tuners keep the default budget of 30 evaluations (at 12 or 20 the
-tuned SVR rows scatter between 0.008 and 0.018 deg, see the closing notes of the issue).
+tuned SVR rows scatter between 0.008 and 0.018 deg).
 """
 
 
