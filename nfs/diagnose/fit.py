@@ -77,6 +77,7 @@ import thermal
 from thermal.solve import step_matrices
 
 from ..constants import OMEGA_IE_DPH
+from ..denoise import earth_rate_projection_dph, separate_drift
 from ..effects.thermometer import THERMOMETERS
 from ..errors import InputError, NfsError
 from ..experiment import conditions_from_run, effect_context, thermal_effects, thermal_power
@@ -480,7 +481,6 @@ def _prepare_drift(run: Run, decimate_s: float, acc_channels: bool,
         raise InputError(f"run '{run.name}' has no true_heading_deg: the drift stage needs the "
                          "Earth-rate projection, which needs the true heading",
                          file=run.path, key="true_heading_deg")
-    from ..denoise import earth_rate_projection_dph, separate_drift
     cond = conditions_from_run(run)
     t = np.asarray(run["time_s"], dtype=float)
     k = _step(t, decimate_s)
