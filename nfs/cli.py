@@ -27,6 +27,11 @@ __all__ = ["main"]
 
 EXIT_USAGE = 2
 
+FEATURES_MODE_HELP = (
+    "what the thermometer features at time t may use: cycle (data up to the end of t's "
+    "north-finding cycle, when its heading is output), causal (data up to t) or offline "
+    "(the whole run, centred rate window: not computable by an instrument)")
+
 
 class Progress:
     """A progress line on stderr (rewritten in place on a terminal)."""
@@ -52,9 +57,12 @@ class Progress:
 
 
 def _cmd_table(args) -> int:
+    from .compensate.modes import check_features_mode
     from .experiment import run_scenario, uncompensated_table
     from .io.scenario import load_scenario
     from .report import write_table
+    if args.features_mode is not None:
+        check_features_mode(args.features_mode, "--features-mode")
     scenario = _with_overrides(load_scenario(args.scenario), args)
     title = f"{scenario.name}: heading RMSE by start temperature"
     progress = Progress("", args.quiet)
@@ -76,6 +84,8 @@ def _cmd_table(args) -> int:
             settings = dataclasses.replace(settings, test_repeats=args.repeats)
         if args.n_jobs is not None:
             settings = dataclasses.replace(settings, n_jobs=args.n_jobs)
+        if args.features_mode is not None:
+            settings = dataclasses.replace(settings, features_mode=args.features_mode)
         study = run_study(scenario, settings, progress=progress)
         table = study.heading_table()
         paths = write_study(study, args.output, json_path=args.json, title=title)
@@ -87,9 +97,11 @@ def _cmd_table(args) -> int:
 
 def _cmd_train(args) -> int:
     from .compensate import get_method, resolve_features, train_compensator
+    from .compensate.modes import check_features_mode
     from .io.measurement import read_runs
     get_method(args.method)                  # a bad name fails before any work
     resolve_features(args.features, ["aux_*"])
+    check_features_mode(args.features_mode, "--features-mode")
     runs = read_runs(args.data)
     missing = [r.name for r in runs if r.meta.true_heading_deg is None]
     if missing:
@@ -99,10 +111,12 @@ def _cmd_train(args) -> int:
         print(f"training {args.method} on {len(runs)} run(s)...", file=sys.stderr)
     comp = train_compensator(args.method, runs, features=args.features, budget=args.budget,
                              random_state=args.seed, n_jobs=args.n_jobs,
-                             decimate_s=args.decimate_s, cutoff_period_s=args.cutoff_s)
+                             decimate_s=args.decimate_s, cutoff_period_s=args.cutoff_s,
+                             features_mode=args.features_mode)
     comp.save(args.output)
     print(f"{comp.method} trained on {len(runs)} run(s) in {comp.fit_time_s:.1f} s; "
-          f"features: {', '.join(comp.feature_names)}; wrote {args.output}")
+          f"features: {', '.join(comp.feature_names)} ({comp.features_mode} mode); "
+          f"wrote {args.output}")
     est = comp.estimator
     if hasattr(est, "best_params_"):
         print("tuned: " + ", ".join(f"{k} = {v:.4g}" for k, v in est.best_params_.items()))
@@ -111,8 +125,14 @@ def _cmd_train(args) -> int:
 
 def _cmd_compensate(args) -> int:
     from .compensate import load_compensator
+    from .compensate.modes import check_features_mode
     from .io.measurement import read_runs, write_run
     comp = load_compensator(args.model)
+    if args.features_mode is not None and \
+            check_features_mode(args.features_mode, "--features-mode") != comp.features_mode:
+        raise NfsError(f"--features-mode {args.features_mode}: the model was trained in "
+                       f"{comp.features_mode} mode, and is applied in the mode it was "
+                       "trained in")
     runs = read_runs(args.data)
     # Every run is compensated before anything is written: a run that lacks an input
     # channel stops the command with nothing half-written.
@@ -295,6 +315,8 @@ def _cmd_diagnose(args) -> int:
         print("thermal structure: adequate (every thermometer within "
               f"{d.thermal_structure.factor:g}x its noise floor, no generic alternative "
               "better)")
+    if d.drift_structure is not None and d.drift_structure.adequate:
+        print("drift structure: " + d.drift_structure.message)
     if d.not_tried:
         print(f"{len(d.not_tried)} candidate(s) not scored (reasons in --json 'not_tried')")
     if args.json:
@@ -356,6 +378,8 @@ def build_parser() -> argparse.ArgumentParser:
                    help="evaluations per tuned method (default: the scenario's, 30)")
     t.add_argument("--n-jobs", type=int, default=None,
                    help="parallel evaluations of the tuners (default: the scenario's; -1 all)")
+    t.add_argument("--features-mode", default=None, metavar="MODE",
+                   help=FEATURES_MODE_HELP + " (default: the scenario's, cycle)")
     t.add_argument("--no-compensation", action="store_true",
                    help="only the uncompensated rows (before, stable, floor)")
     t.add_argument("-q", "--quiet", action="store_true", help="no progress on stderr")
@@ -372,6 +396,9 @@ def build_parser() -> argparse.ArgumentParser:
     tr.add_argument("-o", "--output", required=True, help="model file to write (.joblib)")
     tr.add_argument("--features", nargs="+", default=["seed004"],
                     help="feature names, sets or patterns (default: seed004)")
+    tr.add_argument("--features-mode", default="cycle", metavar="MODE",
+                    help=FEATURES_MODE_HELP + " (default: cycle); the model applies them in "
+                         "the same mode")
     tr.add_argument("--budget", type=int, default=30, help="evaluations of a tuned method")
     tr.add_argument("--decimate-s", type=float, default=30.0,
                     help="training samples every this many seconds (default 30)")
@@ -390,6 +417,9 @@ def build_parser() -> argparse.ArgumentParser:
     _runs(co)
     co.add_argument("--model", required=True, help="model file written by nfs train")
     co.add_argument("-o", "--output", required=True, help="output folder")
+    co.add_argument("--features-mode", default=None, metavar="MODE",
+                    help="check that the model was trained in this features mode (it is "
+                         "always applied in its own)")
     co.set_defaults(func=_cmd_compensate)
 
     s = sub.add_parser("simulate", help="write measurement files for a scenario",

@@ -15,13 +15,20 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any, Sequence
 
+import joblib
 import numpy as np
+import pywt
+import scipy
+import sklearn
 
+from .. import __version__
 from ..errors import NfsError
 from ..io.atomic import atomic_write_bytes
 from ..io.measurement import Run
 from .dataset import DriftDataset, drift_dataset
 from .features import compute_features
+from .methods import get_method
+from .modes import DEFAULT_FEATURE_MODE, FeatureModeError, check_features_mode, horizon_index
 
 __all__ = ["DriftCompensator", "train_compensator", "load_compensator", "FORMAT"]
 
@@ -30,12 +37,7 @@ FORMAT = "nfs-compensator/1"
 
 
 def _versions() -> dict[str, str]:
-    import joblib
-    import pywt
-    import scipy
-    import sklearn
-
-    from .. import __version__
+    """Versions of the libraries a model is trained with (saved beside it)."""
     return {"nfs": __version__, "numpy": np.__version__, "scipy": scipy.__version__,
             "scikit-learn": sklearn.__version__, "pywavelets": pywt.__version__,
             "joblib": joblib.__version__, "python": platform.python_version()}
@@ -51,8 +53,12 @@ class DriftCompensator:
     """The fitted scikit-learn estimator (features -> drift [deg/h])."""
     feature_names: tuple[str, ...]
     """The input features, in column order."""
-    rate_window_s: float = 121.0
-    """Window of the temperature-rate features [s]."""
+    rate_window_s: float | None = None
+    """Window of the temperature-rate features [s] (None: the mode's)."""
+    features_mode: str = DEFAULT_FEATURE_MODE
+    """What a feature at t may use (:mod:`nfs.compensate.modes`), as in training: ``cycle``,
+    ``causal`` or ``offline`` (a model saved before the modes existed was trained
+    offline, and is read so by :func:`load_compensator`)."""
     settings: dict = field(default_factory=dict)
     """How it was trained (decimation, wavelet cutoff, budget, ...)."""
     trained_on: tuple[str, ...] = ()
@@ -67,12 +73,28 @@ class DriftCompensator:
 
         The model is evaluated every ``stride_s`` seconds (default: the training decimation,
         at most 10 s) and linearly interpolated in between: its inputs vary on the scale of
-        minutes (121 s rate window, thermometer lags) and its target was low-passed at the
-        wavelet cutoff (8.5 min), so a kernel model need not be evaluated at every 1 Hz
+        minutes (rate windows of minutes, thermometer lags) and its target was low-passed at
+        the wavelet cutoff (8.5 min), so a kernel model need not be evaluated at every 1 Hz
         sample (a 10x saving for SVR, whose cost is one kernel row per support vector).
+        The interpolation never reaches past what the features mode allows: the model is
+        also evaluated at the first and last sample of every stretch of samples that share
+        a horizon (:func:`~nfs.compensate.modes.horizon_index`: each north-finding cycle in
+        ``cycle`` mode; every sample, so no interpolation at all, in ``causal`` mode).
         ``stride_s=0`` evaluates every sample.
+
+        Parameters
+        ----------
+        run : Run
+            The run, with the model's input channels.
+        stride_s : float, optional
+            Time between evaluations of the model [s].
+
+        Returns
+        -------
+        ndarray
+            Drift [deg/h]; NaN where a feature is missing.
         """
-        X, names = compute_features(run, list(self.feature_names),
+        X, names = compute_features(run, list(self.feature_names), mode=self.features_mode,
                                     rate_window_s=self.rate_window_s)
         if tuple(names) != self.feature_names:
             raise NfsError(f"run '{run.name}': features {names} differ from the model's "
@@ -87,11 +109,13 @@ class DriftCompensator:
         out = np.full(X.shape[0], np.nan)
         if idx.size == 0:
             return out
-        eval_idx = idx[::k]
-        if eval_idx[-1] != idx[-1]:
-            eval_idx = np.append(eval_idx, idx[-1])
+        # stretches of equal horizon: ends are evaluated, so no interpolation crosses one
+        h = horizon_index(run, self.features_mode)[idx]
+        change = h[1:] != h[:-1]
+        ends = idx[np.concatenate(([True], change)) | np.concatenate((change, [True]))]
+        eval_idx = np.union1d(idx[::k], ends)
         pred = self.estimator.predict(X[eval_idx])
-        out[idx] = np.interp(t[idx], t[eval_idx], pred) if k > 1 else pred
+        out[idx] = np.interp(t[idx], t[eval_idx], pred) if eval_idx.size < idx.size else pred
         return out
 
     def compensate(self, run: Run, *, drift_dph: np.ndarray | None = None) -> Run:
@@ -111,7 +135,6 @@ class DriftCompensator:
 
     def save(self, path: str | Path) -> Path:
         """Write the compensator with joblib, atomically."""
-        import joblib
         buf = io.BytesIO()
         joblib.dump({"format": FORMAT, "compensator": self}, buf)
         atomic_write_bytes(path, buf.getvalue())
@@ -119,8 +142,19 @@ class DriftCompensator:
 
 
 def load_compensator(path: str | Path) -> DriftCompensator:
-    """Read a compensator written by :meth:`DriftCompensator.save`."""
-    import joblib
+    """Read a compensator written by :meth:`DriftCompensator.save`.
+
+    Parameters
+    ----------
+    path : str or Path
+        The model file.
+
+    Returns
+    -------
+    DriftCompensator
+        With ``features_mode="offline"`` when the file predates the features modes (its
+        rates were the centred Savitzky-Golay ones).
+    """
     path = Path(path)
     if not path.is_file():
         raise NfsError(f"{path}: model file not found")
@@ -131,26 +165,61 @@ def load_compensator(path: str | Path) -> DriftCompensator:
             from None
     if not isinstance(obj, dict) or obj.get("format") != FORMAT:
         raise NfsError(f"{path}: not a compensator model file (expected format {FORMAT})")
-    return obj["compensator"]
+    comp = obj["compensator"]
+    if "features_mode" not in vars(comp):
+        comp = replace(comp, features_mode="offline")
+    return comp
 
 
 def train_compensator(method: str, runs: Sequence[Run] | DriftDataset, *,
                       features="seed004", budget: int = 40, random_state: int = 0,
                       n_jobs: int | None = None, decimate_s: float = 30.0,
-                      cutoff_period_s: float = 512.0, rate_window_s: float = 121.0
-                      ) -> DriftCompensator:
+                      cutoff_period_s: float = 512.0, rate_window_s: float | None = None,
+                      features_mode: str | None = None) -> DriftCompensator:
     """Train a compensator of ``method`` (a key or name of :data:`~nfs.compensate.methods.METHODS`).
 
-    ``runs`` are measurement runs with a known heading (or a prepared :class:`DriftDataset`).
     Tuned methods search their hyperparameters with ``budget`` evaluations of a validation
     error that leaves one start temperature out (one run out when all share one T0;
     :attr:`DriftDataset.validation_groups`).
+
+    Parameters
+    ----------
+    method : str
+        Method key or name.
+    runs : sequence of Run or DriftDataset
+        Measurement runs with a known heading, or a prepared training set (whose features,
+        mode and rate window are then used).
+    features : str or list of str
+        Feature names, sets or patterns (with runs).
+    budget : int
+        Evaluations of a tuned method's validation error.
+    random_state : int
+        Seed of every stochastic model and tuner.
+    n_jobs : int, optional
+        Parallel evaluations of a tuner's population.
+    decimate_s, cutoff_period_s : float
+        Training samples every ``decimate_s`` [s]; wavelet cutoff of the drift [s].
+    rate_window_s : float, optional
+        Window of the rate features [s] (default: the mode's).
+    features_mode : str, optional
+        ``cycle`` (default), ``causal`` or ``offline``; with a DriftDataset, its own mode
+        (a different one given here is an error).
+
+    Returns
+    -------
+    DriftCompensator
     """
-    from .methods import get_method
     spec = get_method(method)
-    data = runs if isinstance(runs, DriftDataset) else drift_dataset(
-        runs, features, decimate_s=decimate_s, cutoff_period_s=cutoff_period_s,
-        rate_window_s=rate_window_s)
+    if isinstance(runs, DriftDataset):
+        data = runs
+        if features_mode is not None and check_features_mode(features_mode) != \
+                data.features_mode:
+            raise FeatureModeError(f"features mode {features_mode!r} differs from the training "
+                                   f"set's {data.features_mode!r}: train and apply in one mode")
+    else:
+        data = drift_dataset(runs, features, decimate_s=decimate_s,
+                             cutoff_period_s=cutoff_period_s, rate_window_s=rate_window_s,
+                             features_mode=features_mode or DEFAULT_FEATURE_MODE)
     if spec.tuned and len(set(data.groups.tolist())) < 2:
         raise NfsError(f"{spec.name} tunes by leaving whole runs out: it needs at least "
                        "2 training runs")
@@ -165,8 +234,8 @@ def train_compensator(method: str, runs: Sequence[Run] | DriftDataset, *,
     dt = time.perf_counter() - t0
     return DriftCompensator(
         method=spec.name, estimator=est, feature_names=data.feature_names,
-        rate_window_s=rate_window_s,
+        rate_window_s=data.rate_window_s, features_mode=data.features_mode,
         settings={"decimate_s": decimate_s, "cutoff_period_s": cutoff_period_s,
                   "budget": budget if spec.tuned else None, "random_state": random_state,
-                  "n_samples": int(data.X.shape[0])},
+                  "n_samples": int(data.X.shape[0]), "features_mode": data.features_mode},
         trained_on=data.run_names, fit_time_s=dt, versions=_versions())

@@ -21,6 +21,7 @@ import numpy as np
 from ..denoise import separate_drift
 from ..errors import NfsError
 from .features import compute_features
+from .modes import DEFAULT_FEATURE_MODE, check_features_mode
 
 __all__ = ["DriftDataset", "drift_dataset"]
 
@@ -43,6 +44,11 @@ class DriftDataset:
     """Name of each run (index = group number)."""
     start_temperatures_c: tuple[float, ...]
     """T0 of each run."""
+    features_mode: str = DEFAULT_FEATURE_MODE
+    """What each feature may use (:mod:`nfs.compensate.modes`): a compensator trained on
+    this set must be applied in the same mode."""
+    rate_window_s: float | None = None
+    """Window of the rate features [s] (None: the mode's)."""
 
     @property
     def validation_groups(self) -> np.ndarray:
@@ -70,7 +76,8 @@ class DriftDataset:
 
 def drift_dataset(runs: Sequence, features, *, decimate_s: float = 30.0,
                   cutoff_period_s: float = 512.0, wavelet: str = "db4", rule: str = "visu",
-                  rate_window_s: float = 121.0) -> DriftDataset:
+                  features_mode: str = DEFAULT_FEATURE_MODE,
+                  rate_window_s: float | None = None) -> DriftDataset:
     """Build the training set of ``runs`` (each needs ``true_heading_deg``).
 
     Parameters
@@ -84,15 +91,23 @@ def drift_dataset(runs: Sequence, features, *, decimate_s: float = 30.0,
         Wavelet cutoff period of the drift separation [s] (512 s: level 8 at 1 Hz).
     wavelet, rule : str
         Wavelet family and threshold rule of the separation.
-    rate_window_s : float
-        Window of the temperature-rate features [s].
+    features_mode : str
+        ``cycle``, ``causal`` or ``offline`` (:mod:`nfs.compensate.modes`).
+    rate_window_s : float, optional
+        Window of the temperature-rate features [s] (default: the mode's).
+
+    Returns
+    -------
+    DriftDataset
     """
+    features_mode = check_features_mode(features_mode)
     if not runs:
         raise NfsError("no runs to train on")
     Xs, ys, gs, ts = [], [], [], []
     names = None
     for g, run in enumerate(runs):
-        X, names_g = compute_features(run, features, rate_window_s=rate_window_s)
+        X, names_g = compute_features(run, features, mode=features_mode,
+                                      rate_window_s=rate_window_s)
         if names is None:
             names = names_g
         elif names_g != names:
@@ -113,4 +128,5 @@ def drift_dataset(runs: Sequence, features, *, decimate_s: float = 30.0,
                         time_s=np.concatenate(ts), feature_names=tuple(names),
                         run_names=tuple(r.name for r in runs),
                         start_temperatures_c=tuple(float(r.meta.start_temperature_c)
-                                                   for r in runs))
+                                                   for r in runs),
+                        features_mode=features_mode, rate_window_s=rate_window_s)

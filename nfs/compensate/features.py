@@ -22,16 +22,34 @@ Names
 from __future__ import annotations
 
 import fnmatch
-from typing import Iterable, Sequence
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass
 
 import numpy as np
-from scipy.signal import savgol_filter
 
 from ..constants import T_REF_C
 from ..errors import NfsError
+from .modes import (
+    DEFAULT_FEATURE_MODE,
+    FEATURE_MODES,
+    check_features_mode,
+    horizon_index,
+)
+from .rates import rate_k_per_min
 
-__all__ = ["THERMOMETER_COLUMNS", "FEATURE_SETS", "available_features", "resolve_features",
-           "compute_features", "rate_k_per_min", "FeatureError", "feature_columns"]
+__all__ = [
+    "FEATURE_MODES",
+    "FEATURE_SETS",
+    "RATE_FILTERS",
+    "THERMOMETER_COLUMNS",
+    "FeatureError",
+    "RateFilter",
+    "available_features",
+    "compute_features",
+    "feature_columns",
+    "rate_k_per_min",
+    "resolve_features",
+]
 
 #: Thermometer short names -> measurement columns (measurement-format.md).
 THERMOMETER_COLUMNS = {"fog": "temp_fog_c", "acc_x": "temp_acc_x_c", "acc_y": "temp_acc_y_c"}
@@ -50,6 +68,29 @@ FEATURE_SETS: dict[str, tuple[str, ...]] = {
     # every thermometer feature
     "thermometers": tuple([f"T_{t}" for t in _TH] + [f"dT_{t}" for t in _TH]
                           + [f"G_{a}_{b}" for a, b in _PAIRS] + [f"TdT_{t}" for t in _TH]),
+}
+
+
+@dataclass(frozen=True)
+class RateFilter:
+    """The local-polynomial derivative of the rate features in one feature mode."""
+
+    window_s: float
+    """Window length [s] (the longest, when the window grows)."""
+    polyorder: int
+    """Order of the polynomial fitted over the window."""
+    growth: float = 0.0
+    """Window length per second since power-on [s/s] (0: a fixed window)."""
+    min_window_s: float = 0.0
+    """Shortest window when it grows [s]."""
+
+
+#: The rate filter of each feature mode (:mod:`nfs.compensate.rates`; the choice and the
+#: measurements behind it are in the module docstring).
+RATE_FILTERS: dict[str, RateFilter] = {
+    "cycle": RateFilter(121.0, 2),
+    "causal": RateFilter(121.0, 2),
+    "offline": RateFilter(121.0, 2),
 }
 
 
@@ -97,32 +138,6 @@ def resolve_features(spec: str | Sequence[str], columns: Iterable[str] = ()) -> 
     return out
 
 
-def rate_k_per_min(temp_c: np.ndarray, time_s: np.ndarray, window_s: float = 121.0,
-                   polyorder: int = 2) -> np.ndarray:
-    """dT/dt [K/min] by a Savitzky-Golay derivative (Savitzky & Golay 1964, Anal. Chem. 36(8)).
-
-    A least-squares polynomial of order ``polyorder`` over a centred window of ``window_s``
-    is differentiated at its centre.  A finite difference of a thermometer quantised to
-    0.0625 K would be a train of spikes; the local fit averages the quantisation steps
-    (a linear fit over W samples of noise sigma has a slope error sigma sqrt(12 / W^3) per
-    sample).  The ends use a fit over the first / last window (``mode="interp"``).
-    NaN samples are interpolated first.
-    """
-    t = np.asarray(time_s, dtype=float)
-    x = np.asarray(temp_c, dtype=float)
-    ok = np.isfinite(x)
-    if not ok.all():
-        if ok.sum() < 2:
-            return np.full_like(x, np.nan)
-        x = np.interp(t, t[ok], x[ok])
-    dt = float(np.median(np.diff(t))) if t.size > 1 else 1.0
-    w = int(round(window_s / dt)) | 1          # odd number of samples
-    w = min(w, x.size if x.size % 2 else x.size - 1)
-    if w <= polyorder:
-        return np.gradient(x, t) * 60.0
-    return savgol_filter(x, w, polyorder, deriv=1, delta=dt, mode="interp") * 60.0
-
-
 def feature_columns(name: str) -> list[str]:
     """The measurement columns a feature is computed from."""
     if name.startswith("aux_"):
@@ -146,16 +161,44 @@ def _column(columns: dict, name: str, run_name: str) -> np.ndarray:
 
 
 def compute_features(run, spec: str | Sequence[str] = "seed004", *,
-                     rate_window_s: float = 121.0, t_ref_c: float = T_REF_C
+                     mode: str = DEFAULT_FEATURE_MODE, rate_window_s: float | None = None,
+                     rate_polyorder: int | None = None, t_ref_c: float = T_REF_C
                      ) -> tuple[np.ndarray, list[str]]:
     """The feature matrix X (n_samples, n_features) of a run and the feature names.
 
-    ``run`` is a :class:`~nfs.io.measurement.Run` (or any object with ``columns`` and
-    ``name``).
+    Parameters
+    ----------
+    run : Run
+        A :class:`~nfs.io.measurement.Run` (or any object with ``columns``, ``name`` and,
+        for ``cycle`` mode, ``meta``).
+    spec : str or sequence of str
+        Feature names, sets or patterns (:func:`resolve_features`).
+    mode : str
+        What a feature at t may use (:mod:`nfs.compensate.modes`): ``cycle`` (data up to
+        the end of t's north-finding cycle), ``causal`` (up to t) or ``offline`` (the whole
+        run).  Train and apply a compensator in the same mode.
+    rate_window_s : float, optional
+        Window of the rate features [s] (default: the mode's, :data:`RATE_FILTERS`).
+    rate_polyorder : int, optional
+        Order of the rate's local polynomial (default: the mode's).
+    t_ref_c : float
+        T_ref of the ``TdT_`` features [degC].
+
+    Returns
+    -------
+    (ndarray, list of str)
+        X and the feature names of its columns.
     """
+    mode = check_features_mode(mode)
     cols = run.columns
     names = resolve_features(spec, cols.keys())
     t = _column(cols, "time_s", run.name)
+    filt = RATE_FILTERS[mode]
+    window = filt.window_s if rate_window_s is None else float(rate_window_s)
+    order = filt.polyorder if rate_polyorder is None else int(rate_polyorder)
+    horizon = None
+    if mode != "offline" and any(n.partition("_")[0] in ("dT", "TdT") for n in names):
+        horizon = horizon_index(run, mode)
     cache: dict[str, np.ndarray] = {}
 
     def temp(th: str) -> np.ndarray:
@@ -167,7 +210,8 @@ def compute_features(run, spec: str | Sequence[str] = "seed004", *,
     def rate(th: str) -> np.ndarray:
         key = f"dT_{th}"
         if key not in cache:
-            cache[key] = rate_k_per_min(temp(th), t, rate_window_s)
+            cache[key] = rate_k_per_min(temp(th), t, window, order, horizon=horizon,
+                                        growth=filt.growth, min_window_s=filt.min_window_s)
         return cache[key]
 
     out = []

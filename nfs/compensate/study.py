@@ -29,6 +29,7 @@ from ..errors import NfsError
 from .compensator import DriftCompensator, train_compensator
 from .dataset import DriftDataset, drift_dataset
 from .methods import TABLE_METHODS, get_method
+from .modes import DEFAULT_FEATURE_MODE, FEATURE_MODE_NOTES, check_features_mode
 
 __all__ = ["CompensationSettings", "MethodResult", "CompensationStudy", "run_study",
            "DriftRow"]
@@ -42,6 +43,10 @@ class CompensationSettings:
     """Method keys, in table order."""
     features: tuple[str, ...] = ("seed004",)
     """Input features (names, sets or patterns) of every method."""
+    features_mode: str = DEFAULT_FEATURE_MODE
+    """What a feature at t may use, in training and test alike (:mod:`nfs.compensate.modes`):
+    ``cycle`` (up to the end of t's north-finding cycle), ``causal`` (up to t) or
+    ``offline`` (the whole run: no instrument can compute it)."""
     budget: int = 40
     """Evaluations of the validation error per tuned method (the same for all)."""
     decimate_s: float = 30.0
@@ -118,7 +123,9 @@ class CompensationStudy:
             rows.append(TableRow(name, tuple(vals)))
         s = self.settings
         temps = (s.train_temperatures_c or sc.start_temperatures_c)
+        mode = self.dataset.features_mode
         notes = (
+            f"Features mode: {mode} ({FEATURE_MODE_NOTES[mode]}).",
             f"Compensated rows: trained on {len(self.train_runs)} other start-ups (seed "
             f"{s.train_seed}, T0 = {', '.join(f'{t:g}' for t in temps)} C), features "
             f"{', '.join(self.dataset.feature_names)}, drift by wavelet separation "
@@ -129,7 +136,7 @@ class CompensationStudy:
             notes += (f"Tuned rows ({', '.join(tuned)}): {s.budget} evaluations each of the "
                       "leave-one-start-temperature-out validation error (the residual's "
                       "standard deviation within the held-out run).",)
-        return base.with_rows(rows, notes)
+        return base.with_rows(rows, notes, features_mode=self.dataset.features_mode)
 
     def drift_rows(self) -> list[DriftRow]:
         """Drift table rows: the uncompensated separated drift, then each method."""
@@ -201,7 +208,8 @@ def run_study(scenario, settings: CompensationSettings | None = None, *,
                        "set compensation.train_seed different from the scenario's seed")
     train_runs = tuple(simulate_run(train_sc.instrument, c).run for c in train_sc.conditions())
     data = drift_dataset(train_runs, list(s.features), decimate_s=s.decimate_s,
-                         cutoff_period_s=s.cutoff_period_s)
+                         cutoff_period_s=s.cutoff_period_s,
+                         features_mode=check_features_mode(s.features_mode))
     test_runs = [sim.run for sim in test.simulations]
     drifts = _test_drift(test_runs, s.cutoff_period_s, scenario.northfind.startup_end_s)
     study = CompensationStudy(

@@ -27,7 +27,8 @@ __all__ = ["NorthFindSettings", "ChamberProfile", "Scenario", "load_scenario",
 _TOP = ("name", "description", "instrument", "seed", "start_temperatures_c", "repeats",
         "duration_s", "sample_rate_hz", "latitude_deg", "true_heading_deg", "effects_files",
         "effects", "schedule", "northfind", "chamber", "compensation")
-_COMPENSATION = ("methods", "features", "budget", "decimate_s", "cutoff_period_s",
+_COMPENSATION = ("methods", "features", "features_mode", "budget", "decimate_s",
+                 "cutoff_period_s",
                  "train_seed", "train_repeats", "train_temperatures_c", "test_repeats",
                  "random_state", "n_jobs")
 _SCHEDULE = ("positions_deg", "order", "dwell_s", "move_s")
@@ -152,6 +153,7 @@ def _int(tbl, key, prefix, file, default, minimum=None, allow_none=False):
 def _compensation(tbl: dict, file) -> Any:
     from ..compensate.features import FeatureError, resolve_features
     from ..compensate.methods import get_method
+    from ..compensate.modes import FeatureModeError, check_features_mode
     from ..compensate.study import CompensationSettings
     p = "compensation"
     check_keys(tbl, _COMPENSATION, p, file)
@@ -173,12 +175,16 @@ def _compensation(tbl: dict, file) -> Any:
         resolve_features(feats, ["aux_*"])
     except FeatureError as exc:
         raise ScenarioError(str(exc), file=file, key=f"{p}.features") from None
+    try:
+        mode = check_features_mode(tbl.get("features_mode", d.features_mode), option="")
+    except FeatureModeError as exc:
+        raise ScenarioError(str(exc), file=file, key=f"{p}.features_mode") from None
     temps = number_list(tbl, "train_temperatures_c", p, file, None)
     n_jobs = tbl.get("n_jobs", d.n_jobs)
     if n_jobs is not None and (isinstance(n_jobs, bool) or not isinstance(n_jobs, int)):
         raise ScenarioError(f"must be an integer, got {n_jobs!r}", file=file, key=f"{p}.n_jobs")
     return CompensationSettings(
-        methods=methods, features=tuple(feats),
+        methods=methods, features=tuple(feats), features_mode=mode,
         budget=_int(tbl, "budget", p, file, d.budget, minimum=1),
         decimate_s=number(tbl, "decimate_s", p, file, d.decimate_s, positive=True),
         cutoff_period_s=number(tbl, "cutoff_period_s", p, file, d.cutoff_period_s,

@@ -10,6 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..compensate.modes import FEATURE_MODE_NOTES
 from ..io.atomic import atomic_write_bytes, atomic_write_text
 from .reference import (SEED004_TABLE1_SVR, SEED004_TABLE2_DRIFT_DPH,
                         SEED004_TABLE3_HEADING_RMSE_DEG, SEED004_TEMPERATURES_C)
@@ -24,11 +25,14 @@ SVR_FAMILY = ("SVR (grid)", "PSO-SVR", "GWO-SVR", "SSA-SVR")
 
 @dataclass(frozen=True)
 class ShapeCheck:
-    """One expected property of the table (simulator and compensation issues)."""
+    """One expected property of the heading-RMSE table, checked."""
 
     name: str
+    """What is expected."""
     passed: bool
+    """Whether the table has it."""
     detail: str
+    """The figures behind the verdict."""
 
 
 def shape_checks(table: HeadingTable) -> list[ShapeCheck]:
@@ -37,6 +41,8 @@ def shape_checks(table: HeadingTable) -> list[ShapeCheck]:
     - SSA-SVR's mean at most 0.6x the uncompensated mean (seed 004: 0.0101 / 0.0209 = 0.48);
     - the SVR family ahead of BP (each SVR row's mean below BP's);
     - every compensated mean above the white-noise floor;
+    - no compensated row above ``before`` at any start temperature (a compensator that
+      makes some start-up worse is not safe to switch on there);
     - beyond the paper: the best method's start-up RMSE within 1.3x of the stable-stage RMSE
       at every start temperature (the paper misses this at 28 C).
     """
@@ -62,6 +68,12 @@ def shape_checks(table: HeadingTable) -> list[ShapeCheck]:
                               lowest.mean_deg > floor,
                               f"lowest {lowest.method} {lowest.mean_deg:.4f} vs floor "
                               f"{floor:.4f}"))
+    if comp:
+        worse = [f"{r.method} at {t:g} C ({v:.4f} vs {b:.4f})" for r in comp
+                 for t, v, b in zip(table.temperatures_c, r.rmse_deg,
+                                    table.row("before").rmse_deg) if v > b]
+        out.append(ShapeCheck("no compensated row worse than before at any T0", not worse,
+                              "; ".join(worse) if worse else "every row at or below before"))
     if "stable" in names and comp:
         best = min(comp, key=lambda r: r.mean_deg)
         stable = np.asarray(table.row("stable").rmse_deg)
@@ -103,11 +115,26 @@ def _f(v: float) -> str:
     return "nan" if not math.isfinite(v) else f"{v:.4f}"
 
 
-def drift_table_markdown(rows) -> str:
-    """Drift residual MAE and STD by method, beside seed 004's Table 2."""
+def drift_table_markdown(rows, features_mode: str | None = None) -> str:
+    """Drift residual MAE and STD by method, beside seed 004's Table 2.
+
+    Parameters
+    ----------
+    rows : sequence of DriftRow
+        The uncompensated row, then one per method.
+    features_mode : str, optional
+        The features mode of the compensated rows, stated under the table.
+
+    Returns
+    -------
+    str
+        Markdown.
+    """
     lines = ["| method | MAE [deg/h] | STD [deg/h] |", "|---|---:|---:|"]
     for r in rows:
         lines.append(f"| {r.method} | {_f(r.mae_dph)} | {_f(r.std_dph)} |")
+    if features_mode:
+        lines += ["", f"Features mode: {features_mode}."]
     lines += ["", "Seed 004, Table 2: " + "; ".join(
         f"{k} MAE {'-' if v[0] is None else v[0]} STD {v[1]}"
         for k, v in SEED004_TABLE2_DRIFT_DPH.items()) + " [deg/h]."]
@@ -164,21 +191,26 @@ def write_study(study, out_dir, *, json_path=None, title: str = "") -> list[Path
     out.mkdir(parents=True, exist_ok=True)
     table = study.heading_table()
     paths = write_table(table, out, json_path=json_path, title=title)
+    mode = study.dataset.features_mode
     drift = study.drift_rows()
-    drift_md = drift_table_markdown(drift)
+    # the uncompensated row uses no feature: its mode is left empty
+    modes = ["" if r is study.uncompensated_drift else mode for r in drift]
+    drift_md = drift_table_markdown(drift, mode)
     atomic_write_text(out / "drift_residual.md", drift_md)
-    atomic_write_text(out / "drift_residual.csv", "method,MAE_dph,STD_dph\n" + "".join(
-        f"{r.method},{_f(r.mae_dph)},{_f(r.std_dph)}\n" for r in drift))
+    atomic_write_text(out / "drift_residual.csv", "method,MAE_dph,STD_dph,features_mode\n"
+                      + "".join(f"{r.method},{_f(r.mae_dph)},{_f(r.std_dph)},{m}\n"
+                                for r, m in zip(drift, modes)))
     atomic_write_text(out / "drift_residual.json", json.dumps(
         [{"method": r.method, "mae_dph": None if math.isnan(r.mae_dph) else r.mae_dph,
-          "std_dph": r.std_dph} for r in drift], indent=2) + "\n")
+          "std_dph": r.std_dph, "features_mode": m or None}
+         for r, m in zip(drift, modes)], indent=2) + "\n")
     params = study.tuned_parameters()
     keys = sorted({k for p in params.values() for k in p})
     p_md = ["| method | " + " | ".join(keys) + " |", "|---|" + "---:|" * len(keys)]
     for m, p in params.items():
         p_md.append(f"| {m} | " + " | ".join(
             f"{p[k]:.4g}" if k in p else "" for k in keys) + " |")
-    p_md_text = "\n".join(p_md) + "\n"
+    p_md_text = "\n".join(p_md) + f"\n\nTuned on features in {mode} mode.\n"
     atomic_write_text(out / "svr_parameters.md", p_md_text)
     atomic_write_text(out / "svr_parameters.csv", "method," + ",".join(keys) + "\n" + "".join(
         f"{m}," + ",".join(repr(p[k]) if k in p else "" for k in keys) + "\n"
@@ -189,6 +221,7 @@ def write_study(study, out_dir, *, json_path=None, title: str = "") -> list[Path
                        _png(plot_drift_vs_compensated(study, cold)))
     report = "\n".join([
         f"# {title or 'Start-up heading RMSE with drift compensation'}", "",
+        f"Features mode: **{mode}**: {FEATURE_MODE_NOTES[mode]}.", "",
         "## Heading RMSE by start temperature [deg]", "", table.to_markdown(),
         "![heading RMSE by start temperature](heading_rmse.png)", "",
         "## Drift residual over the start-up stage (seed 004, Table 2)", "", drift_md,

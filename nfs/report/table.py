@@ -1,8 +1,9 @@
 """The heading-RMSE table by start temperature (seed 004, Table 3) and its outputs.
 
 Rows are methods (``before``: start-up, uncompensated; ``stable``: the stable stage;
-``floor``: the white-noise limit of the schedule; later issues add compensated rows),
-columns are start temperatures plus their mean.  Written as Markdown, CSV, JSON and a PNG
+``floor``: the white-noise limit of the schedule; the compensation study adds a row per
+compensator and states the features mode they were computed in), columns are start
+temperatures plus their mean.  Written as Markdown, CSV, JSON and a PNG
 bar chart, every file atomically.
 """
 
@@ -19,7 +20,11 @@ import numpy as np
 
 from ..io.atomic import atomic_write_bytes, atomic_write_text
 
-__all__ = ["TableRow", "HeadingTable", "pooled_rmse", "write_table", "plot_heading_table"]
+__all__ = ["TableRow", "HeadingTable", "pooled_rmse", "write_table", "plot_heading_table",
+           "REFERENCE_ROWS"]
+
+#: Rows that are not a compensator: the uncompensated start-up, the stable stage, the floor.
+REFERENCE_ROWS = ("before", "stable", "floor")
 
 
 def pooled_rmse(errors_deg: Iterable[np.ndarray]) -> float:
@@ -55,6 +60,9 @@ class HeadingTable:
     """The rows, in display order."""
     notes: tuple[str, ...] = field(default_factory=tuple)
     """Lines printed under the table (what each row means, budgets, seeds)."""
+    features_mode: str | None = None
+    """What the compensated rows' features could use: ``cycle``, ``causal`` or ``offline``
+    (:mod:`nfs.compensate.modes`); None when the table has no compensated row."""
 
     def row(self, method: str) -> TableRow:
         """The row of ``method`` (KeyError listing the rows if absent)."""
@@ -63,12 +71,27 @@ class HeadingTable:
                 return r
         raise KeyError(f"no row '{method}'; rows: {', '.join(r.method for r in self.rows)}")
 
-    def with_rows(self, rows: Sequence[TableRow], notes: Sequence[str] = ()) -> "HeadingTable":
-        """A table with ``rows`` inserted before ``stable`` and ``floor``."""
+    def with_rows(self, rows: Sequence[TableRow], notes: Sequence[str] = (),
+                  features_mode: str | None = None) -> "HeadingTable":
+        """A table with ``rows`` inserted before ``stable`` and ``floor``.
+
+        Parameters
+        ----------
+        rows : sequence of TableRow
+            The compensated rows.
+        notes : sequence of str
+            Lines added under the table.
+        features_mode : str, optional
+            The features mode of the compensated rows (kept from this table when None).
+
+        Returns
+        -------
+        HeadingTable
+        """
         tail = [r for r in self.rows if r.method in ("stable", "floor")]
         head = [r for r in self.rows if r.method not in ("stable", "floor")]
         return HeadingTable(self.temperatures_c, tuple(head + list(rows) + tail),
-                            self.notes + tuple(notes))
+                            self.notes + tuple(notes), features_mode or self.features_mode)
 
     def _labels(self) -> list[str]:
         return [f"{t:g}" for t in self.temperatures_c]
@@ -87,23 +110,35 @@ class HeadingTable:
         return text
 
     def to_csv(self) -> str:
-        """CSV: header ``method,<T0>...,mean``, one line per row, values in deg."""
-        lines = [",".join(["method", *self._labels(), "mean"])]
+        """CSV: header ``method,<T0>...,mean``, one line per row, values in deg.
+
+        With compensated rows, a last column ``features_mode`` gives their mode (empty for
+        ``before``, ``stable`` and ``floor``, which use no feature).
+        """
+        mode = self.features_mode
+        lines = [",".join(["method", *self._labels(), "mean"]
+                          + (["features_mode"] if mode else []))]
         for r in self.rows:
-            lines.append(",".join([r.method, *(_fmt(v, 6) for v in (*r.rmse_deg, r.mean_deg))]))
+            cells = [r.method, *(_fmt(v, 6) for v in (*r.rmse_deg, r.mean_deg))]
+            if mode:
+                cells.append("" if r.method in REFERENCE_ROWS else mode)
+            lines.append(",".join(cells))
         return "\n".join(lines) + "\n"
 
     def to_dict(self) -> dict:
-        """The JSON form: ``{"temperatures_c": [...], "rows": [{"method", "rmse_deg",
-        "mean_deg"}, ...], "notes": [...]}`` (NaN as null)."""
+        """The JSON form: ``{"temperatures_c": [...], "features_mode": ..., "rows":
+        [{"method", "rmse_deg", "mean_deg"}, ...], "notes": [...]}`` (NaN as null;
+        ``features_mode`` null without compensated rows)."""
         return {
             "temperatures_c": [float(t) for t in self.temperatures_c],
+            "features_mode": self.features_mode,
             "rows": [{"method": r.method, "rmse_deg": [_json(v) for v in r.rmse_deg],
                       "mean_deg": _json(r.mean_deg)} for r in self.rows],
             "notes": list(self.notes),
         }
 
     def to_json(self) -> str:
+        """:meth:`to_dict` as indented JSON text."""
         return json.dumps(self.to_dict(), indent=2) + "\n"
 
 
@@ -145,7 +180,10 @@ def plot_heading_table(table: HeadingTable, title: str = ""):
     ax.set_xticks(x, [f"{t:g}" for t in table.temperatures_c])
     ax.set_xlabel("start temperature T0 [degC]")
     ax.set_ylabel("heading RMSE [deg]")
-    ax.set_title(title or "North-finding heading RMSE by start temperature")
+    title = title or "North-finding heading RMSE by start temperature"
+    if table.features_mode:
+        title += f" (features: {table.features_mode})"
+    ax.set_title(title)
     ax.grid(axis="y", alpha=0.3)
     ax.legend(fontsize=8, ncol=2)
     fig.tight_layout()
