@@ -32,7 +32,8 @@ SHAPE_GRID: dict[str, tuple[float, ...]] = {
     "T_p": (2.0, 5.0, 10.0, 20.0),
     "phi": (0.0, math.pi / 2),
 }
-#: Kinds scored on the drift window means (the others on the thermometers).
+#: Kinds scored on window means at rest (gyro: the drift; accelerometer: its own axis's
+#: readings); the others on the thermometers.
 FAST_KINDS = ("gyro", "accelerometer")
 
 _SHAPE_UNITS = ("s", "K", "deg", "rad")
@@ -65,7 +66,10 @@ class Candidate:
 
     @property
     def channel(self) -> str:
-        """Where it is scored: ``drift_dph`` or ``thermometers`` (the three, in K)."""
+        """Where it is scored: ``drift_dph``, ``acc_x_g`` / ``acc_y_g`` (an accelerometer
+        effect, on its axis's readings) or ``thermometers`` (the three, in K)."""
+        if self.kind == "accelerometer":
+            return f"acc_{self.target}_g"
         return "drift_dph" if self.kind in FAST_KINDS else "thermometers"
 
 
@@ -133,8 +137,8 @@ def candidates(inst: Instrument, runs: Sequence[Run]) -> list[Candidate]:
     under the model's ``[[aux]]`` or not (a column missing from some runs gives a candidate
     with ``tried = False`` naming those runs).  Thermal and thermometer candidates are
     linearised at zero: their time constants [s] become coefficients.  Candidates
-    :func:`~nfs.diagnose.diagnose` cannot score (the y accelerometer, parameters without a
-    start value) have ``tried = False``.
+    :func:`~nfs.diagnose.diagnose` cannot score (parameters without a start value) have
+    ``tried = False``.
     """
     present = set()
     for e in inst.effects:
@@ -154,9 +158,7 @@ def candidates(inst: Instrument, runs: Sequence[Run]) -> list[Candidate]:
             if (name, target) in present:
                 continue
             reason = ""
-            if spec.kind == "accelerometer" and target != "x":
-                reason = "acts on acc_y_g only, which does not enter the drift"
-            elif missing:
+            if missing:
                 reason = "no start value for " + ", ".join(missing)
             elif not coefs:
                 reason = "no linear coefficient to fit"

@@ -10,8 +10,11 @@ Method
 Each candidate is a linear least-squares problem over runs, y_r = [X_r, C_r] beta + e_r:
 on the drift channel y_r are the run's 10 s window means of the measured drift minus the
 model's fixed part, X_r the model's own drift columns and C_r the candidate's at fixed shape
-parameters; on the thermometer channel y_r are the three thermometers, X_r and C_r their
-Jacobians (:mod:`nfs.diagnose.design`).  Window means within a run are strongly
+parameters; an accelerometer candidate is scored on its own axis's window means at rest,
+where it shows against a floor of a few ug instead of through the north finder's vertical
+rate (X_r: the turntable tilts, the axis bias and the model's effects on the axis;
+:mod:`nfs.diagnose.acc_design`); on the thermometer channel y_r are the three thermometers,
+X_r and C_r their Jacobians (:mod:`nfs.diagnose.design`).  Window means within a run are strongly
 autocorrelated, runs are independent, so every statistic is run-level
 (:mod:`nfs.diagnose.stats`), from the per-run Gram matrices:
 
@@ -69,6 +72,14 @@ the same leave-one-start-temperature-out thermometer residual within its physica
 heat source that only fits because the network is wrong is then not significant, and the
 verdict says the thermal structure does not fit, where, and what to change.
 
+The drift has a structural alternative of its own (``check_structure``): a real coil weights
+its temperature rates differently from the model's Shupe terms, and what the model misses of
+that is fitted by whatever candidate has a similar time course (a turn-on transient, a rate
+term on some other node).  A drift candidate is named only when it also stands beyond a rate
+term on every node (its test with those columns in the model, Holm over the drift
+candidates, and a drop of the held-out RMS there; :mod:`nfs.diagnose.drift_structure`);
+otherwise the verdict says the drift's thermal structure is what fails.
+
 Ranking: significant thermometer candidates first (a missing thermal effect also shows in
 the drift, a missing gyro effect never shows in the thermometers), then by the relative CV
 drop.  One effect usually makes several targets significant (a coil-temperature term on
@@ -94,18 +105,21 @@ import numpy as np
 from ..errors import NfsError
 from ..instrument import Instrument
 from ..io.measurement import Run
-from .adequacy import ThermalAdequacy, beats_structure, thermal_adequacy
+from .adequacy import beats_structure, thermal_adequacy
+from .acc_design import AccRun, acc_grid_columns, model_acc_paths, prepare_acc
 from .apply import apply_candidate
 from .candidates import SHAPE_GRID, Candidate, candidates
 from .design import (PreparedRun, bare_instrument, candidate_columns, fit_shapes,
                      grid_columns, model_drift_paths, prepare_runs, refit_heading_rmse,
                      same_signature, startup_heading_rmse, thermal_candidate_columns,
                      thermal_design, thermal_step_instrument)
-from .fit import DEFAULT_DECIMATE_S, FitResult, fit_model
+from .drift_structure import DriftStructure, beyond_alternative, rate_columns
+from .fit import DEFAULT_DECIMATE_S, fit_model
 from .smoother import smooth_runs
 from .stats import (RunGrams, augmented_grams, clustered_fit, group_cv_rms, holm,
                     run_grams, solve)
 from .structure import effect_alternative, structural_alternatives
+from .result import CandidateScore, Diagnosis
 from .unexplained import unexplained
 
 __all__ = ["Candidate", "CandidateScore", "Diagnosis", "candidates", "diagnose",
@@ -125,147 +139,6 @@ HEADING_TOP = 5
 #: (effect, coefficient) -> sign of the only physical alternative: one-sided tests.
 ONE_SIDED = {("heat_source", "power"): 1, ("motor_heat", "power"): 1,
              ("thermometer_lag", "tau"): 1}
-
-
-# ---------------------------------------------------------------------------------------------
-# Results
-
-@dataclass(frozen=True)
-class CandidateScore:
-    """What one candidate explains."""
-
-    effect: str
-    """Registry name."""
-    target: str | None
-    """Target (node, axis, channel) or None."""
-    significant: bool
-    """Holm rejects "every coefficient is 0" at the family-wise alpha AND the CV RMS drops."""
-    cv_rms_before: float
-    """Leave-one-start-temperature-out RMS of the held-out residual, model alone (drift
-    window means [deg/h] or thermometers [K], see ``channel``)."""
-    cv_rms_after: float
-    """The same with the candidate (its shape chosen on each fold's training runs)."""
-    correlation: float
-    """Partial correlation of the baseline residual with the candidate's signature."""
-    coefficient: dict[str, float]
-    """Fitted candidate parameters (coefficients and shapes)."""
-    interval: dict[str, tuple[float, float]]
-    """95 % t intervals from the CR2 covariance clustered by run."""
-    wald_p: float
-    """p-value of the clustered Wald test that every coefficient is 0, Bonferroni over the
-    ``n_grid`` shape grid points it was chosen from."""
-    holm_p: float
-    """``wald_p`` adjusted by Holm's step-down over all scored candidates."""
-    dof: float
-    """Denominator degrees of freedom of the test (run level, at most runs - 1)."""
-    n_grid: int
-    """Grid points of the shape parameters the test paid for (1: no shape)."""
-    inclusion_frequency: float
-    """Fraction of run resamples where the CV RMS drops and the clustered test rejects at
-    alpha (descriptive)."""
-    heading_rmse_before_deg: float | None = None
-    """Start-up heading RMSE with the baseline model's compensation [deg] (None: not run)."""
-    heading_rmse_after_deg: float | None = None
-    """The same with the candidate added [deg]."""
-    explained_by: str | None = None
-    """Label of the top significant candidate when that one explains this one too (its CV
-    drop over the model plus the top candidate is below :data:`CV_DROP`)."""
-    channel: str = "drift_dph"
-    """Residual the CV RMS is taken on: ``drift_dph`` (window means, deg/h) or
-    ``thermometers`` (the three thermometers at the knots, K)."""
-
-    @property
-    def cv_drop(self) -> float:
-        """Relative drop of the CV RMS."""
-        return 1.0 - self.cv_rms_after / self.cv_rms_before
-
-    def to_dict(self) -> dict[str, Any]:
-        return {"effect": self.effect, "target": self.target, "significant": self.significant,
-                "cv_rms_before": self.cv_rms_before, "cv_rms_after": self.cv_rms_after,
-                "cv_drop": self.cv_drop, "channel": self.channel,
-                "explained_by": self.explained_by,
-                "correlation": self.correlation,
-                "coefficient": dict(self.coefficient),
-                "interval": {k: list(v) for k, v in self.interval.items()},
-                "wald_p": self.wald_p, "holm_p": self.holm_p, "dof": self.dof,
-                "n_grid": self.n_grid, "inclusion_frequency": self.inclusion_frequency,
-                "heading_rmse_before_deg": self.heading_rmse_before_deg,
-                "heading_rmse_after_deg": self.heading_rmse_after_deg}
-
-
-@dataclass(frozen=True)
-class Diagnosis:
-    """The ranked candidates and what is left unexplained."""
-
-    ranking: tuple[CandidateScore, ...]
-    """Scored candidates: significant thermometer ones first, then by relative CV drop."""
-    not_tried: tuple[Candidate, ...]
-    """Candidates not scored, each with its reason."""
-    unexplained: dict[str, Any]
-    """Ljung-Box test of the baseline residual and its cross-correlation with every channel."""
-    baseline: FitResult
-    """The model's own drift refit (:func:`fit_model`, drift stage)."""
-    time_s: float
-    """Wall time [s]."""
-    alpha: float = 0.05
-    """Family-wise error rate of the significance rule."""
-    thermal_structure: ThermalAdequacy | None = None
-    """Does the model's thermal structure fit the thermometers (per thermometer and stage,
-    against its noise floor), and the generic structural alternatives it was set against
-    (:func:`nfs.diagnose.adequacy.thermal_adequacy`); None when not checked."""
-    node_temperatures: dict[str, Any] | None = None
-    """Where the drift candidates' node temperatures came from (``source``: ``smoothed`` or
-    ``model``) and, smoothed, the unmodelled-heat scale q [W^2/s], whether it is
-    significant (the thermometers need heat the network does not give) and the thermometer
-    residual RMS of the smoothed states [K]."""
-
-    @property
-    def significant(self) -> list[CandidateScore]:
-        return [s for s in self.ranking if s.significant]
-
-    @property
-    def verdict(self) -> str:
-        """What fails, whether the thermal structure is adequate, and which effect to add with
-        its coefficient and 95 % interval (or that none is significant)."""
-        parts = []
-        ts = self.thermal_structure
-        sig = self.significant
-        # a significant thermal candidate beat every structural alternative: it is the
-        # thermal model's missing piece, and the structure's misfit is its signature
-        if ts is not None and not ts.adequate and not any(
-                s.channel == "thermometers" for s in sig):
-            parts.append("thermal structure: " + ts.message)
-        if not sig:
-            parts.append("no candidate is significant: the missing effect (if any) is not in "
-                         "the library; see 'unexplained'")
-            return "; ".join(parts)
-
-        def name(s):
-            return s.effect if s.target is None else f"{s.effect}:{s.target}"
-
-        def coef(s):
-            return ", ".join(f"{k} = {v:.3g} [{s.interval[k][0]:.3g}, {s.interval[k][1]:.3g}]"
-                             for k, v in s.coefficient.items() if k in s.interval)
-
-        own = [s for s in sig if s.explained_by is None]
-        parts.append("add " + "; ".join(f"{name(s)} ({coef(s)}; Holm p {s.holm_p:.2g}, CV "
-                                        f"RMS -{100 * s.cv_drop:.0f} % on {s.channel})"
-                                        for s in own))
-        by = [s for s in sig if s.explained_by is not None]
-        if by:
-            parts.append(f"also significant alone but explained by {by[0].explained_by}: "
-                         + ", ".join(name(s) for s in by))
-        return "; ".join(parts)
-
-    def to_dict(self) -> dict[str, Any]:
-        return {"ranking": [s.to_dict() for s in self.ranking],
-                "verdict": self.verdict,
-                "not_tried": [{"effect": c.effect, "target": c.target, "reason": c.reason}
-                              for c in self.not_tried],
-                "thermal_structure": (None if self.thermal_structure is None
-                                      else self.thermal_structure.to_dict()),
-                "node_temperatures": self.node_temperatures,
-                "unexplained": self.unexplained, "alpha": self.alpha, "time_s": self.time_s}
 
 
 # ---------------------------------------------------------------------------------------------
@@ -359,6 +232,17 @@ def _score(c: Candidate, ch: _Channel, grid: list[tuple[dict[str, float], list[n
                            inclusion_frequency=hits / len(ch.boot) if ch.boot else math.nan,
                            channel=c.channel)
     return _Scored(c, score, dict(shapes), beta, cols)
+
+
+def _best_grid_point(ch: _Channel, grid: list[tuple[dict[str, float], list[np.ndarray]]]
+                     ) -> tuple[dict[str, float], list[np.ndarray]]:
+    """The grid point of smallest pooled residual (the shapes of a candidate scored without
+    a refinement of its shapes)."""
+
+    def sse(cols):
+        g = augmented_grams(ch.base, ch.ys, ch.Xs, cols)
+        return float(g.sse(clustered_fit(g).beta).sum())
+    return min(grid, key=lambda gc: sse(gc[1])) if len(grid) > 1 else grid[0]
 
 
 def _score_drift(c: Candidate, ch: _Channel, preps: list[PreparedRun], bare: Instrument,
@@ -478,12 +362,44 @@ def diagnose(inst: Instrument, runs: Sequence[Run], *, n_boot: int = 20, alpha: 
     boot = [rng.integers(0, len(runs), len(runs)) for _ in range(n_boot)]
     boot = [b for b in boot if len(np.unique(groups[b])) >= 2]  # a CV needs two groups
     drift = _channel([p.y for p in preps], [p.X for p in preps], groups, boot)
+    drift_cv = group_cv_rms([drift.base], groups)[0]
+    drift_structure = None
     beta_model = drift.beta
     cands = candidates(inst, runs)
     not_tried = [c for c in cands if not c.tried]
     scored = []
+    beyond: dict[str, tuple[float, float]] = {}   # drift candidate -> over the alternative
+    if check_structure:
+        nodes, rates = rate_columns(preps)
+        alt_X = [np.hstack([X, R]) for X, R in zip(drift.Xs, rates)]
+        alt_base = run_grams(drift.ys, alt_X)
+        cv_alt = group_cv_rms([alt_base], groups)[0]
+        alt_paths = paths + [f"rate of {n}" for n in nodes]
+    channels = {"drift_dph": drift}
+    acc_runs: dict[str, list[AccRun] | None] = {}
     for c in cands:
-        if c.tried and c.channel == "drift_dph":
+        if c.tried and c.kind == "accelerometer":
+            if c.target not in acc_runs:
+                acc_runs[c.target] = prepare_acc(inst, runs, [p.ctx for p in preps],
+                                                 decimate_s, c.target)
+            acc = acc_runs[c.target]
+            if acc is None:
+                not_tried.append(replace(c, tried=False, reason=(
+                    f"a run lacks the column {c.channel}")))
+                continue
+            if c.channel not in channels:
+                channels[c.channel] = _channel([a.y for a in acc], [a.X for a in acc],
+                                               groups, boot)
+            ch = channels[c.channel]
+            grid = acc_grid_columns(c, acc)
+            dup = (same_signature(grid[0][1], ch.Xs, model_acc_paths(inst, c.target), 1e-6)
+                   if len(grid) == 1 else "")
+            if dup:
+                not_tried.append(replace(c, tried=False, reason=(
+                    f"same {c.channel} signature as the model's {dup}")))
+                continue
+            scored.append(_score(c, ch, grid, alpha, _best_grid_point(ch, grid)))
+        elif c.tried and c.channel == "drift_dph":
             grid = grid_columns(c, preps, bare)
             dup = same_signature(grid[0][1], drift.Xs, paths, 1e-6) if len(grid) == 1 else ""
             if dup:
@@ -491,6 +407,12 @@ def diagnose(inst: Instrument, runs: Sequence[Run], *, n_boot: int = 20, alpha: 
                     f"same drift signature as the model's {dup}")))
                 continue
             scored.append(_score_drift(c, drift, preps, bare, grid, alpha))
+            if check_structure:
+                sign = ONE_SIDED.get((c.effect, c.coefficients[0]), 0) if len(
+                    c.coefficients) == 1 else 0
+                beyond[c.label] = ((1.0, cv_alt) if len(grid) == 1 and same_signature(
+                    grid[0][1], alt_X, alt_paths, 1e-6) else beyond_alternative(
+                    alt_base, drift.ys, alt_X, grid, groups, sign))
     thermal_cands = [c for c in cands if c.tried and c.channel == "thermometers"]
     adequacy = None
     if check_structure:
@@ -503,7 +425,6 @@ def diagnose(inst: Instrument, runs: Sequence[Run], *, n_boot: int = 20, alpha: 
         effect_cv = {a.name: a.cv_rms_after_k for a in adequacy.alternatives
                      if a.kind == "effect"}
     ts = thermal_design(inst, runs, decimate_s) if thermal_cands else None
-    channels = {"drift_dph": drift}
     if ts is not None:
         therm = _channel([-b0 for b0 in ts.base], ts.X, groups, boot)
         beta_t = therm.beta
@@ -523,6 +444,21 @@ def diagnose(inst: Instrument, runs: Sequence[Run], *, n_boot: int = 20, alpha: 
             s.score, holm_p=float(a), significant=bool(r and s.score.cv_rms_after
                                                        < s.score.cv_rms_before)))
                   for s, r, a in zip(scored, reject, adj)]
+        if beyond:  # a drift candidate must also stand beyond a rate term on every node
+            labels = list(beyond)
+            ok = dict(zip(labels, holm([beyond[b][0] for b in labels], alpha)[0]))
+            explained = [s.candidate.label for s in scored if s.score.significant
+                         and s.candidate.label in beyond and not ok[s.candidate.label]]
+            rate_drops = {s.candidate.label: s.score.cv_drop for s in scored
+                          if s.candidate.effect == "shupe_rate"}
+            drift_structure = DriftStructure(
+                nodes=nodes, cv_rms_model=drift_cv, cv_rms_alternative=cv_alt,
+                explained=tuple(explained),
+                best_rate=max(rate_drops, key=rate_drops.get) if rate_drops else None)
+            scored = [replace(s, score=replace(
+                s.score, significant=s.score.significant and s.candidate.label not in explained,
+                beyond_structure_p=float(beyond[s.candidate.label][0])))
+                if s.candidate.label in beyond else s for s in scored]
         if adequacy is not None:  # a thermal candidate must also beat the structure's rivals
             scored = [s if s.candidate.channel != "thermometers" or not s.score.significant
                       else replace(s, score=replace(s.score, significant=beats_structure(
@@ -547,7 +483,19 @@ def diagnose(inst: Instrument, runs: Sequence[Run], *, n_boot: int = 20, alpha: 
     for i, s in enumerate(scored):
         sc = s.score
         if i < HEADING_TOP or sc.significant:
-            if s.candidate.channel == "drift_dph":
+            if s.candidate.kind == "accelerometer":
+                # the axis's error enters the heading through the drift (the x axis: the
+                # north finder's vertical-rate removal; the y axis: not at all)
+                if h_before is None:
+                    h_before = startup_heading_rmse(
+                        preps, [p.offset_full + p.X_full @ beta_model for p in preps])
+                k = len(s.candidate.coefficients)
+                full = candidate_columns(s.candidate, s.shapes, preps, bare, full=True)
+                model_full = [p.offset_full + p.X_full @ beta_model + f @ s.beta[-k:]
+                              for p, f in zip(preps, full)]
+                sc = replace(sc, heading_rmse_before_deg=h_before,
+                             heading_rmse_after_deg=startup_heading_rmse(preps, model_full))
+            elif s.candidate.channel == "drift_dph":
                 if h_before is None:
                     h_before = startup_heading_rmse(
                         preps, [p.offset_full + p.X_full @ beta_model for p in preps])
@@ -572,4 +520,5 @@ def diagnose(inst: Instrument, runs: Sequence[Run], *, n_boot: int = 20, alpha: 
                          inst, preps, [y - X @ beta_model for y, X in zip(drift.ys, drift.Xs)],
                          decimate_s), baseline=baseline,
                      time_s=time.perf_counter() - t0, alpha=alpha,
-                     thermal_structure=adequacy, node_temperatures=node_info)
+                     thermal_structure=adequacy, node_temperatures=node_info,
+                     drift_structure=drift_structure)

@@ -1,0 +1,166 @@
+"""What :func:`nfs.diagnose.diagnose` returns: the scored candidates and the verdict."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+from .adequacy import ThermalAdequacy
+from .candidates import Candidate
+from .drift_structure import DriftStructure
+from .fit import FitResult
+
+__all__ = ["CandidateScore", "Diagnosis"]
+
+
+@dataclass(frozen=True)
+class CandidateScore:
+    """What one candidate explains."""
+
+    effect: str
+    """Registry name."""
+    target: str | None
+    """Target (node, axis, channel) or None."""
+    significant: bool
+    """Holm rejects "every coefficient is 0" at the family-wise alpha AND the CV RMS drops."""
+    cv_rms_before: float
+    """Leave-one-start-temperature-out RMS of the held-out residual, model alone (drift
+    window means [deg/h] or thermometers [K], see ``channel``)."""
+    cv_rms_after: float
+    """The same with the candidate (its shape chosen on each fold's training runs)."""
+    correlation: float
+    """Partial correlation of the baseline residual with the candidate's signature."""
+    coefficient: dict[str, float]
+    """Fitted candidate parameters (coefficients and shapes)."""
+    interval: dict[str, tuple[float, float]]
+    """95 % t intervals from the CR2 covariance clustered by run."""
+    wald_p: float
+    """p-value of the clustered Wald test that every coefficient is 0, Bonferroni over the
+    ``n_grid`` shape grid points it was chosen from."""
+    holm_p: float
+    """``wald_p`` adjusted by Holm's step-down over all scored candidates."""
+    dof: float
+    """Denominator degrees of freedom of the test (run level, at most runs - 1)."""
+    n_grid: int
+    """Grid points of the shape parameters the test paid for (1: no shape)."""
+    inclusion_frequency: float
+    """Fraction of run resamples where the CV RMS drops and the clustered test rejects at
+    alpha (descriptive)."""
+    heading_rmse_before_deg: float | None = None
+    """Start-up heading RMSE with the baseline model's compensation [deg] (None: not run)."""
+    heading_rmse_after_deg: float | None = None
+    """The same with the candidate added [deg]."""
+    explained_by: str | None = None
+    """Label of the top significant candidate when that one explains this one too (its CV
+    drop over the model plus the top candidate is below :data:`CV_DROP`)."""
+    channel: str = "drift_dph"
+    """Residual the CV RMS is taken on: ``drift_dph`` (window means, deg/h), ``acc_x_g`` /
+    ``acc_y_g`` (an accelerometer's window means, g) or ``thermometers`` (the three
+    thermometers at the knots, K)."""
+    beyond_structure_p: float | None = None
+    """A drift candidate's p-value with a rate term on every node in the model, Holm over the
+    drift candidates (:mod:`nfs.diagnose.drift_structure`); None when not checked."""
+
+    @property
+    def cv_drop(self) -> float:
+        """Relative drop of the CV RMS."""
+        return 1.0 - self.cv_rms_after / self.cv_rms_before
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"effect": self.effect, "target": self.target, "significant": self.significant,
+                "cv_rms_before": self.cv_rms_before, "cv_rms_after": self.cv_rms_after,
+                "cv_drop": self.cv_drop, "channel": self.channel,
+                "explained_by": self.explained_by,
+                "correlation": self.correlation,
+                "coefficient": dict(self.coefficient),
+                "interval": {k: list(v) for k, v in self.interval.items()},
+                "wald_p": self.wald_p, "holm_p": self.holm_p, "dof": self.dof,
+                "n_grid": self.n_grid, "inclusion_frequency": self.inclusion_frequency,
+                "heading_rmse_before_deg": self.heading_rmse_before_deg,
+                "heading_rmse_after_deg": self.heading_rmse_after_deg,
+                "beyond_structure_p": self.beyond_structure_p}
+
+
+@dataclass(frozen=True)
+class Diagnosis:
+    """The ranked candidates and what is left unexplained."""
+
+    ranking: tuple[CandidateScore, ...]
+    """Scored candidates: significant thermometer ones first, then by relative CV drop."""
+    not_tried: tuple[Candidate, ...]
+    """Candidates not scored, each with its reason."""
+    unexplained: dict[str, Any]
+    """Ljung-Box test of the baseline residual and its cross-correlation with every channel."""
+    baseline: FitResult
+    """The model's own drift refit (:func:`fit_model`, drift stage)."""
+    time_s: float
+    """Wall time [s]."""
+    alpha: float = 0.05
+    """Family-wise error rate of the significance rule."""
+    thermal_structure: ThermalAdequacy | None = None
+    """Does the model's thermal structure fit the thermometers (per thermometer and stage,
+    against its noise floor), and the generic structural alternatives it was set against
+    (:func:`nfs.diagnose.adequacy.thermal_adequacy`); None when not checked."""
+    node_temperatures: dict[str, Any] | None = None
+    """Where the drift candidates' node temperatures came from (``source``: ``smoothed`` or
+    ``model``) and, smoothed, the unmodelled-heat scale q [W^2/s], whether it is
+    significant (the thermometers need heat the network does not give) and the thermometer
+    residual RMS of the smoothed states [K]."""
+    drift_structure: DriftStructure | None = None
+    """The drift's thermal structure against a rate term on every node, and the drift
+    candidates it explains (:mod:`nfs.diagnose.drift_structure`); None when not checked."""
+
+    @property
+    def significant(self) -> list[CandidateScore]:
+        return [s for s in self.ranking if s.significant]
+
+    @property
+    def verdict(self) -> str:
+        """What fails, whether the thermal structure is adequate, and which effect to add with
+        its coefficient and 95 % interval (or that none is significant)."""
+        parts = []
+        ts = self.thermal_structure
+        sig = self.significant
+        # a significant thermal candidate beat every structural alternative: it is the
+        # thermal model's missing piece, and the structure's misfit is its signature
+        if ts is not None and not ts.adequate and not any(
+                s.channel == "thermometers" for s in sig):
+            parts.append("thermal structure: " + ts.message)
+        # the drift's structure is what fails when it explains the significant drift
+        # candidates and none stands beyond it
+        if self.drift_structure is not None and not self.drift_structure.adequate and not any(
+                s.channel == "drift_dph" for s in sig):
+            parts.append("drift structure: " + self.drift_structure.message)
+        if not sig:
+            parts.append("no candidate is significant: the missing effect (if any) is not in "
+                         "the library; see 'unexplained'")
+            return "; ".join(parts)
+
+        def name(s):
+            return s.effect if s.target is None else f"{s.effect}:{s.target}"
+
+        def coef(s):
+            return ", ".join(f"{k} = {v:.3g} [{s.interval[k][0]:.3g}, {s.interval[k][1]:.3g}]"
+                             for k, v in s.coefficient.items() if k in s.interval)
+
+        own = [s for s in sig if s.explained_by is None]
+        parts.append("add " + "; ".join(f"{name(s)} ({coef(s)}; Holm p {s.holm_p:.2g}, CV "
+                                        f"RMS -{100 * s.cv_drop:.0f} % on {s.channel})"
+                                        for s in own))
+        by = [s for s in sig if s.explained_by is not None]
+        if by:
+            parts.append(f"also significant alone but explained by {by[0].explained_by}: "
+                         + ", ".join(name(s) for s in by))
+        return "; ".join(parts)
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"ranking": [s.to_dict() for s in self.ranking],
+                "verdict": self.verdict,
+                "not_tried": [{"effect": c.effect, "target": c.target, "reason": c.reason}
+                              for c in self.not_tried],
+                "thermal_structure": (None if self.thermal_structure is None
+                                      else self.thermal_structure.to_dict()),
+                "node_temperatures": self.node_temperatures,
+                "drift_structure": (None if self.drift_structure is None
+                                    else self.drift_structure.to_dict()),
+                "unexplained": self.unexplained, "alpha": self.alpha, "time_s": self.time_s}
