@@ -37,6 +37,68 @@ def test_table_with_compensation_writes_every_output(tmp_path, cli, scen_text):
     assert set(params["SSA-SVR"]) == {"C", "sigma", "epsilon"}
     report = (out_dir / "report.md").read_text()
     assert "Beside seed 004" in report and "6 evaluations" in report
+    # the features mode (default: cycle) in every output that uses the features
+    assert "Features mode: cycle (" in out and "Features mode: **cycle**" in report
+    assert json.loads((out_dir / "heading_rmse.json").read_text())["features_mode"] == "cycle"
+    csv = (out_dir / "heading_rmse.csv").read_text().splitlines()
+    assert csv[0].endswith(",mean,features_mode") and csv[2].endswith(",cycle")
+    assert csv[1].startswith("before,") and csv[1].endswith(",")
+    drift = json.loads((out_dir / "drift_residual.json").read_text())
+    assert [d["features_mode"] for d in drift] == [None, "cycle", "cycle"]
+
+
+LS_ONLY = """[compensation]
+methods = ["ls"]
+train_seed = 9
+test_repeats = 1
+n_jobs = 1
+"""
+
+
+def test_table_features_mode_option_and_same_bytes(tmp_path, cli, scenario_text):
+    # Determinism: the same seed gives the same bytes in every output file (tables, report,
+    # figures), in the mode asked for on the command line.
+    scen = tmp_path / "s.toml"
+    scen.write_text(scenario_text("modes", 5, (-20.0, 40.0), 2600.0, extra=LS_ONLY))
+    outs = []
+    for name in ("a", "b"):
+        code, out, err = cli("table", str(scen), "-o", str(tmp_path / name), "-q",
+                             "--features-mode", "causal")
+        assert code == 0, err
+        outs.append(out)
+    assert outs[0] == outs[1] and "Features mode: causal (" in outs[0]
+    files = sorted(p.name for p in (tmp_path / "a").iterdir())
+    assert "report.md" in files and "heading_rmse.png" in files
+    for name in files:
+        assert (tmp_path / "a" / name).read_bytes() == (tmp_path / "b" / name).read_bytes(), name
+    doc = json.loads((tmp_path / "a" / "heading_rmse.json").read_text())
+    assert doc["features_mode"] == "causal"
+    code, out, err = cli("table", str(scen), "-o", str(tmp_path / "off"), "-q",
+                         "--features-mode", "offline", "--json", str(tmp_path / "off.json"))
+    assert code == 0, err
+    assert "Features mode: offline (OFFLINE:" in out
+    assert json.loads((tmp_path / "off.json").read_text())["features_mode"] == "offline"
+    assert "Features mode: **offline**" in (tmp_path / "off" / "report.md").read_text()
+
+
+def test_train_and_compensate_keep_one_features_mode(tmp_path, cli, scenario_text):
+    scen = tmp_path / "s.toml"
+    scen.write_text(scenario_text("modes", 5, (-20.0, 40.0), 1300.0))
+    assert cli("simulate", str(scen), "-o", str(tmp_path / "runs"), "-q")[0] == 0
+    model = tmp_path / "m.joblib"
+    code, out, err = cli("train", str(tmp_path / "runs"), "--method", "ls", "-o", str(model),
+                         "-q", "--features-mode", "causal")
+    assert code == 0, err
+    assert "(causal mode)" in out
+    from nfs.compensate import load_compensator
+    assert load_compensator(model).features_mode == "causal"
+    code, _, err = cli("compensate", str(tmp_path / "runs"), "--model", str(model),
+                       "-o", str(tmp_path / "out"), "--features-mode", "cycle")
+    assert code == 2 and "trained in causal mode" in err and len(err.strip().splitlines()) == 1
+    assert not (tmp_path / "out").exists()
+    code, _, err = cli("compensate", str(tmp_path / "runs"), "--model", str(model),
+                       "-o", str(tmp_path / "out"), "--features-mode", "causal")
+    assert code == 0, err
 
 
 def test_train_and_compensate_round_trip(tmp_path, cli, scen_text):
@@ -90,6 +152,10 @@ def test_compensate_refuses_runs_without_its_channels(tmp_path, cli, scen_text):
 @pytest.mark.parametrize("argv, msg", [
     (["train", "RUNS", "--method", "magic", "-o", "m.joblib"], "unknown compensation method"),
     (["compensate", "RUNS", "--model", "nope.joblib", "-o", "out"], "model file not found"),
+    (["train", "RUNS", "--method", "ls", "-o", "m.joblib", "--features-mode", "live"],
+     "--features-mode: unknown mode 'live'; choose one of cycle, causal, offline"),
+    (["table", "--features-mode", "centred", "-o", "out"],
+     "--features-mode: unknown mode 'centred'; choose one of cycle, causal, offline"),
 ])
 def test_bad_compensation_input(tmp_path, cli, scen_text, argv, msg):
     scen = tmp_path / "s.toml"

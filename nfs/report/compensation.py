@@ -169,7 +169,8 @@ def plot_drift_vs_compensated(study, run_index: int = 0, methods=("BP", "SSA-SVR
     ax2.axhline(0.0, color="k", lw=0.5)
     ax2.set_ylabel("residual [deg/h]")
     ax2.set_xlabel("time since power-on [min]")
-    ax2.legend(fontsize=8)
+    if ax2.get_legend_handles_labels()[0]:      # none when the table has neither method
+        ax2.legend(fontsize=8)
     fig.tight_layout()
     return fig
 
