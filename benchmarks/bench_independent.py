@@ -8,7 +8,9 @@ For every set the package does what a user does with a real unit's chamber runs:
 lumped model (:func:`nfs.diagnose.fit_model`, default free set), then diagnose
 (:func:`nfs.diagnose.diagnose`).
 
-Printed per hidden effect: how often the hidden effect is the top significant candidate (the
+``structure`` says which structural check flagged the model (``thermal``: the thermometers
+do not fit and no generic alternative does better; ``drift``: significant drift candidates
+stood only for a rate term on every node).  Printed per hidden effect: how often the hidden effect is the top significant candidate (the
 first significant one that no other explains; goal >= 90 %), and for the clean and the
 outside-library sets how often anything is significant (goal <= 5 %); then the time per set.
 
@@ -71,7 +73,11 @@ def one_set(hidden: str | None, seed: int) -> dict:
     else:
         want = TARGETS.get(hidden)
         ok = top is not None and top.effect == hidden and (want is None or top.target == want)
+    flagged = [name for name, st in (("thermal", d.thermal_structure),
+                                     ("drift", d.drift_structure))
+               if st is not None and not st.adequate]
     return {"hidden": hidden or "none", "seed": seed, "top": label, "ok": ok,
+            "structure": ",".join(flagged) or "-",
             "n_significant": len([s for s in d.ranking if s.significant]),
             "verdict": d.verdict, "t_fit_s": t_fit, "t_diagnose_s": t_diag}
 
@@ -89,10 +95,11 @@ def main(argv=None) -> None:
     t0 = time.perf_counter()
     rows = Parallel(n_jobs=args.jobs)(delayed(one_set)(h, s) for h, s in cases)
     wall = time.perf_counter() - t0
-    print(f"{'hidden':26s} {'seed':>4s}  {'ok':3s} top significant (n significant)")
+    print(f"{'hidden':26s} {'seed':>4s}  {'ok':3s} {'structure':13s} top significant "
+          "(n significant)")
     for r in rows:
         print(f"{r['hidden']:26s} {r['seed']:4d}  {'yes' if r['ok'] else 'NO ':3s} "
-              f"{r['top']} ({r['n_significant']})")
+              f"{r['structure']:13s} {r['top']} ({r['n_significant']})")
     print()
     hits = [r for r in rows if r["hidden"] not in ("none", "outside")]
     nulls = [r for r in rows if r["hidden"] in ("none", "outside")]
