@@ -75,10 +75,11 @@ verdict says the thermal structure does not fit, where, and what to change.
 The drift has a structural alternative of its own (``check_structure``): a real coil weights
 its temperature rates differently from the model's Shupe terms, and what the model misses of
 that is fitted by whatever candidate has a similar time course (a turn-on transient, a rate
-term on some other node).  A drift candidate is named only when it also stands beyond a rate
+term on some other node).  A drift candidate is named plainly when it also stands beyond a rate
 term on every node (its test with those columns in the model, Holm over the drift
-candidates, and a drop of the held-out RMS there; :mod:`nfs.diagnose.drift_structure`);
-otherwise the verdict says the drift's thermal structure is what fails.
+candidates; :mod:`nfs.diagnose.drift_structure`);
+otherwise it is *tied* with the alternative and the verdict says the runs cannot tell the
+named effect from a Shupe weighting the model lacks.
 
 Ranking: significant thermometer candidates first (a missing thermal effect also shows in
 the drift, a missing gyro effect never shows in the thermometers), then by the relative CV
@@ -444,20 +445,18 @@ def diagnose(inst: Instrument, runs: Sequence[Run], *, n_boot: int = 20, alpha: 
             s.score, holm_p=float(a), significant=bool(r and s.score.cv_rms_after
                                                        < s.score.cv_rms_before)))
                   for s, r, a in zip(scored, reject, adj)]
-        if beyond:  # a drift candidate must also stand beyond a rate term on every node
+        if beyond:  # does a drift candidate stand beyond a rate term on every node?
             labels = list(beyond)
-            ok = dict(zip(labels, holm([beyond[b][0] for b in labels], alpha)[0]))
-            explained = [s.candidate.label for s in scored if s.score.significant
-                         and s.candidate.label in beyond and not ok[s.candidate.label]]
+            holm_beyond = dict(zip(labels, holm([beyond[b][0] for b in labels], alpha)[1]))
             rate_drops = {s.candidate.label: s.score.cv_drop for s in scored
                           if s.candidate.effect == "shupe_rate"}
             drift_structure = DriftStructure(
                 nodes=nodes, cv_rms_model=drift_cv, cv_rms_alternative=cv_alt,
-                explained=tuple(explained),
+                tied=tuple(s.candidate.label for s in scored if s.score.significant
+                           and holm_beyond.get(s.candidate.label, 0.0) > alpha),
                 best_rate=max(rate_drops, key=rate_drops.get) if rate_drops else None)
             scored = [replace(s, score=replace(
-                s.score, significant=s.score.significant and s.candidate.label not in explained,
-                beyond_structure_p=float(beyond[s.candidate.label][0])))
+                s.score, beyond_structure_p=float(holm_beyond[s.candidate.label])))
                 if s.candidate.label in beyond else s for s in scored]
         if adequacy is not None:  # a thermal candidate must also beat the structure's rivals
             scored = [s if s.candidate.channel != "thermometers" or not s.score.significant

@@ -59,7 +59,8 @@ class CandidateScore:
     thermometers at the knots, K)."""
     beyond_structure_p: float | None = None
     """A drift candidate's p-value with a rate term on every node in the model, Holm over the
-    drift candidates (:mod:`nfs.diagnose.drift_structure`); None when not checked."""
+    drift candidates (:mod:`nfs.diagnose.drift_structure`); above alpha the candidate is
+    tied with that alternative; None when not checked."""
 
     @property
     def cv_drop(self) -> float:
@@ -107,8 +108,9 @@ class Diagnosis:
     significant (the thermometers need heat the network does not give) and the thermometer
     residual RMS of the smoothed states [K]."""
     drift_structure: DriftStructure | None = None
-    """The drift's thermal structure against a rate term on every node, and the drift
-    candidates it explains (:mod:`nfs.diagnose.drift_structure`); None when not checked."""
+    """The drift's thermal structure against a rate term on every node, and the significant
+    drift candidates tied with it (:mod:`nfs.diagnose.drift_structure`); None when not
+    checked."""
 
     @property
     def significant(self) -> list[CandidateScore]:
@@ -126,11 +128,6 @@ class Diagnosis:
         if ts is not None and not ts.adequate and not any(
                 s.channel == "thermometers" for s in sig):
             parts.append("thermal structure: " + ts.message)
-        # the drift's structure is what fails when it explains the significant drift
-        # candidates and none stands beyond it
-        if self.drift_structure is not None and not self.drift_structure.adequate and not any(
-                s.channel == "drift_dph" for s in sig):
-            parts.append("drift structure: " + self.drift_structure.message)
         if not sig:
             parts.append("no candidate is significant: the missing effect (if any) is not in "
                          "the library; see 'unexplained'")
@@ -147,6 +144,10 @@ class Diagnosis:
         parts.append("add " + "; ".join(f"{name(s)} ({coef(s)}; Holm p {s.holm_p:.2g}, CV "
                                         f"RMS -{100 * s.cv_drop:.0f} % on {s.channel})"
                                         for s in own))
+        ds = self.drift_structure
+        tied = [name(s) for s in own if ds is not None and name(s) in ds.tied]
+        if tied:
+            parts.append("tie: " + ds.tie_message(tied))
         by = [s for s in sig if s.explained_by is not None]
         if by:
             parts.append(f"also significant alone but explained by {by[0].explained_by}: "

@@ -1,4 +1,4 @@
-"""The drift's structural alternative: a candidate must stand beyond a rate term on every node.
+"""The drift's structural alternative: every drift candidate is also tested beyond a rate term on every node.
 
 Synthetic runs with a known answer (no simulator): 7 runs of 10 s window means over 2.5 h;
 two "node rates" per run, a fast and a slow exponential whose amplitudes differ from run to
@@ -73,7 +73,8 @@ def test_structure_message():
     ok = DriftStructure(nodes=("a", "b"), cv_rms_model=0.010, cv_rms_alternative=0.009)
     assert ok.adequate and "holds" in ok.message and abs(ok.cv_drop - 0.1) < 1e-12
     bad = DriftStructure(nodes=("a", "b"), cv_rms_model=0.010, cv_rms_alternative=0.008,
-                         explained=("turn_on_transient",), best_rate="shupe_rate:a")
+                         tied=("turn_on_transient",), best_rate="shupe_rate:a")
     assert not bad.adequate
     assert "turn_on_transient" in bad.message and "shupe_rate:a" in bad.message
+    assert bad.tie_message(["x"]).startswith("x tied with a rate term")
     assert bad.to_dict()["cv_drop"] == bad.cv_drop
