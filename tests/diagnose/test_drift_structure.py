@@ -1,4 +1,5 @@
-"""The drift's structural alternative: every drift candidate is also tested beyond a rate term on every node.
+"""The drift's structural alternative: each drift candidate is also tested beyond a rate
+term on every node; one that does not stand beyond it is tied with it.
 
 Synthetic runs with a known answer (no simulator): 7 runs of 10 s window means over 2.5 h;
 two "node rates" per run, a fast and a slow exponential whose amplitudes differ from run to
