@@ -12,11 +12,22 @@ gradients), the T x dT/dt product of seed 001, and auxiliary electrical channels
 Names
 -----
 ``T_<th>``            thermometer reading [degC], th in fog, acc_x, acc_y
-``dT_<th>``           its rate [K/min] (Savitzky-Golay derivative, see :func:`rate_k_per_min`)
+``dT_<th>``           its rate [K/min]: a Savitzky-Golay derivative within what the features
+                      mode allows (cycle, offline; :mod:`nfs.compensate.rates`) or a
+                      Kalman filter of the readings so far (causal;
+                      :mod:`nfs.compensate.kalman_rate`)
 ``G_<a>_<b>``         gradient T_a - T_b [K] between two thermometers
 ``TdT_<th>``          (T_th - T_ref) dT_th/dt [K K/min] (seed 001's product term)
 ``aux_*``             any auxiliary column of the run, as recorded
 ``time_min``          time since power-on [min] (not a thermometer: not in the seed sets)
+
+Modes
+-----
+A feature at sample t uses only what the features mode allows (:mod:`nfs.compensate.modes`):
+``cycle`` (the default) the readings up to the end of t's north-finding cycle, ``causal``
+the readings up to t, ``offline`` the whole run.  Only the rates (``dT_``, ``TdT_``) look
+beyond t; the other features are the readings at t.  A compensator is trained and applied
+in one mode.
 """
 
 from __future__ import annotations
@@ -29,18 +40,20 @@ import numpy as np
 
 from ..constants import T_REF_C
 from ..errors import NfsError
+from .kalman_rate import CAUSAL_RATE, kalman_rate_k_per_min
 from .modes import (
     DEFAULT_FEATURE_MODE,
     FEATURE_MODES,
     check_features_mode,
     horizon_index,
+    in_cycle_mask,
 )
 from .rates import rate_k_per_min
 
 __all__ = [
     "FEATURE_MODES",
     "FEATURE_SETS",
-    "RATE_FILTERS",
+    "RATE_WINDOW",
     "THERMOMETER_COLUMNS",
     "FeatureError",
     "RateFilter",
@@ -73,25 +86,18 @@ FEATURE_SETS: dict[str, tuple[str, ...]] = {
 
 @dataclass(frozen=True)
 class RateFilter:
-    """The local-polynomial derivative of the rate features in one feature mode."""
+    """The local-polynomial derivative of the offline and cycle rate features."""
 
     window_s: float
-    """Window length [s] (the longest, when the window grows)."""
+    """Window length [s]."""
     polyorder: int
     """Order of the polynomial fitted over the window."""
-    growth: float = 0.0
-    """Window length per second since power-on [s/s] (0: a fixed window)."""
-    min_window_s: float = 0.0
-    """Shortest window when it grows [s]."""
 
 
-#: The rate filter of each feature mode (:mod:`nfs.compensate.rates`; the choice and the
-#: measurements behind it are in the module docstring).
-RATE_FILTERS: dict[str, RateFilter] = {
-    "cycle": RateFilter(121.0, 2),
-    "causal": RateFilter(121.0, 2),
-    "offline": RateFilter(121.0, 2),
-}
+#: The rate filter of the offline and cycle modes: seed 004's 121 s quadratic, centred
+#: wherever the horizon allows (:mod:`nfs.compensate.rates`).  The causal mode's rate is
+#: :data:`nfs.compensate.kalman_rate.CAUSAL_RATE`.
+RATE_WINDOW = RateFilter(121.0, 2)
 
 
 class FeatureError(NfsError):
@@ -178,9 +184,10 @@ def compute_features(run, spec: str | Sequence[str] = "seed004", *,
         the end of t's north-finding cycle), ``causal`` (up to t) or ``offline`` (the whole
         run).  Train and apply a compensator in the same mode.
     rate_window_s : float, optional
-        Window of the rate features [s] (default: the mode's, :data:`RATE_FILTERS`).
+        Window of the cycle and offline rate features [s] (default:
+        :data:`RATE_WINDOW`, 121 s); the causal rate has none.
     rate_polyorder : int, optional
-        Order of the rate's local polynomial (default: the mode's).
+        Order of their local polynomial (default 2).
     t_ref_c : float
         T_ref of the ``TdT_`` features [degC].
 
@@ -190,15 +197,18 @@ def compute_features(run, spec: str | Sequence[str] = "seed004", *,
         X and the feature names of its columns.
     """
     mode = check_features_mode(mode)
+    if mode == "causal" and rate_window_s is not None:
+        raise FeatureError("the causal rate is a Kalman filter without a window: "
+                           "rate_window_s applies to the cycle and offline modes")
     cols = run.columns
     names = resolve_features(spec, cols.keys())
     t = _column(cols, "time_s", run.name)
-    filt = RATE_FILTERS[mode]
-    window = filt.window_s if rate_window_s is None else float(rate_window_s)
-    order = filt.polyorder if rate_polyorder is None else int(rate_polyorder)
+    window = RATE_WINDOW.window_s if rate_window_s is None else float(rate_window_s)
+    order = RATE_WINDOW.polyorder if rate_polyorder is None else int(rate_polyorder)
     horizon = None
-    if mode != "offline" and any(n.partition("_")[0] in ("dT", "TdT") for n in names):
+    if mode == "cycle" and any(n.partition("_")[0] in ("dT", "TdT") for n in names):
         horizon = horizon_index(run, mode)
+        outside = ~in_cycle_mask(run)          # the moves, a partial cycle: causal
     cache: dict[str, np.ndarray] = {}
 
     def temp(th: str) -> np.ndarray:
@@ -210,8 +220,15 @@ def compute_features(run, spec: str | Sequence[str] = "seed004", *,
     def rate(th: str) -> np.ndarray:
         key = f"dT_{th}"
         if key not in cache:
-            cache[key] = rate_k_per_min(temp(th), t, window, order, horizon=horizon,
-                                        growth=filt.growth, min_window_s=filt.min_window_s)
+            if mode == "causal":
+                cache[key] = kalman_rate_k_per_min(temp(th), t, CAUSAL_RATE)
+            elif mode == "offline":
+                cache[key] = rate_k_per_min(temp(th), t, window, order)
+            else:
+                r = rate_k_per_min(temp(th), t, window, order, horizon=horizon)
+                if outside.any():
+                    r[outside] = kalman_rate_k_per_min(temp(th), t, CAUSAL_RATE)[outside]
+                cache[key] = r
         return cache[key]
 
     out = []

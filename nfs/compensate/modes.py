@@ -45,6 +45,7 @@ __all__ = [
     "check_features_mode",
     "cycle_spans",
     "horizon_index",
+    "in_cycle_mask",
 ]
 
 #: The feature modes, the instrument-computable ones first.
@@ -124,6 +125,26 @@ def cycle_spans(run) -> list[tuple[int, int]]:
                             getattr(meta, "positions_deg", None),
                             dwell_s=getattr(meta, "dwell_s", None))
     return [(c.dwells[0].start, c.dwells[-1].stop) for c in cycles]
+
+
+def in_cycle_mask(run) -> np.ndarray:
+    """True at every sample of a complete north-finding cycle (:func:`cycle_spans`).
+
+    Parameters
+    ----------
+    run : Run
+        The run.
+
+    Returns
+    -------
+    ndarray of bool
+        One flag per sample; False in the moves between cycles, in a partial cycle and on
+        a run without a turntable schedule.
+    """
+    mask = np.zeros(np.asarray(run.columns["time_s"]).size, dtype=bool)
+    for start, stop in cycle_spans(run):
+        mask[start:stop] = True
+    return mask
 
 
 def horizon_index(run, mode: str) -> np.ndarray:

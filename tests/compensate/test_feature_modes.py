@@ -14,9 +14,11 @@ import pytest
 from sklearn.linear_model import LinearRegression
 
 from nfs.compensate import DriftCompensator, compute_features, load_compensator
-from nfs.compensate.features import RATE_FILTERS, THERMOMETER_COLUMNS
+from nfs.compensate.features import RATE_WINDOW, THERMOMETER_COLUMNS
+from nfs.compensate.kalman_rate import (CAUSAL_RATE, kalman_rate_filter,
+                                       kalman_rate_k_per_min)
 from nfs.compensate.modes import (FEATURE_MODES, FeatureModeError, check_features_mode,
-                                  cycle_spans, horizon_index)
+                                  cycle_spans, horizon_index, in_cycle_mask)
 from nfs.compensate.rates import savgol_rate_k_per_min, windowed_rate_k_per_min
 from nfs.errors import NfsError
 from nfs.northfind import north_find, synthetic_run
@@ -135,23 +137,57 @@ def test_predicted_drift_reads_no_further_than_its_features(mode):
         np.testing.assert_array_equal(dp[:safe + 1], d[:safe + 1], err_msg=f"cut at {k}")
 
 
-@pytest.mark.parametrize("mode", ["causal", "cycle", "offline"])
-def test_rate_of_a_ramp_is_its_slope(mode):
-    # Oracle: a local polynomial reproduces a line exactly, so every window that holds two
-    # samples or more returns the slope (0.6 K/min) to rounding.
+def ramp_run(slope_k_per_s=0.01):
     run = warming_run()
     t = run.columns["time_s"]
     cols = dict(run.columns)
     for col in THERMOMETER_COLUMNS.values():
-        cols[col] = -31.7 + 0.01 * t
-    X, _ = compute_features(dataclasses.replace(run, columns=cols), ["dT_fog"], mode=mode)
-    np.testing.assert_allclose(X[1:, 0], 0.6, rtol=0, atol=1e-9)
-    w = int(RATE_FILTERS[mode].window_s)
-    np.testing.assert_allclose(X[w:, 0], 0.6, rtol=0, atol=1e-9)   # after the window fills
+        cols[col] = -31.7 + slope_k_per_s * t
+    return dataclasses.replace(run, columns=cols)
 
 
-def test_causal_rate_uses_only_the_samples_there_are():
-    # At sample i < W the causal window is the i + 1 samples 0..i: the first sample alone
+@pytest.mark.parametrize("mode", ["cycle", "offline"])
+def test_windowed_rate_of_a_ramp_is_its_slope(mode):
+    # Oracle: a local polynomial reproduces a line exactly, so every window returns the
+    # slope (0.6 K/min) to rounding once it holds two samples; in cycle mode the samples
+    # outside the cycles are causal (next test), so the comparison is on the cycles.
+    run = ramp_run()
+    X, _ = compute_features(run, ["dT_fog"], mode=mode)
+    inside = in_cycle_mask(run) if mode == "cycle" else np.ones(X.shape[0], dtype=bool)
+    np.testing.assert_allclose(X[inside, 0], 0.6, rtol=0, atol=1e-9)
+    w = int(RATE_WINDOW.window_s)
+    r = windowed_rate_k_per_min(-31.7 + 0.01 * np.arange(3000.0), np.arange(3000.0),
+                                np.arange(3000), w, RATE_WINDOW.polyorder)
+    np.testing.assert_allclose(r[w:], 0.6, rtol=0, atol=1e-9)   # one-sided, window filled
+    np.testing.assert_allclose(r[1:], 0.6, rtol=0, atol=1e-9)   # ... and before
+
+
+def test_causal_rate_of_a_ramp_is_its_slope_after_the_filter_memory():
+    # Oracle: the constant-velocity Kalman filter tracks a ramp with no steady-state error
+    # (its double pole 0.964 per sample forgets the soak start, rate 0, within ~560 s).
+    X, _ = compute_features(ramp_run(), ["dT_fog", "dT_acc_y"], mode="causal")
+    np.testing.assert_allclose(X[600:], 0.6, rtol=0, atol=1e-9)
+    assert X[0, 0] == 0.0 and 0.0 < X[60, 0] < 0.6       # from the soak towards the slope
+    b, a = kalman_rate_filter(1.0, CAUSAL_RATE.accel_psd_k2_per_s3,
+                              CAUSAL_RATE.reading_variance_k2)
+    np.testing.assert_allclose(np.abs(np.roots(a)), 0.9642, atol=1e-4)
+
+
+def test_causal_rate_survives_quantisation():
+    # A 0.1 K/min ramp read by a 0.0625 K thermometer with 0.01 K noise (the finite
+    # difference is spikes of +-3.75 K/min): after the filter's memory the Kalman rate stays
+    # within 0.05 K/min, 5.8 sigma of its 0.0086 K/min for this reading noise.
+    rng = np.random.default_rng(3)
+    t = np.arange(3600.0)
+    true = 10.0 + t * (0.1 / 60.0)
+    read = 0.0625 * np.round((true + 0.01 * rng.standard_normal(t.size)) / 0.0625)
+    r = kalman_rate_k_per_min(read, t)
+    assert np.max(np.abs(np.diff(read))) * 60 > 3.0
+    assert np.max(np.abs(r[600:] - 0.1)) < 0.05
+
+
+def test_one_sided_window_uses_only_the_samples_there_are():
+    # At sample i < W the one-sided window (horizon h_i = i) is the i + 1 samples 0..i: the first sample alone
     # has the rate 0 of a constant, the second the finite difference.
     t = np.arange(10.0)
     x = np.array([0.0, 0.0625, 0.0625, 0.125, 0.125, 0.125, 0.1875, 0.25, 0.25, 0.3125])
@@ -173,16 +209,21 @@ def test_window_rule_with_the_whole_run_is_savgol_interp():
         savgol_rate_k_per_min(x, t, 121.0, 2), rtol=0, atol=1e-9)
 
 
-def test_causal_gap_is_held_not_interpolated():
+@pytest.mark.parametrize("rate", [
+    lambda x, t: windowed_rate_k_per_min(x, t, np.arange(t.size), 61.0, 1),
+    kalman_rate_k_per_min], ids=["one-sided window", "kalman"])
+def test_causal_gap_is_held_not_interpolated(rate):
     t = np.arange(300.0)
     x = 0.01 * t
     x[100:110] = np.nan
-    r = windowed_rate_k_per_min(x, t, np.arange(300), 61.0, 1)
+    r = rate(x, t)
     assert np.all(np.isfinite(r))
     later = x.copy()
     later[110:] += 3.0            # what comes after the gap cannot reach into it
-    r2 = windowed_rate_k_per_min(later, t, np.arange(300), 61.0, 1)
-    np.testing.assert_array_equal(r2[:110], r[:110])
+    np.testing.assert_array_equal(rate(later, t)[:110], r[:110])
+    lead = x.copy()
+    lead[:5] = np.nan             # before the first reading there is no rate
+    assert np.all(np.isnan(rate(lead, t)[:5])) and np.isfinite(rate(lead, t)[5:]).all()
 
 
 def test_same_seed_same_features_bytes():
@@ -209,3 +250,20 @@ def test_a_model_saved_before_the_modes_is_read_as_offline(tmp_path):
     comp = DriftCompensator(method="linear", estimator=est, feature_names=("T_fog",),
                             features_mode="causal")
     assert load_compensator(comp.save(tmp_path / "new.joblib")).features_mode == "causal"
+
+
+def test_cycle_mode_is_the_window_inside_cycles_and_causal_outside():
+    run = warming_run()
+    X, _ = compute_features(run, ["dT_fog"], mode="cycle")
+    x, t = run.columns["temp_fog_c"], run.columns["time_s"]
+    inside = in_cycle_mask(run)
+    window = windowed_rate_k_per_min(x, t, horizon_index(run, "cycle"), RATE_WINDOW.window_s,
+                                     RATE_WINDOW.polyorder)
+    np.testing.assert_array_equal(X[inside, 0], window[inside])
+    np.testing.assert_array_equal(X[~inside, 0], kalman_rate_k_per_min(x, t)[~inside])
+    assert (~inside).sum() > 100                     # the moves and the partial cycle
+
+
+def test_the_causal_rate_has_no_window_to_set():
+    with pytest.raises(NfsError, match="causal rate is a Kalman filter without a window"):
+        compute_features(warming_run(), ["dT_fog"], mode="causal", rate_window_s=61.0)
