@@ -100,8 +100,8 @@ def test_preset_and_effects(cli):
     (lambda s: s + "[[effects]]\nname = 'shupe_rate'\n", ["needs parameter 'k_s'"]),
     (lambda s: s + "[schedule\n", ["TOML syntax error"]),
     (lambda s: s + "[compensation]\nfeatures_mode = 'live'\n",
-     ["key 'compensation.features_mode'", "unknown mode 'live'; choose one of cycle, causal, "
-      "offline"]),
+     ["key 'compensation.features_mode'",
+      "unknown mode 'live'; choose one of cycle, causal, offline"]),
 ])
 def test_bad_scenario(tmp_path, cli, edit, expect, scenario_text):
     from nfs.instrument import preset_path

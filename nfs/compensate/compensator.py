@@ -11,9 +11,10 @@ from __future__ import annotations
 import io
 import platform
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Any, Sequence
+from typing import Any
 
 import joblib
 import numpy as np
@@ -28,7 +29,12 @@ from ..io.measurement import Run
 from .dataset import DriftDataset, drift_dataset
 from .features import compute_features
 from .methods import get_method
-from .modes import DEFAULT_FEATURE_MODE, FeatureModeError, check_features_mode, horizon_index
+from .modes import (
+    DEFAULT_FEATURE_MODE,
+    FeatureModeError,
+    check_features_mode,
+    horizon_index,
+)
 
 __all__ = ["DriftCompensator", "train_compensator", "load_compensator", "FORMAT"]
 

@@ -15,10 +15,19 @@ from sklearn.linear_model import LinearRegression
 
 from nfs.compensate import DriftCompensator, compute_features, load_compensator
 from nfs.compensate.features import RATE_WINDOW, THERMOMETER_COLUMNS
-from nfs.compensate.kalman_rate import (CAUSAL_RATE, kalman_rate_filter,
-                                       kalman_rate_k_per_min)
-from nfs.compensate.modes import (FEATURE_MODES, FeatureModeError, check_features_mode,
-                                  cycle_spans, horizon_index, in_cycle_mask)
+from nfs.compensate.kalman_rate import (
+    CAUSAL_RATE,
+    kalman_rate_filter,
+    kalman_rate_k_per_min,
+)
+from nfs.compensate.modes import (
+    FEATURE_MODES,
+    FeatureModeError,
+    check_features_mode,
+    cycle_spans,
+    horizon_index,
+    in_cycle_mask,
+)
 from nfs.compensate.rates import savgol_rate_k_per_min, windowed_rate_k_per_min
 from nfs.errors import NfsError
 from nfs.northfind import north_find, synthetic_run
@@ -168,7 +177,7 @@ def test_causal_rate_of_a_ramp_is_its_slope_after_the_filter_memory():
     X, _ = compute_features(ramp_run(), ["dT_fog", "dT_acc_y"], mode="causal")
     np.testing.assert_allclose(X[600:], 0.6, rtol=0, atol=1e-9)
     assert X[0, 0] == 0.0 and 0.0 < X[60, 0] < 0.6       # from the soak towards the slope
-    b, a = kalman_rate_filter(1.0, CAUSAL_RATE.accel_psd_k2_per_s3,
+    _, a = kalman_rate_filter(1.0, CAUSAL_RATE.accel_psd_k2_per_s3,
                               CAUSAL_RATE.reading_variance_k2)
     np.testing.assert_allclose(np.abs(np.roots(a)), 0.9642, atol=1e-4)
 
@@ -187,8 +196,8 @@ def test_causal_rate_survives_quantisation():
 
 
 def test_one_sided_window_uses_only_the_samples_there_are():
-    # At sample i < W the one-sided window (horizon h_i = i) is the i + 1 samples 0..i: the first sample alone
-    # has the rate 0 of a constant, the second the finite difference.
+    # At sample i < W the one-sided window (horizon h_i = i) is the i + 1 samples 0..i: the
+    # first sample alone has the rate 0 of a constant, the second the finite difference.
     t = np.arange(10.0)
     x = np.array([0.0, 0.0625, 0.0625, 0.125, 0.125, 0.125, 0.1875, 0.25, 0.25, 0.3125])
     r = windowed_rate_k_per_min(x, t, np.arange(10), 121.0, 1)
