@@ -147,6 +147,7 @@ def test_predicted_drift_reads_no_further_than_its_features(mode):
 
 
 def ramp_run(slope_k_per_s=0.01):
+    """The warming run's schedule with every thermometer on the ramp -31.7 C + slope t."""
     run = warming_run()
     t = run.columns["time_s"]
     cols = dict(run.columns)
