@@ -1,6 +1,8 @@
 """Drift compensation: features, compensators (scikit-learn estimators), tuners, the study.
 
-- :mod:`~nfs.compensate.features`: named features from the thermometers and aux channels;
+- :mod:`~nfs.compensate.features`: named features from the thermometers and aux channels,
+  in a features mode (:mod:`~nfs.compensate.modes`: cycle, causal, offline) with their rates
+  (:mod:`~nfs.compensate.rates`, :mod:`~nfs.compensate.kalman_rate`);
 - :mod:`~nfs.compensate.regression`, :mod:`~nfs.compensate.neural`,
   :mod:`~nfs.compensate.kernels`: the compensators of the seed papers;
 - :mod:`~nfs.compensate.tuners`, :mod:`~nfs.compensate.search`: metaheuristic tuners (grid,
@@ -16,6 +18,7 @@ from .features import (FEATURE_SETS, FeatureError, available_features, compute_f
                        feature_columns, rate_k_per_min, resolve_features)
 from .kernels import IRLSSVMRegressor, LSSVMRegressor, RVRRegressor, SVRRegressor
 from .methods import METHODS, TABLE_METHODS, MethodSpec, get_method
+from .modes import DEFAULT_FEATURE_MODE, FEATURE_MODES, FeatureModeError, check_features_mode
 from .neural import BPNetwork, RBFNetwork
 from .regression import CubicLeastSquares, StepwiseRegression
 from .search import Integer, MetaheuristicSearchCV, Real
@@ -29,5 +32,6 @@ __all__ = [
     "LSSVMRegressor", "RVRRegressor", "SVRRegressor", "METHODS", "TABLE_METHODS", "MethodSpec",
     "get_method", "BPNetwork", "RBFNetwork", "CubicLeastSquares", "StepwiseRegression",
     "Integer", "MetaheuristicSearchCV", "Real", "CompensationSettings", "CompensationStudy",
-    "run_study", "TUNERS", "TuneResult", "minimize",
+    "run_study", "TUNERS", "TuneResult", "minimize", "DEFAULT_FEATURE_MODE", "FEATURE_MODES",
+    "FeatureModeError", "check_features_mode",
 ]
