@@ -164,7 +164,7 @@ class MetaheuristicSearchCV(MetaEstimatorMixin, BaseEstimator):
         -> :class:`Real` or :class:`Integer`.  Dimension i of the tuner's box is the i-th
         entry.
     method : str
-        Tuner name in :data:`nfs.compensate.tuners.TUNERS` ('ssa', 'pso', 'gwo', 'hho',
+        Tuner name in :data:`nfs.compensate.tuners.TUNERS` ('ssa', 'pso', 'gwo', 'hho', 'random',
         'grid', 'tpe').
     budget : int
         Maximum number of candidates scored (each costs one fit per CV split).

@@ -66,6 +66,7 @@ __all__ = [
     "TUNERS",
     "minimize",
     "grid",
+    "random_search",
     "pso",
     "gwo",
     "hho",
@@ -250,6 +251,32 @@ def grid(objective_batch: ObjectiveBatch, n_dims: int, *, budget: int,
     except _BudgetExhausted:
         pass
     return ev.result("grid")
+
+
+# --------------------------------------------------------------------------------------
+# random search
+
+
+def random_search(objective_batch: ObjectiveBatch, n_dims: int, *, budget: int,
+                  random_state: int | np.random.Generator | None = None,
+                  population: int | None = None) -> TuneResult:
+    """Random search: ``budget`` positions drawn uniformly in the box (Bergstra & Bengio 2012).
+
+    The baseline every tuner must beat: no model, no memory.  ``population`` positions are
+    evaluated per batch (default: all at once).  Uniform in the normalised box is
+    log-uniform on a log-scaled real range.
+    """
+    _check(n_dims, budget, population)
+    rng = _rng(random_state)
+    points = _uniform(rng, budget, n_dims)
+    ev = _Evaluator(objective_batch, n_dims, budget)
+    step = population or budget
+    try:
+        for start in range(0, budget, step):
+            ev(points[start:start + step])
+    except _BudgetExhausted:
+        pass
+    return ev.result("random")
 
 
 # --------------------------------------------------------------------------------------
@@ -647,6 +674,7 @@ def tpe(objective_batch: ObjectiveBatch, n_dims: int, *, budget: int,
 
 TUNERS: dict[str, Callable[..., TuneResult]] = {
     "grid": grid,
+    "random": random_search,
     "pso": pso,
     "gwo": gwo,
     "hho": hho,
@@ -668,7 +696,7 @@ def minimize(objective_batch: ObjectiveBatch, n_dims: int, *, method: str = "ssa
     n_dims : int
         Dimension d of the search box.
     method : str
-        A key of :data:`TUNERS`: 'grid', 'pso', 'gwo', 'hho', 'ssa', 'tpe'.
+        A key of :data:`TUNERS`: 'grid', 'random', 'pso', 'gwo', 'hho', 'ssa', 'tpe'.
     budget : int
         Maximum number of objective evaluations (see the module docstring for the last,
         partial generation).

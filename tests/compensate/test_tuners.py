@@ -61,8 +61,9 @@ def err(result, c):
 # dive steps scale with |J X_rabbit - X|, i.e. with the rabbit's distance from the origin, so
 # on a shifted optimum it only settles when E -> 0 (at 600 evaluations its error is 0.07-0.16).
 # The grid's Sobol set (600 is not a cube) is judged by its covering radius, about
-# 2 * 600^(-1/3) = 0.24 per axis in the worst case.
-SPHERE_CASES = {"grid": (600, 0.2), "pso": (600, 0.05), "gwo": (600, 0.05),
+# 2 * 600^(-1/3) = 0.24 per axis in the worst case; random search by the distance to the
+# nearest of 600 uniform points (median (8 * 3 / (4 pi 600))^(1/3) = 0.15 in 3-D).
+SPHERE_CASES = {"grid": (600, 0.2), "random": (600, 0.3), "pso": (600, 0.05), "gwo": (600, 0.05),
                 "hho": (2400, 0.05), "ssa": (600, 0.05), "tpe": (200, 0.08)}
 
 
@@ -87,7 +88,7 @@ def test_factorial_grid_is_the_nearest_grid_point():
     assert np.unique(r.all_x, axis=0).shape[0] == 512
 
 
-RIPPLE_CASES = {"grid": (500, 0.15), "pso": (500, 0.05), "gwo": (500, 0.05),
+RIPPLE_CASES = {"grid": (500, 0.15), "random": (500, 0.15), "pso": (500, 0.05), "gwo": (500, 0.05),
                 "hho": (500, 0.05), "ssa": (500, 0.05), "tpe": (200, 0.05)}
 
 
@@ -161,7 +162,7 @@ def test_same_seed_same_history(method):
 
 def test_bad_names_and_options():
     f = sphere(C2)
-    with pytest.raises(TuningError, match="unknown tuner 'sparrow'; valid tuners: grid, pso, "
+    with pytest.raises(TuningError, match="unknown tuner 'sparrow'; valid tuners: grid, random, pso, "
                                           "gwo, hho, ssa, tpe"):
         minimize(f, 2, method="sparrow", budget=10)
     with pytest.raises(TuningError, match="unknown option.*PD for tuner 'pso'.*w, c1, c2"):
@@ -340,3 +341,14 @@ def test_sklearn_estimator_checks():
     failed = [r for r in check_estimator(est, on_fail=None) if r["status"] == "failed"]
     assert not failed, [(r["check_name"], repr(r["exception"])) for r in failed]
     clone(est)
+
+
+def test_random_search_is_uniform_and_seeded():
+    # Oracle: budget draws, each coordinate U(-1, 1): mean 0 +- 3 sd/sqrt(n), variance 1/3.
+    r = minimize(sphere(C3), 3, method="random", budget=3000, random_state=4)
+    assert r.n_evaluations == 3000
+    x = r.all_x
+    assert np.all(np.abs(x.mean(axis=0)) < 3 * np.sqrt(1 / 3 / 3000))
+    np.testing.assert_allclose(x.var(axis=0), 1 / 3, rtol=0.06)
+    again = minimize(sphere(C3), 3, method="random", budget=3000, random_state=4)
+    np.testing.assert_array_equal(again.all_x, x)
