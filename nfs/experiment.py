@@ -25,6 +25,8 @@ from .io.measurement import Run, RunMeta
 from .noise import gyro_noise_dph, white_noise
 from .sensors import (Schedule, axis_elevation_deg, earth_rate_along_axis_dph,
                       thermometer_reading, turntable_motion)
+from .variability import (Variability, chamber_terms, describe_units, initial_temperatures,
+                          unit_instrument)
 
 __all__ = ["RunConditions", "SimulationResult", "simulate_run", "effect_context",
            "conditions_from_run", "thermal_power",
@@ -53,9 +55,15 @@ class RunConditions:
     sample_rate_hz: float = 1.0
     """Sample rate [Hz]."""
     seed: int | tuple[int, ...] = 0
-    """Entropy of the run's random streams (noise of every sensor)."""
+    """Entropy of the run's random streams (noise of every sensor, and the start-up's soak
+    and chamber draws when ``variability`` is given)."""
     chamber_c: Callable[[np.ndarray], np.ndarray] | None = None
     """Chamber temperature T_amb(t) [degC]; None holds T0."""
+    unit: int = 0
+    """The unit that makes the start-up (its parameters are drawn from ``variability``)."""
+    variability: Variability | None = None
+    """Run-to-run and unit-to-unit scatter (:mod:`nfs.variability`); None: the unit is the
+    instrument as given, soaked exactly at T0, in the chamber ``chamber_c``."""
     motion: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
     """(time_s, position_deg, moving) of a measured run to replay instead of the schedule:
     the model is then simulated on the run's own time base and turntable motion."""
@@ -124,6 +132,9 @@ class SimulationResult:
     """ARW + bias instability + rate random walk [deg/h]."""
     run: Run
     """The measurement, as written to file."""
+    instrument: Instrument | None = None
+    """The instrument simulated: the unit's draw of the instrument given to
+    :func:`simulate_run` (that instrument itself without variability)."""
 
     @property
     def drift_dph(self) -> np.ndarray:
@@ -244,12 +255,17 @@ def simulate_run(inst: Instrument, cond: RunConditions) -> SimulationResult:
     """Simulate one start-up run of ``inst`` under ``cond``.
 
     The unpowered instrument is soaked at T0 (every node at T0), powered on at t = 0 and held
-    in the chamber at T_amb(t) (T0 unless ``cond.chamber_c``).
+    in the chamber at T_amb(t) (T0 unless ``cond.chamber_c``).  With ``cond.variability``
+    the instrument is unit ``cond.unit``'s draw of ``inst``, its nodes start from the
+    start-up's soak and the chamber wanders and cycles (:mod:`nfs.variability`).
     """
     _check_simulated_channels(inst)
     t = cond.time_s
     fs = cond.sample_rate_hz
     rngs = _streams(cond.seed)
+    var = cond.variability
+    if var is not None and var.per_unit:
+        inst = unit_instrument(inst, var, cond.unit)
     theta, moving = cond.turntable(t)
     azimuth = np.mod(cond.true_heading_deg + theta, 360.0)
     tilt = inst.turntable
@@ -259,8 +275,12 @@ def simulate_run(inst: Instrument, cond: RunConditions) -> SimulationResult:
     # 1. thermal network
     power, thermal_terms, stateful = thermal_power(inst, t, moving)
     ambient = cond.start_temperature_c if cond.chamber_c is None else cond.chamber_c(t)
-    th = thermal.simulate(inst.network, t, ambient_c=ambient,
-                          initial_c=cond.start_temperature_c, power_w=power)
+    initial = cond.start_temperature_c
+    if var is not None and var.per_start_up:
+        initial = initial_temperatures(inst, var, cond.start_temperature_c, cond.seed)
+        ambient = ambient + chamber_terms(var, t, cond.seed)
+    th = thermal.simulate(inst.network, t, ambient_c=ambient, initial_c=initial,
+                          power_w=power)
     for e, j, params in stateful:
         thermal_terms[e.label] = np.asarray(
             e.spec.function(t, th.temperature_c[:, j], moving, **params), dtype=float)
@@ -325,7 +345,8 @@ def simulate_run(inst: Instrument, cond: RunConditions) -> SimulationResult:
     run = Run(name=cond.name, columns=columns, meta=meta)
     return SimulationResult(conditions=cond, thermal=th, context=ctx,
                             thermal_terms_w=thermal_terms, gyro_terms_dph=gyro_terms,
-                            acc_terms_g=acc_terms, gyro_noise_dph=noise, run=run)
+                            acc_terms_g=acc_terms, gyro_noise_dph=noise, run=run,
+                            instrument=inst)
 
 
 # --------------------------------------------------------------------------------------------
@@ -412,6 +433,10 @@ def uncompensated_table(res: ScenarioResult):
         f"stable: cycles starting after {nf.stable_start_s:g} s; floor: white-noise limit "
         f"sqrt(2/N) (ARW / sqrt(dwell)) / (Omega_ie cos L).",
     )
+    var = sc.variability
+    if sc.units > 1 or var.active:
+        notes += (f"Start-ups made by {describe_units(sc.units, sc.unit_ids)}; variability "
+                  f"{var.describe()}.",)
     rows = (TableRow("before", tuple(before)), TableRow("stable", tuple(stable)),
             TableRow("floor", (fl,) * n_t))
     return HeadingTable(tuple(sc.start_temperatures_c), rows, notes)

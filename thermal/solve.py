@@ -181,12 +181,15 @@ def _modal_recursion(phi_minus_i: np.ndarray, capacity: np.ndarray, t0: np.ndarr
     d = np.sqrt(capacity)
     sym = d[:, None] * phi_minus_i / d[None, :]
     mu, q = eigh(0.5 * (sym + sym.T))
-    mu = np.minimum(mu, 0.0)
+    # lambda = exp(eigenvalue of A times h) lies in (0, 1]: a step long against a fast mode
+    # gives lambda = 0 to rounding, and mu a hair below -1 would make log1p(mu) NaN.
+    mu = np.clip(mu, -1.0, 0.0)
     n_t = drive.shape[0] + 1
     w = (drive * d) @ q                                  # (n_t - 1, n)
     w0 = w[0] if n_t > 1 else np.zeros(mu.size)
     k = np.arange(n_t)[:, None]
-    k_log_lam = k * np.maximum(np.log1p(mu), -700.0)     # lambda = 0 underflows to e^-700
+    with np.errstate(divide="ignore"):                   # log1p(-1) = -inf, then clipped
+        k_log_lam = k * np.maximum(np.log1p(mu), -700.0)  # lambda = 0 underflows to e^-700
     floating = mu == 0.0
     geometric = np.where(floating, k, np.expm1(k_log_lam) / np.where(floating, 1.0, mu))
     z = np.exp(k_log_lam) * (q.T @ (d * t0)) + geometric * w0

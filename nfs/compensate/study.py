@@ -16,7 +16,6 @@ Protocol (seed 004, done on equal terms):
 
 from __future__ import annotations
 
-import dataclasses
 import warnings
 from dataclasses import dataclass, field
 from typing import Any, Callable
@@ -66,6 +65,12 @@ class CompensationSettings:
     test_repeats: int | None = 5
     """Test start-ups per temperature (None: the scenario's ``repeats``).  The start-up and
     stable RMSE of a single run rest on 5 cycles each (+-30 %); five runs pool 25 (+-14 %)."""
+    train_units: tuple[int, ...] | None = None
+    """Units that make the training start-ups, ``train_repeats`` per temperature each (None:
+    :meth:`~nfs.io.scenario.Scenario.unit_split`: every unit not tested, or unit 0)."""
+    test_units: tuple[int, ...] | None = None
+    """Units that make the test start-ups, ``test_repeats`` per temperature each (None: the
+    last unit)."""
 
 
 @dataclass(frozen=True)
@@ -131,6 +136,12 @@ class CompensationStudy:
             f"{', '.join(self.dataset.feature_names)}, drift by wavelet separation "
             f"(cutoff {s.cutoff_period_s:g} s), training samples every {s.decimate_s:g} s.",
         )
+        if sc.units > 1:
+            tr, te = sc.unit_split(s.train_units, s.test_units)
+            notes += (f"Units: trained on {', '.join(map(str, tr))}, tested on "
+                      f"{', '.join(map(str, te))} of {sc.units} ("
+                      + ("different units" if not set(tr) & set(te) else "shared units")
+                      + ").",)
         tuned = [get_method(m).name for m in s.methods if get_method(m).tuned]
         if tuned:
             notes += (f"Tuned rows ({', '.join(tuned)}): {s.budget} evaluations each of the "
@@ -191,19 +202,19 @@ def run_study(scenario, settings: CompensationSettings | None = None, *,
             progress(step, n_steps, msg)
         step += 1
 
-    if s.test_repeats is not None and test is None:
-        scenario = dataclasses.replace(scenario, repeats=s.test_repeats)
+    train_units, test_units = scenario.unit_split(s.train_units, s.test_units)
     if test is None:
+        scenario = scenario.made_by(test_units, s.test_repeats or scenario.repeats)
         tick("simulating the test start-ups")
         test = run_scenario(scenario)
     else:
         step += 1
     tick("simulating the training start-ups")
-    train_sc = dataclasses.replace(
-        scenario, seed=s.train_seed, repeats=s.train_repeats, name=f"{scenario.name}_train",
+    train_sc = scenario.made_by(
+        train_units, s.train_repeats, seed=s.train_seed, name=f"{scenario.name}_train",
         start_temperatures_c=tuple(s.train_temperatures_c or scenario.start_temperatures_c))
-    if train_sc.seed == scenario.seed and train_sc.start_temperatures_c == \
-            scenario.start_temperatures_c:
+    if train_sc.seed == scenario.seed and set(train_units) & set(test_units) and \
+            train_sc.start_temperatures_c == scenario.start_temperatures_c:
         raise NfsError("the training start-ups must differ from the test start-ups: "
                        "set compensation.train_seed different from the scenario's seed")
     train_runs = tuple(simulate_run(train_sc.instrument, c).run for c in train_sc.conditions())

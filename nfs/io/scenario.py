@@ -2,23 +2,30 @@
 
 A scenario names an instrument (a built-in preset or an instrument TOML file), the start
 temperatures, the schedule and the north-finding settings; ``[[effects]]`` in the scenario,
-when present, replace the instrument's effect list.  Every key is checked: an unknown key is
-an error that names it and lists the allowed ones.  See ``scenarios/startup_7temps.toml``.
+when present, replace the instrument's effect list.  ``units`` simulated units make the
+start-ups, and ``[variability]`` says how start-ups and units differ
+(:mod:`nfs.variability`; no table: every start-up soaked exactly at T0, every unit the
+nominal instrument).  Every key is checked: an unknown key is an error that names it and
+lists the allowed ones.  See ``scenarios/startup_7temps.toml``.
 """
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
-from typing import Any
+from typing import Any, Sequence
 
 import numpy as np
 
 from ..effects import load_effects_file
 from ..errors import EffectError, NfsError, ScenarioError
 from ..instrument import Instrument, _check_effect_targets, load_instrument, parse_effects
+from ..parameters import ParameterError, expand_paths
 from ..sensors import ORDERS, Schedule
+from ..variability import (CYCLING_SHAPES, NO_VARIABILITY, VARIABILITY_KEYS,
+                           VARIABILITY_PRESETS, Variability)
 from .tomlio import check_keys, load_toml, number, number_list, string, table
 
 __all__ = ["NorthFindSettings", "ChamberProfile", "Scenario", "load_scenario",
@@ -26,11 +33,13 @@ __all__ = ["NorthFindSettings", "ChamberProfile", "Scenario", "load_scenario",
 
 _TOP = ("name", "description", "instrument", "seed", "start_temperatures_c", "repeats",
         "duration_s", "sample_rate_hz", "latitude_deg", "true_heading_deg", "effects_files",
-        "effects", "schedule", "northfind", "chamber", "compensation")
+        "effects", "schedule", "northfind", "chamber", "compensation", "units",
+        "variability")
 _COMPENSATION = ("methods", "features", "features_mode", "budget", "decimate_s",
                  "cutoff_period_s",
                  "train_seed", "train_repeats", "train_temperatures_c", "test_repeats",
-                 "random_state", "n_jobs")
+                 "train_units", "test_units", "random_state", "n_jobs")
+_VARIABILITY = ("preset", *VARIABILITY_KEYS, "parameters")
 _SCHEDULE = ("positions_deg", "order", "dwell_s", "move_s")
 _NORTHFIND = ("startup_end_s", "stable_start_s", "tilt_correction", "settle_s")
 _CHAMBER = ("ripple_c", "ripple_period_s")
@@ -80,9 +89,11 @@ class Scenario:
     schedule: Schedule
     """North-finding schedule."""
     seed: int = 0
-    """Root seed; run (i, r) draws from SeedSequence([seed, i, r])."""
+    """Root seed; start-up k of unit u at T0 number i draws from SeedSequence([seed, i, k])
+    for unit 0 (the runs of a one-unit scenario), [seed, i, k, u] for u > 0."""
     repeats: int = 1
-    """Monte Carlo runs per start temperature (different noise)."""
+    """Start-ups per start temperature, made by the units of :attr:`unit_ids` in turn
+    (start-up r by unit ``unit_ids[r % n]``, its ``r // n``-th)."""
     duration_s: float = 9000.0
     """Length of each run [s]."""
     sample_rate_hz: float = 1.0
@@ -102,26 +113,73 @@ class Scenario:
     when the table is absent)."""
     path: Path | None = None
     """The file it was read from."""
+    units: int = 1
+    """Simulated units (each start-up is made by one unit; a unit's parameters are drawn
+    once from :attr:`variability`)."""
+    run_units: tuple[int, ...] | None = None
+    """The units that make this scenario's start-ups (None: every unit, 0 .. units-1)."""
+    variability: Variability = NO_VARIABILITY
+    """How start-ups and units differ (:mod:`nfs.variability`)."""
 
-    def run_name(self, i_temp: int, repeat: int) -> str:
-        """File stem of run (i_temp, repeat)."""
+    @property
+    def unit_ids(self) -> tuple[int, ...]:
+        """The units that make the start-ups, in turn."""
+        return tuple(range(self.units)) if self.run_units is None else tuple(self.run_units)
+
+    def run_name(self, i_temp: int, repeat: int, unit: int = 0) -> str:
+        """File stem of start-up ``repeat`` of ``unit`` at T0 number ``i_temp``:
+        ``{name}_T{T0}C_r{repeat}``, with ``_u{unit}`` before ``_r`` when there are several
+        units."""
         t0 = self.start_temperatures_c[i_temp]
         t0s = f"{t0:+g}".replace(".", "p")
-        return f"{self.name}_T{t0s}C_r{repeat}"
+        u = f"_u{unit}" if self.units > 1 else ""
+        return f"{self.name}_T{t0s}C{u}_r{repeat}"
 
     def conditions(self):
         """The :class:`~nfs.experiment.RunConditions` of every run, temperature-major."""
         from ..experiment import RunConditions
+        units = self.unit_ids
+        var = self.variability if self.variability.active else None
         out = []
         for i, t0 in enumerate(self.start_temperatures_c):
             for r in range(self.repeats):
+                u, k = units[r % len(units)], r // len(units)
                 out.append(RunConditions(
-                    name=self.run_name(i, r), start_temperature_c=t0,
+                    name=self.run_name(i, k, u), start_temperature_c=t0,
                     latitude_deg=self.latitude_deg, true_heading_deg=self.true_heading_deg,
                     schedule=self.schedule, duration_s=self.duration_s,
-                    sample_rate_hz=self.sample_rate_hz, seed=(self.seed, i, r),
-                    chamber_c=self.chamber.ambient(t0)))
+                    sample_rate_hz=self.sample_rate_hz,
+                    seed=(self.seed, i, k) if u == 0 else (self.seed, i, k, u),
+                    chamber_c=self.chamber.ambient(t0), unit=u, variability=var))
         return out
+
+    def made_by(self, units: Sequence[int], repeats: int, **changes) -> "Scenario":
+        """The same experiment with ``repeats`` start-ups per start temperature by each of
+        ``units`` (``changes``: other fields to replace, e.g. ``seed``)."""
+        units = tuple(int(u) for u in units)
+        bad = [u for u in units if not 0 <= u < self.units]
+        if not units or bad:
+            raise NfsError(f"units {list(units)}: scenario '{self.name}' has units "
+                           f"0..{self.units - 1}")
+        return dataclasses.replace(self, run_units=units, repeats=repeats * len(units),
+                                   **changes)
+
+    def unit_split(self, train_units: Sequence[int] | None = None,
+                   test_units: Sequence[int] | None = None
+                   ) -> tuple[tuple[int, ...], tuple[int, ...]]:
+        """(training units, test units) of a compensation study.
+
+        Defaults: with one unit, unit 0 for both (the start-ups differ by their seeds); with
+        several, the test units are the last one and the training units all the others
+        (or those not tested, when only ``test_units`` is given).
+        """
+        every = tuple(range(self.units))
+        if test_units is None:
+            held = tuple(u for u in every if train_units is None or u not in train_units)
+            test_units = (held[-1],) if held and self.units > 1 else every[-1:]
+        if train_units is None:
+            train_units = tuple(u for u in every if u not in test_units) or every
+        return tuple(train_units), tuple(test_units)
 
 
 def default_scenario_path() -> Path:
@@ -150,7 +208,83 @@ def _int(tbl, key, prefix, file, default, minimum=None, allow_none=False):
     return v
 
 
-def _compensation(tbl: dict, file) -> Any:
+def _unit_list(tbl, key, prefix, file, units):
+    """A list of distinct unit indices in 0 .. units-1, or None when absent."""
+    if key not in tbl:
+        return None
+    v = tbl[key]
+    name = f"{prefix}.{key}"
+    if (not isinstance(v, list) or not v
+            or not all(isinstance(u, int) and not isinstance(u, bool) for u in v)):
+        raise ScenarioError(f"must be a non-empty list of unit indices, got {v!r}", file=file,
+                            key=name)
+    bad = [u for u in v if not 0 <= u < units]
+    if bad:
+        raise ScenarioError(f"unit {bad[0]} is out of range: the scenario has units "
+                            f"0..{units - 1} (units = {units})", file=file, key=name)
+    if len(set(v)) != len(v):
+        raise ScenarioError(f"names a unit twice: {v!r}", file=file, key=name)
+    return tuple(v)
+
+
+def _variability(d: dict, inst: Instrument, seed: int, file) -> Variability:
+    """``[variability]``: a preset (``realistic`` when the table is given, ``none`` when it is
+    absent) with any of its values overridden."""
+    p = "variability"
+    if "variability" not in d:
+        return NO_VARIABILITY
+    tbl = d["variability"]
+    if not isinstance(tbl, dict):
+        raise ScenarioError(f"must be a table, got {tbl!r}; write [variability] and "
+                            f"preset = \"none\" or \"realistic\"", file=file, key=p)
+    check_keys(tbl, _VARIABILITY, p, file)
+    preset = string(tbl, "preset", p, file, "realistic", choices=tuple(VARIABILITY_PRESETS))
+    base = VARIABILITY_PRESETS[preset]
+    kw: dict[str, Any] = {"preset": preset}
+    for key in VARIABILITY_KEYS:
+        default = getattr(base, key)
+        if key == "unfinished_soak":
+            kw[key] = _bool(tbl, key, p, file, default)
+        elif key == "cycling_shape":
+            kw[key] = string(tbl, key, p, file, default, choices=CYCLING_SHAPES)
+        elif key == "unit_seed":
+            kw[key] = _int(tbl, key, p, file, seed, minimum=0)
+        elif key == "soak_from_c":
+            kw[key] = number(tbl, key, p, file, default, minimum=-273.15)
+        elif key in ("soak_h", "chamber_wander_tau_s", "cycling_period_s"):
+            kw[key] = number(tbl, key, p, file, default, positive=True)
+        else:                                           # standard deviations
+            kw[key] = number(tbl, key, p, file, default, minimum=0.0)
+    kw["parameters"] = _variability_parameters(table(tbl, "parameters", p, file, {}), inst,
+                                               file)
+    out = Variability(**kw)
+    if out != dataclasses.replace(base, preset=preset, unit_seed=out.unit_seed):
+        out = dataclasses.replace(out, preset=f"{preset} (modified)")
+    return out
+
+
+def _variability_parameters(tbl: dict, inst: Instrument, file):
+    """``[variability.parameters]``: "path or pattern" = relative std, or { std = K }."""
+    out = []
+    for pattern, v in tbl.items():
+        name = f'variability.parameters."{pattern}"'
+        if isinstance(v, dict):
+            if set(v) != {"std"}:
+                raise ScenarioError(
+                    "must be a relative standard deviation or { std = value } (quote a "
+                    "dotted path: \"effects.shupe_gradient.k_r\" = 0.3)", file=file, key=name)
+            std, rel = number(v, "std", name, file, minimum=0.0), False
+        else:
+            std, rel = number(tbl, pattern, "variability.parameters", file, minimum=0.0), True
+        try:
+            expand_paths(inst, pattern)
+        except ParameterError as exc:
+            raise ScenarioError(str(exc), file=file, key=name) from None
+        out.append((pattern, std, rel))
+    return tuple(out)
+
+
+def _compensation(tbl: dict, file, units: int = 1) -> Any:
     from ..compensate.features import FeatureError, resolve_features
     from ..compensate.methods import get_method
     from ..compensate.modes import FeatureModeError, check_features_mode
@@ -193,6 +327,8 @@ def _compensation(tbl: dict, file) -> Any:
         train_repeats=_int(tbl, "train_repeats", p, file, d.train_repeats, minimum=1),
         train_temperatures_c=temps,
         test_repeats=_int(tbl, "test_repeats", p, file, d.test_repeats, minimum=1),
+        train_units=_unit_list(tbl, "train_units", p, file, units),
+        test_units=_unit_list(tbl, "test_units", p, file, units),
         random_state=_int(tbl, "random_state", p, file, d.random_state, minimum=0),
         n_jobs=n_jobs)
 
@@ -262,6 +398,8 @@ def load_scenario(path: str | Path | None = None) -> Scenario:
         if t0 < -273.15:
             raise ScenarioError(f"{t0} is below absolute zero", file=f,
                                 key="start_temperatures_c")
+    units = _int(d, "units", "", f, 1, minimum=1)
+    variability = _variability(d, inst, seed, f)
     duration = number(d, "duration_s", "", f, 9000.0, positive=True)
     if duration < schedule.cycle_s:
         raise ScenarioError(f"{duration} s is shorter than one cycle ({schedule.cycle_s} s)",
@@ -274,5 +412,6 @@ def load_scenario(path: str | Path | None = None) -> Scenario:
         latitude_deg=number(d, "latitude_deg", "", f, 30.0, minimum=-89.0, maximum=89.0),
         true_heading_deg=number(d, "true_heading_deg", "", f, 0.0),
         northfind=settings, chamber=chamber,
-        compensation=_compensation(table(d, "compensation", "", f, {}), f),
-        description=string(d, "description", "", f, ""), path=path)
+        compensation=_compensation(table(d, "compensation", "", f, {}), f, units),
+        description=string(d, "description", "", f, ""), path=path, units=units,
+        variability=variability)
