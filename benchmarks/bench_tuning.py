@@ -1,152 +1,106 @@
-"""Cost of tuning an SVR's (C, sigma, epsilon) by sparrow search (seed 004's SSA-SVR).
+"""Which tuner reaches the best validation error for a given budget?  (the SVR rows of ``nfs table``)
 
-Problem: 7 start-up runs (one per start temperature of seed 004), features = the 9 seed-004
-thermometer features (3 temperatures, 3 rates, 3 gradients), target = the wavelet-separated
-gyro drift, validation = leave one run out (7 folds).  By default the runs come from the
-simulator (``--data simulated``: nfs.experiment on the default scenario, then
-nfs.compensate.dataset.drift_dataset -- the hook that turns simulated runs into a grouped
-regression problem); ``--data synthetic`` uses a stand-alone smooth nonlinear function of
-synthetic thermometer features plus time-correlated noise (used as well when the simulator
-chain cannot be imported).
+The question a user of the tuned rows asks is not "is the sparrow search faster than a grid"
+(every tuner pays the same fit per candidate, so time follows the budget) but "at a budget of
+B evaluations, which tuner finds the lowest validation error, and can the seeds tell them
+apart?".  This benchmark answers it on the problem the SVR rows of ``nfs table`` solve.
 
-Sampling: the brief's representative size is 7 runs x ~900 samples at 0.1 Hz
-(``--decimate-s 10``).  An RBF SVR fit at large C and small epsilon costs 20-170 s at that
-size (LIBSVM, O(n^2)-O(n^3)), so one SSA run at budget 60 takes tens of minutes on 2 cores
-and the grid side hours; the default keeps one sample every 30 s (7 x ~280 samples), which
-keeps the whole benchmark near half an hour on 2 cores.  ``--quick`` (60 s) is a smoke run.
+Problem: the training start-ups of the default scenario (its ``[compensation]`` settings:
+training seed, features, features mode; 7 start temperatures x 2.5 h), the drift target
+separated by the wavelet, decimated to one sample every ``--decimate-s`` seconds (default
+60 s, half the table's density, to keep the benchmark near 15 min on 2 cores; ``--decimate-s
+30`` is the table's own).  Estimator, search box and validation score are those of the
+SSA-SVR row (:func:`nfs.compensate.methods.get_method`): the SVR (C, sigma, epsilon) box,
+the residual's standard deviation on the held-out start temperature (leave one start
+temperature out).
 
-Parts:
+Tuners: SSA, PSO, GWO, HHO (the papers' metaheuristics), random search (uniform in the box),
+a factorial grid (k^3 <= budget points; deterministic), and Optuna's TPE (optional: the
+'tune' extra; skipped when Optuna is missing).  ``--mealpy`` adds mealpy's OriginalSSA (the
+'bench' extra) behind the same interface.
 
-1. SSA (``MetaheuristicSearchCV(method="ssa")``, default budget 60) against scikit-learn's
-   ``GridSearchCV`` on the same LeaveOneGroupOut folds and the same ranges (log-spaced
-   grids of k points per axis, k = 3, 4, 5, ...): the grid grows until its best CV error
-   reaches SSA's; a grid whose predicted time exceeds 10x SSA's is not started, and the error
-   of the largest grid run is reported instead.  Target: SSA 10x faster.
-2. Our SSA against mealpy's ``OriginalSSA`` (optional, the 'bench' extra) at the same budget
-   on the same objective: mealpy is plugged into the tuner registry (``TUNERS``) as a user's
-   function, so both run through the same MetaheuristicSearchCV objective (mean
-   leave-one-run-out error).  Evaluations past the budget are not made (mealpy's last epoch
-   is cut like ours).
+Printed:
 
-Run: ``python benchmarks/bench_tuning.py [--quick] [--decimate-s S] [--budget B]
-[--n-jobs N] [--data simulated|synthetic]``.
+1. the validation error reached against budget (default 10, 25, 50, 100, 200 evaluations; a
+   separate tuner run per budget, since SSA, PSO and GWO schedule their generations on the
+   budget): median and quartiles over ``--seeds`` tuner seeds (default 10);
+2. at the largest budget, each tuner against the best median: the difference of medians
+   with a bootstrap 95 % interval over seeds, "not distinguishable" when it holds 0;
+3. each tuner's own overhead per evaluation (its time on a free objective, 3-D, at the
+   largest budget) against the mean cost of one evaluation of the real objective (7 fold fits
+   and scores), and the ratio (goal < 1 %).
+
+Run: ``python benchmarks/bench_tuning.py [--seeds 10] [--budgets 10,25,50,100,200]
+[--tuners ssa,pso,gwo,hho,random,grid,tpe] [--decimate-s 60] [--n-jobs 2] [--mealpy]
+[--quick]``.
 """
 
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import math
 import time
 
 import numpy as np
-from sklearn.base import BaseEstimator, RegressorMixin
-from sklearn.model_selection import GridSearchCV, LeaveOneGroupOut
-from sklearn.svm import SVR
+from sklearn.base import clone
 
-from nfs.compensate.search import MetaheuristicSearchCV, Real
-from nfs.compensate.tuners import TUNERS, TuneResult
+from nfs.compensate.dataset import drift_dataset
+from nfs.compensate.methods import get_method
+from nfs.compensate.tuners import TUNERS, TuneResult, minimize
+from nfs.experiment import simulate_run
+from nfs.io.scenario import load_scenario
 
-START_TEMPERATURES_C = (-32, -16, -5, 17, 28, 43, 54)  # seed 004 Table 3
-# Search ranges and validation score: those of the SSA-SVR row of `nfs table`
-# (nfs.compensate.methods: the bounded box, and the residual's STD within the held-out run).
-from nfs.compensate.methods import svr_space, get_method, neg_residual_std  # noqa: E402
-
-RANGES = {name: (r.low, r.high) for name, r in svr_space().items()}
-SCORING = neg_residual_std
-TIME_FACTOR = 10.0  # grid allowed 10x SSA's time
+DEFAULT_TUNERS = ("ssa", "pso", "gwo", "hho", "random", "grid", "tpe")
+OVERHEAD_GOAL = 0.01
 
 
-# -- estimator --------------------------------------------------------------------------
+# -- the problem ------------------------------------------------------------------------------
 
-try:
-    from nfs.compensate.kernels import SVRRegressor
-except ImportError:  # stand-in until nfs.compensate.kernels exists
-    from sklearn.preprocessing import StandardScaler
+def training_problem(decimate_s: float):
+    """The training set of the SVR rows of ``nfs table`` on the default scenario.
 
-    class SVRRegressor(RegressorMixin, BaseEstimator):
-        """SVR in the sigma convention (gamma = 1 / (2 sigma^2)) on standardised x and y."""
-
-        def __init__(self, C=1.0, sigma=1.0, epsilon=0.01):
-            self.C, self.sigma, self.epsilon = C, sigma, epsilon
-
-        def fit(self, X, y):
-            self.sx_ = StandardScaler().fit(X)
-            self.my_, self.sy_ = float(np.mean(y)), float(np.std(y)) or 1.0
-            self.svr_ = SVR(C=self.C, gamma=1.0 / (2.0 * self.sigma ** 2),
-                            epsilon=self.epsilon).fit(self.sx_.transform(X),
-                                                      (y - self.my_) / self.sy_)
-            return self
-
-        def predict(self, X):
-            return self.my_ + self.sy_ * self.svr_.predict(self.sx_.transform(X))
-
-
-# -- data -------------------------------------------------------------------------------
-
-def simulated_problem(decimate_s: float):
-    """HOOK: simulated runs -> grouped regression problem (X, y, groups, description)."""
-    from nfs.compensate.dataset import drift_dataset
-    from nfs.experiment import simulate_run
-    from nfs.io.scenario import load_scenario
-
-    import dataclasses
-    sc = load_scenario()
-    # the training start-ups of `nfs table` (train_seed), capped as the SSA-SVR row is
-    sc = dataclasses.replace(sc, seed=sc.compensation.train_seed, repeats=1)
-    runs = [simulate_run(sc.instrument, c).run for c in sc.conditions()]
-    ds = drift_dataset(runs, "seed004", decimate_s=decimate_s)
-    cap = get_method("ssa-svr").max_samples
-    if cap is not None and ds.X.shape[0] > cap:
-        ds = ds.thinned(cap)
-    return ds.X, ds.y, ds.groups, (f"the training start-ups of nfs table, {len(runs)} runs, "
-                                   f"features {', '.join(ds.feature_names)}")
-
-
-def synthetic_problem(decimate_s: float, seed: int = 0):
-    """7 start-up runs of 9000 s: thermometer-like features and a smooth drift plus AR(1) noise.
-
-    Temperatures approach T0 + 18 K (self-heating) with time constants 900, 1400, 2000 s;
-    rates in K/min; gradients are differences.  y [deg/h] = a smooth nonlinear function of
-    the features + AR(1) noise (correlation time 300 s, 0.002 deg/h).
+    Returns (X, y, groups, description): features, separated drift [deg/h] and the
+    validation groups (start temperatures) of the default scenario's training start-ups.
     """
-    rng = np.random.default_rng(seed)
-    t = np.arange(0.0, 9000.0, decimate_s)
-    X, y, g = [], [], []
-    for k, t0 in enumerate(START_TEMPERATURES_C):
-        temps = np.stack([t0 + 18.0 * (1 - np.exp(-t / tau)) + 0.3 * k
-                          for tau in (900.0, 1400.0, 2000.0)], axis=1)
-        rates = np.gradient(temps, t, axis=0) * 60.0
-        grads = np.stack([temps[:, 0] - temps[:, 1], temps[:, 0] - temps[:, 2],
-                          temps[:, 1] - temps[:, 2]], axis=1)
-        feats = np.hstack([temps, rates, grads])
-        drift = (0.02 * np.tanh(rates[:, 0] / 0.5) + 0.004 * grads[:, 0]
-                 + 1e-5 * (temps[:, 0] - 25.0) ** 2 + 0.01 * rates[:, 1] * grads[:, 2] / 5.0)
-        phi = math.exp(-decimate_s / 300.0)
-        e = np.zeros(t.size)
-        w = rng.standard_normal(t.size) * 0.002 * math.sqrt(1 - phi ** 2)
-        for i in range(1, t.size):
-            e[i] = phi * e[i - 1] + w[i]
-        X.append(feats)
-        y.append(drift + e)
-        g.append(np.full(t.size, k))
-    return (np.vstack(X), np.concatenate(y), np.concatenate(g),
-            "synthetic thermometer features, smooth drift + AR(1) noise")
+    sc = load_scenario()
+    comp = sc.compensation
+    train = dataclasses.replace(sc, seed=comp.train_seed, repeats=comp.train_repeats)
+    runs = [simulate_run(train.instrument, c).run for c in train.conditions()]
+    ds = drift_dataset(runs, list(comp.features), decimate_s=decimate_s,
+                       cutoff_period_s=comp.cutoff_period_s,
+                       features_mode=comp.features_mode)
+    spec = get_method("ssa-svr")
+    if spec.max_samples is not None and ds.X.shape[0] > spec.max_samples:
+        ds = ds.thinned(spec.max_samples)
+    desc = (f"{len(runs)} training start-ups of the default scenario, {ds.X.shape[0]} samples "
+            f"(one every {decimate_s:g} s), {ds.X.shape[1]} features "
+            f"({comp.features_mode} mode), {len(np.unique(ds.validation_groups))} "
+            "validation groups (start temperatures)")
+    return ds.X, ds.y, ds.validation_groups, desc
 
 
-# -- mealpy as a user-supplied tuner ------------------------------------------------------
+def search_for(method: str, budget: int, seed: int, n_jobs: int | None):
+    """The SSA-SVR row's search with another tuner (same estimator, box and score)."""
+    search = get_method("ssa-svr").build(budget=budget, random_state=seed, n_jobs=n_jobs)
+    options = {"kind": "factorial"} if method == "grid" else None
+    return clone(search).set_params(method=method, budget=budget, random_state=seed,
+                                    tuner_options=options)
+
+
+# -- mealpy as a user-supplied tuner ----------------------------------------------------------
 
 def mealpy_ssa(objective_batch, n_dims, *, budget, random_state=None, population=None,
                ST=0.8, PD=0.2, SD=0.2) -> TuneResult:
     """mealpy's OriginalSSA behind the tuners' interface (one evaluation per call).
 
     Epochs are chosen to reach the budget; evaluations past it are not made (mealpy gets
-    +inf for them), so the budget is cut like our tuners cut their last generation.
+    +inf for them), so the budget is cut as our tuners cut their last generation.
     """
-    from mealpy import SSA, FloatVar
+    from mealpy import SSA, FloatVar  # optional ('bench' extra): imported only when asked
 
     pop = population or max(6, min(30, budget // 10))
-    n2 = int(SD * pop)
-    epochs = max(1, math.ceil((budget - pop) / (2 * pop - n2)))
+    epochs = max(1, math.ceil((budget - pop) / (2 * pop - int(SD * pop))))
     xs, fs = [], []
 
     def obj(u):
@@ -170,140 +124,136 @@ def mealpy_ssa(objective_batch, n_dims, *, budget, random_state=None, population
                       method="mealpy-ssa")
 
 
-# -- parts ---------------------------------------------------------------------------------
+# -- statistics -------------------------------------------------------------------------------
 
-def space():
-    return {name: Real(lo, hi, log=True) for name, (lo, hi) in RANGES.items()}
-
-
-def run_search(method, X, y, groups, budget, n_jobs, seed, verbose=1):
-    t0 = time.perf_counter()
-    s = MetaheuristicSearchCV(SVRRegressor(), space(), method=method, budget=budget,
-                              n_jobs=n_jobs, random_state=seed, verbose=verbose,
-                              scoring=SCORING)
-    s.fit(X, y, groups=groups)
-    return s, time.perf_counter() - t0
+def quartiles(v) -> tuple[float, float, float]:
+    q = np.percentile(np.asarray(v, dtype=float), [25, 50, 75])
+    return float(q[1]), float(q[0]), float(q[2])
 
 
-def run_grid(k, X, y, groups, n_jobs):
-    grid = {name: np.logspace(math.log10(lo), math.log10(hi), k)
-            for name, (lo, hi) in RANGES.items()}
-    t0 = time.perf_counter()
-    gs = GridSearchCV(SVRRegressor(), grid, cv=LeaveOneGroupOut(),
-                      scoring=SCORING, n_jobs=n_jobs, refit=True)
-    gs.fit(X, y, groups=groups)
-    return gs, time.perf_counter() - t0
+def median_difference_ci(a, b, *, n_boot: int = 4000, seed: int = 0):
+    """Median(a) - median(b) and its percentile-bootstrap 95 % interval (seeds resampled
+    independently in each group: the tuner seeds of two tuners are unrelated draws)."""
+    rng = np.random.default_rng(seed)
+    a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
+    d = np.median(a) - np.median(b)
+    ia = rng.integers(0, a.size, size=(n_boot, a.size))
+    ib = rng.integers(0, b.size, size=(n_boot, b.size))
+    boot = np.median(a[ia], axis=1) - np.median(b[ib], axis=1)
+    lo, hi = np.percentile(boot, [2.5, 97.5])
+    return float(d), float(lo), float(hi)
 
 
-def fit_seconds(cv_results, n_splits):
-    """Fit time summed over candidates and folds [CPU-s]."""
-    return float(np.sum(cv_results["mean_fit_time"]) * n_splits)
+# -- parts ------------------------------------------------------------------------------------
+
+def error_vs_budget(X, y, groups, tuners, budgets, seeds, n_jobs):
+    """errors[tuner][budget] = list over seeds of the best validation error [deg/h];
+    fit_s = mean seconds of one evaluation (every fold's fit and score)."""
+    errors: dict[str, dict[int, list[float]]] = {t: {b: [] for b in budgets} for t in tuners}
+    used: dict[str, dict[int, int]] = {t: {} for t in tuners}
+    eval_s: list[float] = []
+    for t in tuners:
+        t_start = time.perf_counter()
+        for b in budgets:
+            for s in (seeds[:1] if t == "grid" else seeds):  # the factorial grid is fixed
+                search = search_for(t, b, s, n_jobs).fit(X, y, groups=groups)
+                errors[t][b].append(-float(search.best_score_))
+                used[t][b] = int(search.n_evaluations_)
+                eval_s.append(float(np.sum(search.cv_results_["mean_fit_time"]))
+                              * search.n_splits_ / search.n_evaluations_)
+        print(f"  {t}: {time.perf_counter() - t_start:.0f} s", flush=True)
+    return errors, used, float(np.mean(eval_s))
 
 
-def fmt_params(p):
-    return ", ".join(f"{k}={v:.4g}" for k, v in p.items())
-
-
-def part1(X, y, groups, budget, n_jobs, seed):
-    print(f"\n(1) SSA vs GridSearchCV, SVR (C, sigma, epsilon), leave one run out "
-          f"({len(np.unique(groups))} folds)", flush=True)
-    ssa, t_ssa = run_search("ssa", X, y, groups, budget, n_jobs, seed)
-    rmse_ssa = -ssa.best_score_
-    fit_ssa = fit_seconds(ssa.cv_results_, ssa.n_splits_)
-    print(f"SSA   budget {budget}: {ssa.n_evaluations_} candidates, best CV error "
-          f"{rmse_ssa:.6g} [{fmt_params(ssa.best_params_)}], {t_ssa:.1f} s "
-          f"(fits {fit_ssa:.0f} CPU-s, {fit_ssa / ssa.n_evaluations_:.2f} per candidate)",
-          flush=True)
-    cap = TIME_FACTOR * t_ssa
-    reached, last, per_cand = None, None, None
-    for k in range(3, 12):
-        n_cand = k ** 3
-        if per_cand is not None and per_cand * n_cand > cap:
-            print(f"grid  k={k} ({n_cand} candidates) not started: predicted "
-                  f"{per_cand * n_cand:.0f} s > {TIME_FACTOR:g}x SSA = {cap:.0f} s", flush=True)
-            break
-        print(f"grid  k={k}: {n_cand} candidates x 7 folds ...", flush=True)
-        gs, t_gs = run_grid(k, X, y, groups, n_jobs)
-        per_cand = t_gs / n_cand
-        rmse = -gs.best_score_
-        last = (k, n_cand, rmse, t_gs, gs.best_params_)
-        fit_gs = fit_seconds(gs.cv_results_, gs.n_splits_)
-        print(f"grid  k={k}: best CV error {rmse:.6g} [{fmt_params(gs.best_params_)}], "
-              f"{t_gs:.1f} s (fits {fit_gs:.0f} CPU-s, {fit_gs / n_cand:.2f} per candidate)",
-              flush=True)
-        if rmse <= rmse_ssa:
-            reached = last
-            break
-        if t_gs > cap:
-            break
-    print("-- part 1 summary")
-    print(f"SSA  : CV error {rmse_ssa:.6g} in {t_ssa:.1f} s ({ssa.n_evaluations_} candidates)")
-    if reached:
-        k, n_cand, rmse, t_gs, _ = reached
-        print(f"grid : reaches it at k={k} ({n_cand} candidates): CV error {rmse:.6g} in "
-              f"{t_gs:.1f} s")
-        print(f"ratio: grid time / SSA time = {t_gs / t_ssa:.1f}x (target >= 10x); "
-              f"candidates {n_cand / ssa.n_evaluations_:.1f}x")
-    elif last:
-        k, n_cand, rmse, t_gs, _ = last
-        print(f"grid : does not reach it within {TIME_FACTOR:g}x SSA's time; largest grid run "
-              f"k={k} ({n_cand} candidates): CV error {rmse:.6g} in {t_gs:.1f} s "
-              f"({t_gs / t_ssa:.1f}x SSA's time), error ratio grid/SSA "
-              f"{rmse / rmse_ssa:.3f}")
-    return ssa, t_ssa
-
-
-def part2(X, y, groups, budget, n_jobs, seed, ssa, t_ssa):
-    print(f"\n(2) our SSA vs mealpy OriginalSSA, same objective, budget {budget}", flush=True)
-    try:
-        import mealpy
-    except ImportError:
-        print("mealpy is not installed (pip install 'nfs-startup[bench]'): part 2 skipped")
-        return
-    TUNERS["mealpy-ssa"] = mealpy_ssa  # a user's tuner plugs into the registry
-    try:
-        mp, t_mp = run_search("mealpy-ssa", X, y, groups, budget, n_jobs, seed, verbose=0)
-    finally:
-        del TUNERS["mealpy-ssa"]
-    r_ours, r_mp = -ssa.best_score_, -mp.best_score_
-    print(f"ours   SSA: CV error {r_ours:.6g} [{fmt_params(ssa.best_params_)}], "
-          f"{ssa.n_evaluations_} evaluations, {t_ssa:.1f} s")
-    print(f"mealpy SSA {mealpy.__version__}: CV error {r_mp:.6g} [{fmt_params(mp.best_params_)}], "
-          f"{mp.n_evaluations_} evaluations, {t_mp:.1f} s")
-    print(f"ratio: mealpy/ours CV error {r_mp / r_ours:.3f}, time {t_mp / t_ssa:.2f}x")
+def tuner_overhead(tuners, budget, repeats: int = 5) -> dict[str, float]:
+    """Seconds per evaluation a tuner spends in its own code (free objective, 3-D box)."""
+    def free(X):
+        return np.sum((X - 0.3) ** 2, axis=1)
+    out = {}
+    for t in tuners:
+        best = float("inf")
+        for r in range(repeats):
+            t0 = time.perf_counter()
+            res = minimize(free, 3, method=t, budget=budget, random_state=r)
+            best = min(best, (time.perf_counter() - t0) / res.n_evaluations)
+        out[t] = best
+    return out
 
 
 def main(argv=None) -> None:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--data", choices=("simulated", "synthetic"), default="simulated")
-    ap.add_argument("--decimate-s", type=float, default=None,
-                    help="seconds between samples (10 = the 0.1 Hz of the brief; default 30)")
-    ap.add_argument("--budget", type=int, default=30, help="the nfs table default")
-    ap.add_argument("--n-jobs", type=int, default=-1)
-    ap.add_argument("--seed", type=int, default=0)
-    ap.add_argument("--quick", action="store_true", help="smoke run: 60 s sampling")
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--seeds", type=int, default=10, help="tuner seeds per (tuner, budget)")
+    ap.add_argument("--budgets", default="10,25,50,100,200")
+    ap.add_argument("--tuners", default=",".join(DEFAULT_TUNERS))
+    ap.add_argument("--decimate-s", type=float, default=60.0,
+                    help="one training sample every S seconds (nfs table: 30)")
+    ap.add_argument("--n-jobs", type=int, default=-1, help="parallel fold fits (joblib)")
+    ap.add_argument("--mealpy", action="store_true", help="add mealpy's OriginalSSA")
+    ap.add_argument("--quick", action="store_true",
+                    help="smoke run: 3 seeds, budgets 10 and 25, one sample every 180 s")
     args = ap.parse_args(argv)
-    decimate_s = args.decimate_s or (60.0 if args.quick else 30.0)
-
-    t0 = time.perf_counter()
-    if args.data == "simulated":
+    budgets = [int(b) for b in args.budgets.split(",")]
+    seeds = list(range(args.seeds))
+    decimate = args.decimate_s
+    if args.quick:
+        budgets, seeds, decimate = [10, 25], [0, 1, 2], 180.0
+    tuners = [t.strip() for t in args.tuners.split(",") if t.strip()]
+    if "tpe" in tuners:
         try:
-            X, y, groups, desc = simulated_problem(decimate_s)
-        except Exception as exc:  # the simulator chain is work in progress elsewhere
-            print(f"simulated runs unavailable ({type(exc).__name__}: {exc}); "
-                  f"using the synthetic problem")
-            X, y, groups, desc = synthetic_problem(decimate_s, args.seed)
-    else:
-        X, y, groups, desc = synthetic_problem(decimate_s, args.seed)
-    counts = np.bincount(groups)
+            import optuna  # noqa: F401  (optional: the 'tune' extra)
+        except ImportError:
+            print("tpe skipped: Optuna is not installed (pip install -e '.[tune]')")
+            tuners.remove("tpe")
+    if args.mealpy:
+        TUNERS["mealpy-ssa"] = mealpy_ssa
+        tuners.append("mealpy-ssa")
+
+    t_all = time.perf_counter()
+    X, y, groups, desc = training_problem(decimate)
     print(f"problem: {desc}")
-    print(f"{len(counts)} groups x {counts.min()}-{counts.max()} samples (one every "
-          f"{decimate_s:g} s), {X.shape[1]} features, std(y) {np.std(y):.4g}; "
-          f"built in {time.perf_counter() - t0:.1f} s; n_jobs={args.n_jobs}")
-    print("ranges: " + ", ".join(f"{k} [{lo:g}, {hi:g}] (log)" for k, (lo, hi) in
-                                  RANGES.items()))
-    ssa, t_ssa = part1(X, y, groups, args.budget, args.n_jobs, args.seed)
-    part2(X, y, groups, args.budget, args.n_jobs, args.seed, ssa, t_ssa)
+    print(f"tuners: {', '.join(tuners)}; budgets {budgets}; {len(seeds)} tuner seeds each "
+          f"(grid: factorial, one run)", flush=True)
+    errors, used, eval_s = error_vs_budget(X, y, groups, tuners, budgets, seeds, args.n_jobs)
+
+    print("\n(1) validation error reached [deg/h]: median [25 %, 75 %] over seeds")
+    head = f"{'budget':>7s} " + " ".join(f"{t:>26s}" for t in tuners)
+    print(head)
+    for b in budgets:
+        cells = []
+        for t in tuners:
+            med, q1, q3 = quartiles(errors[t][b])
+            tag = f"{med:.5f} [{q1:.5f}, {q3:.5f}]"
+            if used[t][b] != b:
+                tag = f"({used[t][b]}) " + tag
+            cells.append(f"{tag:>26s}")
+        print(f"{b:7d} " + " ".join(cells))
+    print("(n) before a grid cell: the factorial grid's evaluations (k^3 <= budget)")
+
+    b = budgets[-1]
+    best = min(tuners, key=lambda t: np.median(errors[t][b]))
+    print(f"\n(2) at budget {b}, each tuner against the best median ({best}): "
+          "difference of medians, bootstrap 95 % interval over seeds")
+    for t in tuners:
+        if t == best:
+            continue
+        if t == "grid":
+            d = float(np.median(errors[t][b]) - np.median(errors[best][b]))
+            print(f"  {t:12s} {d:+.5f} deg/h (deterministic: no interval)")
+            continue
+        d, lo, hi = median_difference_ci(errors[t][b], errors[best][b])
+        verdict = "not distinguishable" if lo <= 0.0 <= hi else "worse"
+        print(f"  {t:12s} {d:+.5f} deg/h, 95 % CI [{lo:+.5f}, {hi:+.5f}]: {verdict}")
+
+    over = tuner_overhead(tuners, b)
+    print(f"\n(3) tuner overhead per evaluation (free 3-D objective, budget {b}) against one "
+          f"evaluation of the real objective ({eval_s * 1e3:.1f} ms: every fold's fit and "
+          "score, CPU time)")
+    for t in tuners:
+        ratio = over[t] / eval_s
+        print(f"  {t:12s} {over[t] * 1e3:8.3f} ms / {eval_s * 1e3:.1f} ms = {100 * ratio:6.3f} % "
+              f"({'under' if ratio < OVERHEAD_GOAL else 'OVER'} the {100 * OVERHEAD_GOAL:g} % "
+              "goal)")
+    print(f"\nbenchmark wall time {time.perf_counter() - t_all:.0f} s")
 
 
 if __name__ == "__main__":
