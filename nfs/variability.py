@@ -62,6 +62,7 @@ from dataclasses import dataclass, fields, replace
 from typing import Sequence
 
 import numpy as np
+from scipy.signal import lfilter
 
 import thermal
 
@@ -346,11 +347,13 @@ def chamber_terms(var: Variability, time_s: np.ndarray, entropy) -> np.ndarray:
     if var.chamber_wander_c and t.size:
         z = _run_rng(entropy, _WANDER_KEY).standard_normal(t.size)
         a = np.exp(-np.diff(t) / var.chamber_wander_tau_s)
-        w = np.empty(t.size)
-        w[0] = var.chamber_wander_c * z[0]
-        innov = var.chamber_wander_c * np.sqrt(1.0 - a ** 2) * z[1:]
-        for k in range(1, t.size):
-            w[k] = a[k - 1] * w[k - 1] + innov[k - 1]
+        x = var.chamber_wander_c * np.concatenate([z[:1], np.sqrt(1.0 - a ** 2) * z[1:]])
+        if a.size and np.ptp(a) == 0.0:             # a uniform grid: one linear filter
+            w = lfilter([1.0], [1.0, -a[0]], x)
+        else:
+            w = x.copy()
+            for k in range(1, t.size):
+                w[k] += a[k - 1] * w[k - 1]
         out += w
     if var.cycling_c:
         rng = _run_rng(entropy, _CYCLING_KEY)

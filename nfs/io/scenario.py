@@ -275,7 +275,7 @@ def _variability_parameters(tbl: dict, inst: Instrument, file):
                     "dotted path: \"effects.shupe_gradient.k_r\" = 0.3)", file=file, key=name)
             std, rel = number(v, "std", name, file, minimum=0.0), False
         else:
-            std, rel = number(tbl, pattern, "variability.parameters", file, minimum=0.0), True
+            std, rel = number({name: v}, name, "", file, minimum=0.0), True
         try:
             expand_paths(inst, pattern)
         except ParameterError as exc:

@@ -269,3 +269,17 @@ def test_linspace_grid_counts_as_uniform():
     a = simulate(net, np.arange(0.0, 9001.0), ambient_c=43.0, initial_c=43.0)
     b = simulate(net, np.linspace(0.0, 9000.0, 9001), ambient_c=43.0, initial_c=43.0)
     np.testing.assert_allclose(b.temperature_c, a.temperature_c, rtol=1e-12)
+
+
+def test_a_step_long_against_a_fast_mode_stays_finite():
+    # Closed form: the unpowered two-node network relaxing from 10 C to a chamber at 0 C over
+    # one step of 4 h, T(h) = expm(A h) T(0); its fast mode (a few seconds) has decayed to
+    # exactly zero in floating point, where the modal march once took log1p(-1 - eps) = NaN.
+    net = Network((Node("a", 10.0), Node("b", 1000.0)),
+                  (Link("a", CHAMBER, 5.0), Link("a", "b", 0.5), Link("b", CHAMBER, 1.0)))
+    from scipy.linalg import expm
+    a, _ = net.matrices()
+    with np.errstate(all="raise"):
+        res = simulate(net, np.array([0.0, 14400.0]), ambient_c=0.0, initial_c=10.0)
+    np.testing.assert_allclose(res.temperature_c[-1], expm(a * 14400.0) @ [10.0, 10.0],
+                               rtol=0.0, atol=1e-11)     # 1e-12 of the initial 10 K
