@@ -336,3 +336,14 @@ def test_study_trains_and_tests_on_different_units(tmp_path, scenario_text):
     assert sorted(r.name.split("_u")[1][0] for r in st.train_runs) == ["0", "0", "1", "1"]
     notes = " ".join(st.heading_table().notes)
     assert "trained on 0, 1, tested on 2 of 3 (different units)" in notes
+
+
+def test_nominal_is_the_world_before_variability(default):
+    # The default scenario's nominal() makes the runs the scenario made before units and
+    # variability existed: names {name}_T{T0}C_r{r}, seeds (seed, i, r), no draws.
+    nom = dataclasses.replace(default, repeats=2).nominal()
+    conds = nom.conditions()
+    assert [c.name for c in conds[:2]] == ["startup_7temps_T-32C_r0", "startup_7temps_T-32C_r1"]
+    assert [c.seed for c in conds[:3]] == [(default.seed, 0, 0), (default.seed, 0, 1),
+                                          (default.seed, 1, 0)]
+    assert all(c.variability is None and c.unit == 0 for c in conds)

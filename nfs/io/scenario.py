@@ -153,6 +153,12 @@ class Scenario:
                     chamber_c=self.chamber.ambient(t0), unit=u, variability=var))
         return out
 
+    def nominal(self) -> "Scenario":
+        """The same experiment in the world without variability: one unit, the nominal
+        instrument, every start-up soaked exactly at T0 (``[variability] preset = "none"``,
+        ``units = 1``); its runs are those unit 0 made before units existed."""
+        return dataclasses.replace(self, units=1, run_units=None, variability=NO_VARIABILITY)
+
     def made_by(self, units: Sequence[int], repeats: int, **changes) -> "Scenario":
         """The same experiment with ``repeats`` start-ups per start temperature by each of
         ``units`` (``changes``: other fields to replace, e.g. ``seed``)."""
