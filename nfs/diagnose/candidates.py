@@ -2,8 +2,9 @@
 
 A candidate is one effect on one target (a node, an accelerometer axis, a thermometer, a
 measured ``aux_*`` column).  Its float parameters split into *coefficients* (entering the
-model linearly, started at 0) and *shape* parameters (time constants, angles, periods:
-chosen on :data:`SHAPE_GRID`).  Thermal and thermometer candidates are linearised at zero,
+model linearly, started at 0) and *shape* parameters (time constants, angles, periods, and
+parameters registered with ``shape=True`` such as shupe_stress's c_m: chosen on
+:data:`SHAPE_GRID`).  Thermal and thermometer candidates are linearised at zero,
 so their time constants become coefficients (:mod:`nfs.diagnose.design`).
 """
 
@@ -31,6 +32,9 @@ SHAPE_GRID: dict[str, tuple[float, ...]] = {
     "D_mag": (0.0, 45.0, 90.0, 135.0),
     "T_p": (2.0, 5.0, 10.0, 20.0),
     "phi": (0.0, math.pi / 2),
+    # shupe_stress's potting-modulus coefficient [1/K], inside its sign-keeping bounds
+    # (-1/35, 1/65 at T_ref = 25 C); 0 would repeat the model's own shupe_gradient
+    "c_m": (-0.02, -0.01, 0.01),
 }
 #: Kinds scored on window means at rest (gyro: the drift; accelerometer: its own axis's
 #: readings); the others on the thermometers.
@@ -92,7 +96,7 @@ def split_parameters(spec: EffectSpec) -> tuple[list[str], list[str], list[str]]
         if p.unit in _FIXED_UNITS:
             if p.required:
                 missing.append(p.name)
-        elif p.unit in _SHAPE_UNITS:
+        elif p.unit in _SHAPE_UNITS or p.shape:
             if p.name not in SHAPE_GRID and p.default is None:
                 missing.append(p.name)
             else:

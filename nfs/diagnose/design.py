@@ -5,7 +5,7 @@ Drift channel.  The thermal solution of every run is computed once from the mode
 measured drift is reduced to means over windows of ``decimate_s`` at rest
 (:func:`nfs.diagnose.fit._prepare_drift`).  The model drift
 (:func:`~nfs.diagnose.fit.model_drift_dph`) is linear in ``gyro.bias_dph`` and in the
-coefficients of the gyro effects (b1, b2, k_r, k_s, k_p, a, m, A_p, k, s1), so each is a
+coefficients of the gyro effects (b1, b2, k_r, k_s, k_p, k_m, a, m, A_p, k, s1), so each is a
 column of a design matrix on the window means (:class:`PreparedRun`); a candidate adds its
 own columns, one per coefficient, at fixed shape parameters (:func:`candidate_columns`).
 
@@ -158,8 +158,11 @@ def _shape_bounds(c: Candidate, x0: dict[str, float]) -> tuple[np.ndarray, np.nd
     spec = get_effect(c.effect)
     lb, ub = [], []
     for s in c.shapes:
-        v, unit = x0[s], spec.parameter(s).unit
-        if unit in ("s", "K"):
+        par = spec.parameter(s)
+        v, unit = x0[s], par.unit
+        if par.bounds is not None:
+            lo, hi = par.bounds
+        elif unit in ("s", "K"):
             lo, hi = min(SHAPE_GRID.get(s, (v,))) / 5.0, max(SHAPE_GRID.get(s, (v,))) * 5.0
         elif unit == "deg":
             lo, hi = v - 360.0, v + 360.0

@@ -208,16 +208,17 @@ def default_free(inst: Instrument, stages: Sequence[str] = STAGES) -> list[str]:
     node power, every thermometer lag and offset, the coefficients of the thermal effects
     (TEC slopes c_h, c_c; heat powers).  drift stage: ``gyro.bias_dph``, every coefficient of
     the gyro and accelerometer effects, the accelerometer biases and the turntable tilts.
-    Effect time constants [s], temperature periods [K], set points [degC] and channel
-    references are left out (list them to free them).
+    Effect time constants [s], temperature periods [K], set points [degC], channel
+    references and parameters registered as shapes (shupe_stress's c_m) are left out (list
+    them to free them).
     """
     out = []
     for path, kind in _all_paths(inst):
         leaf = path.rsplit(".", 1)[-1]
         if path.startswith("effects."):
             label = path[len("effects."):].rsplit(".", 1)[0]
-            unit = inst.effect(label).spec.parameter(leaf).unit
-            take = unit not in _NOT_FREE_UNITS
+            par = inst.effect(label).spec.parameter(leaf)
+            take = par.unit not in _NOT_FREE_UNITS and not par.shape
         elif kind == "thermal":
             take = (leaf == "capacity_j_per_k"
                     or (leaf == "power_w" and get_param(inst, path) != 0.0)

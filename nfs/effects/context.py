@@ -7,6 +7,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..constants import T_REF_C
+from ..errors import EffectError
 
 __all__ = ["EffectContext"]
 
@@ -51,7 +52,6 @@ class EffectContext:
         try:
             return self.node_names.index(node)
         except ValueError:
-            from ..errors import EffectError
             raise EffectError(f"unknown node '{node}'; nodes: {', '.join(self.node_names)}") \
                 from None
 

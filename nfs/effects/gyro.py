@@ -9,12 +9,14 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..constants import T_REF_C
+from ..errors import EffectError
 from .context import EffectContext
 from .registry import Parameter, register_effect
 
 __all__ = [
-    "bias_temperature", "shupe_gradient", "shupe_rate", "shupe_product",
-    "turn_on_transient", "aux_linear", "scale_factor_temperature", "magnetic",
+    "bias_temperature", "shupe_gradient", "shupe_rate", "shupe_product", "shupe_stress",
+    "stress_factor_bounds", "STRESS_RANGE_C", "turn_on_transient", "aux_linear", "scale_factor_temperature", "magnetic",
     "polarization_ripple",
 ]
 
@@ -82,6 +84,63 @@ def shupe_product(ctx: EffectContext, *, k_p: float, node: str | None = None) ->
     return k_p * (ctx.temperature(node) - ctx.t_ref_c) * _S_PER_MIN * ctx.temperature_rate(node)
 
 
+#: Coil temperatures over which the stress factor 1 + c_m (T_coil - T_ref) of
+#: :func:`shupe_stress` must keep its sign [degC] (effects.md: -40..60 C, the operating range).
+STRESS_RANGE_C = (-40.0, 60.0)
+
+
+def stress_factor_bounds(t_ref_c: float = T_REF_C) -> tuple[float, float]:
+    """The c_m [1/K] for which 1 + c_m (T - T_ref) >= 0 over :data:`STRESS_RANGE_C`.
+
+    The factor is linear in T, so it keeps its sign over the range when it does at both
+    ends: -1 / (T_max - T_ref) <= c_m <= 1 / (T_ref - T_min); (-1/35, 1/65) 1/K at
+    T_ref = 25 C.
+    """
+    t_min, t_max = STRESS_RANGE_C
+    if not t_min < t_ref_c < t_max:
+        raise EffectError(f"shupe_stress: T_ref {t_ref_c:g} C must lie inside the operating "
+                          f"range {t_min:g}..{t_max:g} C")
+    return -1.0 / (t_max - t_ref_c), 1.0 / (t_ref_c - t_min)
+
+
+@register_effect("shupe_stress", kind="gyro", parameters=[
+    Parameter("k_m", "deg/h per K/min",
+              "Shupe-Mohr stress coefficient of the radial gradient rate at T_ref"),
+    Parameter("c_m", "1/K",
+              "temperature coefficient of the stress term (potting modulus); "
+              "1 + c_m (T_coil - T_ref) must keep its sign over -40..60 C",
+              shape=True, bounds=stress_factor_bounds())])
+def shupe_stress(ctx: EffectContext, *, k_m: float, c_m: float) -> np.ndarray:
+    """Shupe-Mohr thermal stress: k_m d(T_out - T_in)/dt (1 + c_m (T_coil - T_ref)) [deg/h].
+
+    A radial temperature gradient across the potted coil strains the fibre; through the
+    elasto-optic effect the strain rate adds a non-reciprocal phase with the same weighting
+    along the fibre as Shupe's thermal phase (Shupe 1980, Appl. Opt. 19(5) 654, eq. (5)),
+    so it is lumped on the rate of the radial gradient, here in K/min (Mohr 1996,
+    "Thermooptically induced bias drift in fiber optical Sagnac interferometers",
+    J. Lightwave Technol. 14(1) 27: the thermally induced stress term beside the dn/dT term).
+    Its coefficient follows the elastic modulus of the potting compound, which changes with
+    temperature (stiffer when cold, c_m < 0); to first order
+    k_m(T) = k_m (1 + c_m (T_coil - T_ref)), which gives the T x dT/dt interaction that
+    seed 001 feeds its network.
+
+    Parameters: k_m [deg/h per K/min] at T_ref; c_m [1/K], bounded so that the factor keeps
+    its sign over -40..60 C (:func:`stress_factor_bounds`: c_m in [-1/35, 1/65] at
+    T_ref = 25 C; checked on construction, and against the instrument's own T_ref here).
+    T_coil = (T_outer + T_inner)/2.  Magnitudes are engineering estimates (physics.md
+    section 3); not checked against a measured potting modulus.
+    """
+    lo, hi = stress_factor_bounds(ctx.t_ref_c)
+    if not lo <= c_m <= hi:
+        raise EffectError(f"shupe_stress: c_m = {c_m:g} 1/K flips the sign of "
+                          f"1 + c_m (T_coil - T_ref) inside {STRESS_RANGE_C[0]:g}.."
+                          f"{STRESS_RANGE_C[1]:g} C at T_ref = {ctx.t_ref_c:g} C "
+                          f"(allowed {lo:.6g}..{hi:.6g})")
+    d_grad = ctx.rate(ctx.coil_outer) - ctx.rate(ctx.coil_inner)
+    factor = 1.0 + c_m * (ctx.coil_c - ctx.t_ref_c)
+    return k_m * _S_PER_MIN * d_grad * factor
+
+
 @register_effect("turn_on_transient", kind="gyro", parameters=[
     Parameter("a", "deg/h", "amplitude at power-on"),
     Parameter("tau", "s", "time constant")])
@@ -92,7 +151,6 @@ def turn_on_transient(ctx: EffectContext, *, a: float, tau: float) -> np.ndarray
     defines turn-on behaviour as warm-up time (clause 9 in its test procedure list).
     """
     if tau <= 0:
-        from ..errors import EffectError
         raise EffectError(f"turn_on_transient: tau must be > 0 s, got {tau}")
     return a * np.exp(-ctx.time_s / tau)
 
@@ -111,7 +169,6 @@ def aux_linear(ctx: EffectContext, *, channel: str, k: float, aux_ref: float = 0
     try:
         x = ctx.aux[channel]
     except KeyError:
-        from ..errors import EffectError
         raise EffectError(f"aux_linear: no channel '{channel}'; aux channels: "
                           + (", ".join(sorted(ctx.aux)) or "(none)")) from None
     return k * (x - aux_ref)

@@ -77,6 +77,14 @@ class Parameter:
     """``float`` for numbers, ``str`` for names (nodes, channels, axes)."""
     optional: bool = False
     """True when ``None`` is a legal value (the effect then uses its own default target)."""
+    shape: bool = False
+    """True when the effect is not linear in this parameter although its unit does not say so
+    (a time constant [s], a period [K] or an angle are shapes by their unit): a fit or a
+    diagnosis holds it at its value, or chooses it on a grid, instead of solving for it as
+    a linear coefficient."""
+    bounds: tuple[float, float] | None = None
+    """Closed interval (low, high) of the values where the effect is physical; a value
+    outside raises :class:`~nfs.errors.EffectError` on construction.  None: unbounded."""
 
     @property
     def required(self) -> bool:
@@ -140,6 +148,11 @@ class EffectSpec:
                         raise EffectError(f"{prefix}effect '{self.name}' parameter "
                                           f"'{p.name}' must be a number [{p.unit}], got {value!r}")
                     value = float(value)
+                    if p.bounds is not None and not p.bounds[0] <= value <= p.bounds[1]:
+                        lo, hi = p.bounds
+                        raise EffectError(
+                            f"{prefix}effect '{self.name}' parameter '{p.name}' = {value:g} "
+                            f"[{p.unit}] is outside [{lo:.6g}, {hi:.6g}] ({p.description})")
                 elif p.type is str and not isinstance(value, str):
                     raise EffectError(f"{prefix}effect '{self.name}' parameter '{p.name}' "
                                       f"must be a name (string), got {value!r}")

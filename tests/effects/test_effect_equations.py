@@ -1,9 +1,12 @@
 """Each built-in effect against its equation in effects.md on a hand-made state."""
 
+import dataclasses
+
 import numpy as np
 import pytest
 
-from nfs.effects import EffectContext, get_effect
+from nfs.effects import EffectContext, get_effect, make_effect
+from nfs.effects.gyro import stress_factor_bounds
 from nfs.errors import EffectError
 
 T = np.linspace(0.0, 600.0, 61)
@@ -46,6 +49,39 @@ def test_shupe_family(ctx):
     tc = 0.5 * (ctx.node("coil_outer") + ctx.node("coil_inner"))
     np.testing.assert_allclose(call("shupe_product", ctx, k_p=0.01),
                                0.01 * (tc - 25) * 0.18, rtol=1e-12)
+
+
+def test_shupe_stress(ctx):
+    # d(T_out - T_in)/dt = 0.002 K/s = 0.12 K/min; T_coil = 19 + 0.003 t [degC]
+    tc = 19.0 + 0.003 * T
+    np.testing.assert_allclose(call("shupe_stress", ctx, k_m=0.4, c_m=-0.02),
+                               0.4 * 0.12 * (1.0 - 0.02 * (tc - 25.0)), rtol=1e-12)
+    # c_m = 0: the stress term is the Shupe radial term with k_r = k_m
+    np.testing.assert_allclose(call("shupe_stress", ctx, k_m=0.4, c_m=0.0),
+                               call("shupe_gradient", ctx, k_r=0.4), rtol=1e-12)
+
+
+def test_shupe_stress_factor_keeps_its_sign():
+    # Oracle: 1 + c_m (T - 25) >= 0 at T = 60 C needs c_m >= -1/35, at T = -40 C c_m <= 1/65
+    lo, hi = stress_factor_bounds(25.0)
+    assert (lo, hi) == pytest.approx((-1 / 35, 1 / 65), rel=1e-12)
+    make_effect("shupe_stress", {"k_m": 0.3, "c_m": -1 / 35})
+    make_effect("shupe_stress", {"k_m": 0.3, "c_m": 1 / 65})
+    for c_m in (-0.03, 0.016, -1.0):
+        with pytest.raises(EffectError, match="c_m.*-40..60 C") as exc:
+            make_effect("shupe_stress", {"k_m": 0.3, "c_m": c_m})
+        assert "\n" not in str(exc.value)
+    t = np.linspace(-40.0, 60.0, 101)
+    for c_m in (lo, hi, -0.02, 0.01):
+        assert np.all(1.0 + c_m * (t - 25.0) >= -1e-15)
+
+
+def test_shupe_stress_checks_the_instruments_own_t_ref(ctx):
+    # c_m = -0.02 keeps the sign at T_ref = 25 C (1 - 0.02 * 35 = 0.3 at 60 C), not at
+    # T_ref = 0 C (1 - 0.02 * 60 = -0.2)
+    cold = dataclasses.replace(ctx, t_ref_c=0.0)
+    with pytest.raises(EffectError, match="flips the sign"):
+        call("shupe_stress", cold, k_m=0.3, c_m=-0.02)
 
 
 def test_turn_on_transient(ctx):
