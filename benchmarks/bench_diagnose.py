@@ -15,7 +15,7 @@ from nfs.io.scenario import load_scenario
 
 def main() -> None:
     warnings.simplefilter("ignore")
-    sc = load_scenario()
+    sc = load_scenario().nominal()
     runs = [simulate_run(sc.instrument, c).run for c in sc.conditions()]
     model = load_instrument("default")
     best, d = float("inf"), None

@@ -27,7 +27,7 @@ PERTURBED = ("thermal.nodes.coil_inner.capacity_j_per_k",
 
 
 def main() -> None:
-    sc = load_scenario()
+    sc = load_scenario().nominal()
     inst = sc.instrument
     truth = set_params(inst, {p: 1.2 * get_param(inst, p) for p in PERTURBED})
     runs = [simulate_run(truth, c).run for c in sc.conditions()]

@@ -41,7 +41,7 @@ def _best(f):
 
 
 def main() -> None:
-    sc = load_scenario()
+    sc = load_scenario().nominal()
     inst = sc.instrument
     truth = free_link(inst, "electronics", "coil_inner").build([0.3])
     runs = [simulate_run(truth, c).run for c in sc.conditions()]

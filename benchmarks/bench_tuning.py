@@ -38,7 +38,6 @@ Run: ``python benchmarks/bench_tuning.py [--seeds 10] [--budgets 10,25,50,100,20
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import math
 import time
 
@@ -65,7 +64,8 @@ def training_problem(decimate_s: float):
     """
     sc = load_scenario()
     comp = sc.compensation
-    train = dataclasses.replace(sc, seed=comp.train_seed, repeats=comp.train_repeats)
+    units, _ = sc.unit_split(comp.train_units, comp.test_units)
+    train = sc.made_by(units, comp.train_repeats, seed=comp.train_seed)
     runs = [simulate_run(train.instrument, c).run for c in train.conditions()]
     ds = drift_dataset(runs, list(comp.features), decimate_s=decimate_s,
                        cutoff_period_s=comp.cutoff_period_s,
