@@ -1,0 +1,122 @@
+"""The two-level bootstrap of RMSE tables, its paired comparisons and Holm's adjustment.
+
+Oracles: coverage of the true RMSE by the 95 % intervals on draws from a known distribution
+of cycle errors (Gaussian, a start-up effect of standard deviation tau shared by the cycles
+of a start-up plus cycle noise sigma: true RMSE sqrt(tau^2 + sigma^2)); a zero difference
+between identical rows; Holm's adjustment by hand (Holm 1979).
+"""
+
+import math
+
+import numpy as np
+import pytest
+
+from nfs.report.intervals import (ClusterBootstrap, bc_interval, cluster_bootstrap,
+                                  compare_rows, holm)
+
+R, N, COLS = 5, 5, 7          # start-ups per column, cycles per start-up, start temperatures
+
+
+def _draw(rng, tau, sigma, cols=COLS, r=R, n=N):
+    return [[rng.normal(0.0, tau) + rng.normal(0.0, sigma, n) for _ in range(r)]
+            for _ in range(cols)]
+
+
+@pytest.mark.parametrize("tau, sigma", [(0.0, 1.0), (0.5, 1.0)])
+def test_intervals_cover_the_true_rmse(tau, sigma):
+    # 200 seeded trials of a 7-column table, 5 start-ups x 5 cycles per column: the cells'
+    # and the row mean's 95 % intervals hold the truth in 90-99 % of them.
+    truth = math.hypot(tau, sigma)
+    cell_hits = row_hits = 0
+    trials = 200
+    for seed in range(trials):
+        rng = np.random.default_rng(seed)
+        boot = cluster_bootstrap([_draw(rng, tau, sigma)], n_boot=1000, random_state=seed)
+        ci = boot.cell_intervals()[0]
+        cell_hits += np.count_nonzero((ci[:, 0] <= truth) & (truth <= ci[:, 1]))
+        lo, hi = boot.row_intervals()[0]
+        row_hits += lo <= truth <= hi
+    cell_cover = cell_hits / (trials * COLS)
+    row_cover = row_hits / trials
+    assert 0.90 <= cell_cover <= 0.99, cell_cover
+    assert 0.90 <= row_cover <= 0.99, row_cover
+
+
+def test_point_estimates_are_the_pooled_rmse_and_same_seed_same_replicates():
+    rng = np.random.default_rng(1)
+    errors = [_draw(rng, 0.3, 1.0, cols=3), _draw(rng, 0.3, 2.0, cols=3)]
+    errors[0][1][2] = np.append(errors[0][1][2], np.nan)       # a failed cycle is left out
+    a = cluster_bootstrap(errors, n_boot=200, random_state=4)
+    b = cluster_bootstrap(errors, n_boot=200, random_state=4)
+    np.testing.assert_array_equal(a.cell_replicates, b.cell_replicates)
+    for i in range(2):
+        for j in range(3):
+            e = np.concatenate(errors[i][j])
+            e = e[np.isfinite(e)]
+            assert a.cells[i, j] == pytest.approx(np.sqrt(np.mean(e * e)), rel=1e-12)
+    assert a.row_means[1] == pytest.approx(np.mean(a.cells[1]))
+    ci = a.cell_intervals()
+    assert np.all(ci[..., 0] <= a.cells) and np.all(a.cells <= ci[..., 1])
+
+
+def test_identical_rows_are_not_distinguishable():
+    rng = np.random.default_rng(2)
+    row = _draw(rng, 0.3, 1.0)
+    boot = cluster_bootstrap([row, [list(c) for c in row]], n_boot=500, random_state=0)
+    (c,) = compare_rows(boot, ["A", "B"], [("A", "B")])
+    assert c.difference_deg == 0.0 and c.ci_low_deg == 0.0 == c.ci_high_deg
+    assert c.p_value == 1.0 and not c.distinguishable
+    assert "not distinguishable" in c.sentence()
+
+
+def test_same_distribution_rarely_distinguishable_and_a_clear_gap_always():
+    # Two compensators whose cycle errors come from one distribution (independent draws on
+    # the same start-ups) are called distinguishable in about 5 % of trials at most; a
+    # compensator with 1.5x the error of another is called distinguishable every time.
+    same = clear = 0
+    for seed in range(60):
+        rng = np.random.default_rng(100 + seed)
+        base = _draw(rng, 0.3, 1.0)
+        twin = _draw(rng, 0.3, 1.0)
+        worse = [[1.5 * c for c in col] for col in base]
+        boot = cluster_bootstrap([base, twin, worse], n_boot=1000, random_state=seed)
+        comp = compare_rows(boot, ["base", "twin", "worse"], [("base", "twin")])
+        same += comp[0].distinguishable
+        comp = compare_rows(boot, ["base", "twin", "worse"], [("worse", "base")])
+        clear += comp[0].distinguishable and comp[0].difference_deg > 0
+    assert same <= 6, same
+    assert clear == 60
+
+
+def test_holm_by_hand():
+    # sorted 0.01, 0.03, 0.04, 0.2 -> 4 x 0.01, 3 x 0.03, max(2 x 0.04, 0.09), 0.2
+    np.testing.assert_allclose(holm([0.01, 0.04, 0.03, 0.2]), [0.04, 0.09, 0.09, 0.2])
+    out = holm([0.5, math.nan, 0.6])
+    assert math.isnan(out[1]) and out[0] == 1.0 and out[2] == 1.0
+
+
+def test_compare_rows_adjusts_over_the_pairs_and_drops_duplicates():
+    rng = np.random.default_rng(5)
+    rows = [_draw(rng, 0.2, s) for s in (1.0, 1.2, 2.0)]
+    boot = cluster_bootstrap(rows, n_boot=800, random_state=1)
+    comps = compare_rows(boot, ["a", "b", "c"], [("a", "c"), ("c", "a"), ("b", "c"),
+                                                    ("a", "b")])
+    assert [(c.method_a, c.method_b) for c in comps] == [("a", "c"), ("b", "c"), ("a", "b")]
+    np.testing.assert_allclose([c.p_adjusted for c in comps], holm([c.p_value for c in comps]))
+    d = comps[0].to_dict()
+    assert set(d) >= {"method_a", "method_b", "difference_deg", "ci_low_deg", "ci_high_deg",
+                      "p_adjusted", "distinguishable"}
+
+
+def test_bc_interval_of_a_symmetric_distribution_is_the_percentile_interval():
+    b = np.linspace(-1.0, 1.0, 4001)
+    lo, hi = bc_interval(b, 0.0)
+    assert lo == pytest.approx(-0.95, abs=1e-3) and hi == pytest.approx(0.95, abs=1e-3)
+    assert all(math.isnan(v) for v in bc_interval(np.array([np.nan]), 1.0))
+
+
+def test_empty_cells_are_nan():
+    boot = ClusterBootstrap(cells=np.array([[np.nan, 1.0]]),
+                            cell_replicates=np.array([[[np.nan] * 3, [1.0, 0.9, 1.1]]]))
+    assert boot.row_means[0] == 1.0
+    assert np.all(np.isnan(boot.cell_intervals()[0, 0]))
