@@ -59,7 +59,10 @@ class CompensationSettings:
     train_temperatures_c: tuple[float, ...] | None = None
     """Start temperatures of the training start-ups (None: the scenario's)."""
     random_state: int = 0
-    """Seed of every stochastic model and tuner."""
+    """Seed of every stochastic model and tuner (the first tuner seed)."""
+    tuner_seeds: int = 3
+    """Seeds of each stochastic tuner (``random_state``, ``random_state + 1``, ...): a tuned
+    row is the seed whose mean is the median, and the table gives the spread over seeds."""
     n_jobs: int | None = -1
     """Parallel evaluations of a tuner's population (joblib; -1: every core)."""
     test_repeats: int | None = 5

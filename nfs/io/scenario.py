@@ -38,7 +38,7 @@ _TOP = ("name", "description", "instrument", "seed", "start_temperatures_c", "re
 _COMPENSATION = ("methods", "features", "features_mode", "budget", "decimate_s",
                  "cutoff_period_s",
                  "train_seed", "train_repeats", "train_temperatures_c", "test_repeats",
-                 "train_units", "test_units", "random_state", "n_jobs")
+                 "train_units", "test_units", "random_state", "tuner_seeds", "n_jobs")
 _VARIABILITY = ("preset", *VARIABILITY_KEYS, "parameters")
 _SCHEDULE = ("positions_deg", "order", "dwell_s", "move_s")
 _NORTHFIND = ("startup_end_s", "stable_start_s", "tilt_correction", "settle_s")
@@ -336,6 +336,7 @@ def _compensation(tbl: dict, file, units: int = 1) -> Any:
         train_units=_unit_list(tbl, "train_units", p, file, units),
         test_units=_unit_list(tbl, "test_units", p, file, units),
         random_state=_int(tbl, "random_state", p, file, d.random_state, minimum=0),
+        tuner_seeds=_int(tbl, "tuner_seeds", p, file, d.tuner_seeds, minimum=1),
         n_jobs=n_jobs)
 
 
