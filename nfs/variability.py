@@ -95,7 +95,8 @@ class Variability:
     """
 
     preset: str = "none"
-    """The preset the values started from (``none`` or ``realistic``), for the table notes."""
+    """The preset the values started from (``none``, ``custom``: zero, or ``realistic``),
+    for the table notes."""
     soak_offset_c: float = 0.0
     """Common offset of every node from the chamber at power-on, per start-up [K]."""
     soak_node_c: float = 0.0
@@ -226,7 +227,8 @@ REALISTIC = Variability(
 )
 
 #: Presets by name.
-VARIABILITY_PRESETS = {"none": NO_VARIABILITY, "realistic": REALISTIC}
+VARIABILITY_PRESETS = {"none": NO_VARIABILITY, "custom": Variability(preset="custom"),
+                       "realistic": REALISTIC}
 
 #: Field names a scenario's ``[variability]`` table may set (besides ``preset`` and
 #: ``parameters``).

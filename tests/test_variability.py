@@ -301,7 +301,7 @@ def test_bad_variability_exits_2_with_one_line(tmp_path, cli, scenario_text):
 
 def test_parameters_of_ones_own(tmp_path, scenario_text):
     sc = _scenario(tmp_path, scenario_text,
-                   '[variability]\npreset = "none"\n[variability.parameters]\n'
+                   '[variability]\npreset = "custom"\n[variability.parameters]\n'
                    '"effects.shupe_gradient.k_r" = 0.3\n"thermometers.*.lag_s" = { std = 5.0 }\n')
     scatter = unit_scatter(sc.instrument, sc.variability)
     assert scatter == {"effects.shupe_gradient.k_r": (0.3, True),
@@ -309,6 +309,18 @@ def test_parameters_of_ones_own(tmp_path, scenario_text):
                        "thermometers.acc_x.lag_s": (5.0, False),
                        "thermometers.acc_y.lag_s": (5.0, False)}
     assert sc.variability.per_unit and not sc.variability.per_start_up
+    assert sc.variability.preset == "custom"
+
+
+def test_preset_none_switches_a_written_table_off(tmp_path):
+    # The default scenario's table, every value written, with preset = "none": no variability
+    # (the keys are still checked: a negative one is still an error).
+    text = load_scenario().path.read_text().replace('preset = "realistic"', 'preset = "none"')
+    sc = load_scenario(_write(tmp_path, text))
+    assert sc.variability == NO_VARIABILITY and sc.units == 3
+    bad = text.replace("soak_node_c = 0.1", "soak_node_c = -0.1")
+    with pytest.raises(ScenarioError, match="variability.soak_node_c"):
+        load_scenario(_write(tmp_path, bad, "bad.toml"))
 
 
 # ------------------------------------------------------------------------------ the study

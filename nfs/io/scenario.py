@@ -234,15 +234,20 @@ def _unit_list(tbl, key, prefix, file, units):
 
 
 def _variability(d: dict, inst: Instrument, seed: int, file) -> Variability:
-    """``[variability]``: a preset (``realistic`` when the table is given, ``none`` when it is
-    absent) with any of its values overridden."""
+    """``[variability]``: its ``preset`` with the values written overriding the preset's.
+
+    ``realistic`` (the default when the table is given): the realistic set; ``custom``:
+    nothing varies but what is written; ``none``: no variability at all, the other keys
+    checked but not used (a table switched off without deleting it).  No table: ``none``.
+    """
     p = "variability"
     if "variability" not in d:
         return NO_VARIABILITY
     tbl = d["variability"]
     if not isinstance(tbl, dict):
         raise ScenarioError(f"must be a table, got {tbl!r}; write [variability] and "
-                            f"preset = \"none\" or \"realistic\"", file=file, key=p)
+                            f"preset = \"none\", \"custom\" or \"realistic\"", file=file,
+                            key=p)
     check_keys(tbl, _VARIABILITY, p, file)
     preset = string(tbl, "preset", p, file, "realistic", choices=tuple(VARIABILITY_PRESETS))
     base = VARIABILITY_PRESETS[preset]
@@ -264,7 +269,9 @@ def _variability(d: dict, inst: Instrument, seed: int, file) -> Variability:
     kw["parameters"] = _variability_parameters(table(tbl, "parameters", p, file, {}), inst,
                                                file)
     out = Variability(**kw)
-    if out != dataclasses.replace(base, preset=preset, unit_seed=out.unit_seed):
+    if preset == "none":
+        return NO_VARIABILITY
+    if preset == "realistic" and out != dataclasses.replace(base, unit_seed=out.unit_seed):
         out = dataclasses.replace(out, preset=f"{preset} (modified)")
     return out
 
