@@ -58,6 +58,7 @@ class Progress:
 
 def _cmd_table(args) -> int:
     from .compensate.modes import check_features_mode
+    from .compensate.study import errors_by_temperature
     from .experiment import run_scenario, uncompensated_table
     from .io.scenario import load_scenario
     from .report import write_table
@@ -69,7 +70,9 @@ def _cmd_table(args) -> int:
     if args.no_compensation:
         progress.what = "simulating"
         res = run_scenario(scenario, progress=progress)
-        table = uncompensated_table(res)
+        table = uncompensated_table(res).with_intervals(
+            {"before": errors_by_temperature(res), "stable": errors_by_temperature(res, stage=1)},
+            random_state=scenario.seed)
         paths = write_table(table, args.output, json_path=args.json, title=title)
     else:
         import dataclasses

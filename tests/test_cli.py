@@ -49,7 +49,7 @@ def test_table_simulate_northfind(tmp_path, cli, scenario_text):
     code, out, err = cli("table", str(scen), "-o", str(tmp_path / "tab"),
                              "--json", str(tmp_path / "h.json"), "--no-compensation")
     assert code == 0
-    assert out.splitlines()[0] == "| method | -20 | 40 | mean |"
+    assert out.splitlines()[0] == "| method | -20 | 40 | mean | 95 % CI |"
     for suffix in (".md", ".csv", ".json", ".png"):
         assert (tmp_path / "tab" / f"heading_rmse{suffix}").stat().st_size > 0
     doc = json.loads((tmp_path / "h.json").read_text())
@@ -57,6 +57,7 @@ def test_table_simulate_northfind(tmp_path, cli, scenario_text):
     assert [r["method"] for r in doc["rows"]] == ["before", "stable", "floor"]
     before = doc["rows"][0]
     assert before["mean_deg"] == pytest.approx(np.mean(before["rmse_deg"]), rel=1e-6)
+    assert before["ci_low_deg"] <= before["mean_deg"] <= before["ci_high_deg"]
     assert "simulating" in err                      # progress on stderr
 
     code, out, _ = cli("simulate", str(scen), "-o", str(tmp_path / "runs"), "-q")

@@ -41,8 +41,32 @@ def test_table_with_compensation_writes_every_output(tmp_path, cli, scen_text):
     assert "Features mode: cycle (" in out and "Features mode: **cycle**" in report
     assert json.loads((out_dir / "heading_rmse.json").read_text())["features_mode"] == "cycle"
     csv = (out_dir / "heading_rmse.csv").read_text().splitlines()
-    assert csv[0].endswith(",mean,features_mode") and csv[2].endswith(",cycle")
+    head = csv[0].split(",")
+    assert head[:5] == ["method", "-20", "10", "40", "mean"] and head[-1] == "features_mode"
+    assert head[5:7] == ["mean_ci_low", "mean_ci_high"] and "-20_ci_low" in head
+    assert "vs_best" in head and csv[2].endswith(",cycle")
     assert csv[1].startswith("before,") and csv[1].endswith(",")
+    # intervals: every row but the floor has one around its mean, cells included
+    doc = json.loads((out_dir / "heading_rmse.json").read_text())
+    for row in doc["rows"]:
+        if row["method"] == "floor":
+            assert row["ci_low_deg"] is None and row["cell_ci_deg"] is None
+            continue
+        if row["mean_deg"] is None:            # stable: these runs end before that stage
+            assert row["ci_low_deg"] is None
+            continue
+        assert row["ci_low_deg"] <= row["mean_deg"] <= row["ci_high_deg"], row
+        assert len(row["cell_ci_deg"]) == 3
+    pairs = {(c["method_a"], c["method_b"]) for c in doc["comparisons"]}
+    assert {("LS", "before"), ("SSA-SVR", "before"), ("SSA-SVR", "LS")} <= pairs
+    for c in doc["comparisons"]:
+        assert c["ci_low_deg"] <= c["difference_deg"] <= c["ci_high_deg"]
+        assert c["p_value"] <= c["p_adjusted"] <= 1.0
+        assert c["distinguishable"] == (c["p_adjusted"] < 0.05)
+    assert doc["best"] in ("LS", "SSA-SVR")
+    assert "95 % CI" in out.splitlines()[0] and "SSA-SVR vs LS: " in out
+    row_csv = next(line for line in csv if line.startswith("SSA-SVR,")).split(",")
+    assert row_csv[head.index("vs_best")] in ("best", "tie", "worse")
     drift = json.loads((out_dir / "drift_residual.json").read_text())
     assert [d["features_mode"] for d in drift] == [None, "cycle", "cycle"]
 

@@ -36,7 +36,8 @@ from .modes import (
     horizon_index,
 )
 
-__all__ = ["DriftCompensator", "train_compensator", "load_compensator", "FORMAT"]
+__all__ = ["DriftCompensator", "PredictionPlan", "prediction_plan", "train_compensator",
+           "load_compensator", "FORMAT"]
 
 #: Format tag of a saved compensator.
 FORMAT = "nfs-compensator/1"
@@ -47,6 +48,90 @@ def _versions() -> dict[str, str]:
     return {"nfs": __version__, "numpy": np.__version__, "scipy": scipy.__version__,
             "scikit-learn": sklearn.__version__, "pywavelets": pywt.__version__,
             "joblib": joblib.__version__, "python": platform.python_version()}
+
+
+@dataclass(frozen=True)
+class PredictionPlan:
+    """The samples of one run where a drift model is evaluated, and its features there.
+
+    Computed once per run and feature set, it serves every compensator trained on those
+    features (the comparison behind ``nfs table`` applies a dozen to each test run).
+    """
+
+    n_samples: int
+    """Samples of the run."""
+    time_s: np.ndarray
+    """Time of every sample [s]."""
+    finite_idx: np.ndarray
+    """Samples where every feature is finite (the prediction is NaN elsewhere)."""
+    eval_idx: np.ndarray
+    """Samples where the model is evaluated (a subset of ``finite_idx``)."""
+    X_eval: np.ndarray
+    """Features at ``eval_idx`` (n_eval, n_features)."""
+    feature_names: tuple[str, ...]
+    """Names of the feature columns."""
+    features_mode: str
+    """The features mode they were computed in."""
+
+    def interpolate(self, pred_eval: np.ndarray) -> np.ndarray:
+        """The drift at every sample from its values at ``eval_idx`` [deg/h] (linear in time
+        between evaluations; NaN where a feature is missing)."""
+        out = np.full(self.n_samples, np.nan)
+        idx, ev = self.finite_idx, self.eval_idx
+        if idx.size == 0:
+            return out
+        t = self.time_s
+        out[idx] = np.interp(t[idx], t[ev], pred_eval) if ev.size < idx.size else pred_eval
+        return out
+
+
+def prediction_plan(run: Run, feature_names: Sequence[str], *, features_mode: str,
+                    rate_window_s: float | None = None, stride_s: float = 10.0
+                    ) -> PredictionPlan:
+    """The evaluation samples of ``run`` and its features there.
+
+    One sample every ``stride_s`` seconds (``0``: every sample), plus the first and last
+    sample of every stretch that shares a horizon in ``features_mode``
+    (:func:`~nfs.compensate.modes.horizon_index`), so that no interpolation between two
+    evaluations reaches past what the mode allows.
+
+    Parameters
+    ----------
+    run : Run
+        The run, with the input channels.
+    feature_names : sequence of str
+        The features, in the model's column order.
+    features_mode : str
+        ``cycle``, ``causal`` or ``offline``.
+    rate_window_s : float, optional
+        Window of the rate features [s] (None: the mode's).
+    stride_s : float
+        Time between evaluations [s].
+
+    Returns
+    -------
+    PredictionPlan
+    """
+    X, names = compute_features(run, list(feature_names), mode=features_mode,
+                                rate_window_s=rate_window_s)
+    if tuple(names) != tuple(feature_names):
+        raise NfsError(f"run '{run.name}': features {names} differ from the model's "
+                       f"{list(feature_names)}")
+    t = np.asarray(run.columns["time_s"], dtype=float)
+    dt = float(np.median(np.diff(t))) if t.size > 1 else 1.0
+    k = max(1, int(round(stride_s / dt))) if stride_s > 0 else 1
+    idx = np.flatnonzero(np.all(np.isfinite(X), axis=1))
+    if idx.size:
+        # stretches of equal horizon: ends are evaluated, so no interpolation crosses one
+        h = horizon_index(run, features_mode)[idx]
+        change = h[1:] != h[:-1]
+        ends = idx[np.concatenate(([True], change)) | np.concatenate((change, [True]))]
+        eval_idx = np.union1d(idx[::k], ends)
+    else:
+        eval_idx = idx
+    return PredictionPlan(n_samples=X.shape[0], time_s=t, finite_idx=idx, eval_idx=eval_idx,
+                          X_eval=X[eval_idx], feature_names=tuple(feature_names),
+                          features_mode=features_mode)
 
 
 @dataclass(frozen=True)
@@ -74,7 +159,17 @@ class DriftCompensator:
     versions: dict = field(default_factory=dict)
     """Library versions at training time."""
 
-    def predict_drift(self, run: Run, *, stride_s: float | None = None) -> np.ndarray:
+    def plan(self, run: Run, *, stride_s: float | None = None) -> "PredictionPlan":
+        """Where and on what this compensator is evaluated on ``run``
+        (:func:`prediction_plan` with its features, mode and rate window; ``stride_s``
+        default: the training decimation, at most 10 s)."""
+        if stride_s is None:
+            stride_s = min(10.0, float(self.settings.get("decimate_s", 10.0)))
+        return prediction_plan(run, self.feature_names, features_mode=self.features_mode,
+                               rate_window_s=self.rate_window_s, stride_s=stride_s)
+
+    def predict_drift(self, run: Run | None = None, *, stride_s: float | None = None,
+                      plan: "PredictionPlan | None" = None) -> np.ndarray:
         """Predicted drift at every sample of ``run`` [deg/h].
 
         The model is evaluated every ``stride_s`` seconds (default: the training decimation,
@@ -91,38 +186,27 @@ class DriftCompensator:
         Parameters
         ----------
         run : Run
-            The run, with the model's input channels.
+            The run, with the model's input channels (not needed with ``plan``).
         stride_s : float, optional
             Time between evaluations of the model [s].
+        plan : PredictionPlan, optional
+            The run's features already computed (:meth:`plan`; several compensators trained
+            on the same features share one).
 
         Returns
         -------
         ndarray
             Drift [deg/h]; NaN where a feature is missing.
         """
-        X, names = compute_features(run, list(self.feature_names), mode=self.features_mode,
-                                    rate_window_s=self.rate_window_s)
-        if tuple(names) != self.feature_names:
-            raise NfsError(f"run '{run.name}': features {names} differ from the model's "
-                           f"{list(self.feature_names)}")
-        t = np.asarray(run.columns["time_s"], dtype=float)
-        if stride_s is None:
-            stride_s = min(10.0, float(self.settings.get("decimate_s", 10.0)))
-        dt = float(np.median(np.diff(t))) if t.size > 1 else 1.0
-        k = max(1, int(round(stride_s / dt))) if stride_s > 0 else 1
-        ok = np.all(np.isfinite(X), axis=1)
-        idx = np.flatnonzero(ok)
-        out = np.full(X.shape[0], np.nan)
-        if idx.size == 0:
-            return out
-        # stretches of equal horizon: ends are evaluated, so no interpolation crosses one
-        h = horizon_index(run, self.features_mode)[idx]
-        change = h[1:] != h[:-1]
-        ends = idx[np.concatenate(([True], change)) | np.concatenate((change, [True]))]
-        eval_idx = np.union1d(idx[::k], ends)
-        pred = self.estimator.predict(X[eval_idx])
-        out[idx] = np.interp(t[idx], t[eval_idx], pred) if eval_idx.size < idx.size else pred
-        return out
+        if plan is None:
+            plan = self.plan(run, stride_s=stride_s)
+        elif (plan.feature_names, plan.features_mode) != (self.feature_names,
+                                                          self.features_mode):
+            raise NfsError(f"prediction plan of features {list(plan.feature_names)} "
+                           f"({plan.features_mode} mode) differs from the model's "
+                           f"{list(self.feature_names)} ({self.features_mode} mode)")
+        return plan.interpolate(self.estimator.predict(plan.X_eval)
+                                if plan.eval_idx.size else np.zeros(0))
 
     def compensate(self, run: Run, *, drift_dph: np.ndarray | None = None) -> Run:
         """The run with the predicted drift subtracted from ``gyro_dph``.

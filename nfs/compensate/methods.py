@@ -27,7 +27,13 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any, Callable
 
+import numpy as np
+
 from ..errors import NfsError
+from .kernels import IRLSSVMRegressor, LSSVMRegressor, RVRRegressor, SVRRegressor
+from .neural import BPNetwork, RBFNetwork
+from .regression import CubicLeastSquares, StepwiseRegression
+from .search import MetaheuristicSearchCV, Real
 
 __all__ = ["MethodSpec", "METHODS", "TABLE_METHODS", "get_method", "svr_space", "rvr_space",
            "neg_residual_std"]
@@ -50,11 +56,21 @@ class MethodSpec:
     max_samples: int | None = None
     """Training samples at most (every k-th sample is kept above it): for the models whose
     fit costs O(n^3) (LSSVM, RVR); stated in the table notes."""
+    tuner: str | None = None
+    """The tuner of a tuned method (``grid``, ``pso``, ...)."""
+    cost: float = 1.0
+    """Rough cost of one training [s on one core, default scenario] (the study dispatches
+    the costliest first)."""
+
+    @property
+    def seeded(self) -> bool:
+        """True when training depends on the random_state through a tuner's draws (a grid
+        search draws nothing)."""
+        return self.tuner is not None and self.tuner != "grid"
 
 
 def svr_space():
     """The search box of the tuned SVR rows (C, sigma, epsilon)."""
-    from .search import Real
     # Bounded box (seed 004 Table 1 found C 1.05, sigma 0.95 on standardised inputs).
     # epsilon is in units of std(y): below ~0.02 nearly every sample becomes a support
     # vector and LIBSVM's fit time grows 100-fold at large C (measured: 14 s vs 0.02 s at
@@ -65,7 +81,6 @@ def svr_space():
 
 def rvr_space():
     """The search box of HHO-RVR (sigma)."""
-    from .search import Real
     return {"sigma": Real(0.5, 30.0, log=True)}
 
 
@@ -73,8 +88,6 @@ def rvr_space():
 
 def _tuned_svr(method: str):
     def build(*, budget: int, random_state: int, n_jobs: int | None):
-        from .kernels import SVRRegressor
-        from .search import MetaheuristicSearchCV
         return MetaheuristicSearchCV(SVRRegressor(), svr_space(), method=method,
                                      budget=budget, random_state=random_state, n_jobs=n_jobs,
                                      scoring=neg_residual_std)
@@ -82,8 +95,6 @@ def _tuned_svr(method: str):
 
 
 def _hho_rvr(*, budget: int, random_state: int, n_jobs: int | None):
-    from .kernels import RVRRegressor
-    from .search import MetaheuristicSearchCV
     # max_iter 40 / tol 0.01: the evidence updates have settled the prediction long before
     # the last bases are pruned; the full 300 sweeps cost 5x for little change in the score.
     return MetaheuristicSearchCV(RVRRegressor(max_iter=40, tol=1e-2), rvr_space(),
@@ -101,7 +112,6 @@ def neg_residual_std(estimator, X, y) -> float:
     variation within the held-out start-up, not its level.  (An RMSE score would be dominated
     by extrapolating the bias level to the coldest and hottest held-out start temperatures.)
     """
-    import numpy as np
     return -float(np.std(np.asarray(y) - estimator.predict(X)))
 
 
@@ -112,22 +122,18 @@ def _plain(factory: Callable[[int], Any]):
 
 
 def _ls(rs):
-    from .regression import CubicLeastSquares
     return CubicLeastSquares()
 
 
 def _stepwise(rs):
-    from .regression import StepwiseRegression
     return StepwiseRegression()
 
 
 def _bp(rs):
-    from .neural import BPNetwork
     return BPNetwork(random_state=rs)
 
 
 def _rbf(rs):
-    from .neural import RBFNetwork
     # 150 centres: the target spans the bias levels of every start temperature (about
     # 0.5 deg/h) while the heading needs it to ~0.003 deg/h; 20 centres leave ~0.02 deg/h.
     return RBFNetwork(n_centers=150, width=1.0, alpha=1e-8, random_state=rs)
@@ -142,35 +148,36 @@ LSSVM_GAMMA = 1000.0
 
 
 def _lssvm(rs):
-    from .kernels import LSSVMRegressor
     return LSSVMRegressor(gamma=LSSVM_GAMMA, sigma=LSSVM_SIGMA)
 
 
 def _irlssvm(rs):
-    from .kernels import IRLSSVMRegressor
     return IRLSSVMRegressor(gamma=LSSVM_GAMMA, sigma=LSSVM_SIGMA, weight="myriad")
 
 
 _ALL = (
-    MethodSpec("LS", "ls", False, _plain(_ls), "seed 000: cubic least squares"),
-    MethodSpec("stepwise", "stepwise", False, _plain(_stepwise), "seed 000: stepwise regression"),
-    MethodSpec("BP", "bp", False, _plain(_bp), "seed 004: BP network"),
-    MethodSpec("RBF", "rbf", False, _plain(_rbf), "seed 001: RBF network"),
-    MethodSpec("LSSVM", "lssvm", False, _plain(_lssvm), "seed 000: LSSVM", max_samples=700),
+    MethodSpec("LS", "ls", False, _plain(_ls), "seed 000: cubic least squares", cost=1.0),
+    MethodSpec("stepwise", "stepwise", False, _plain(_stepwise), "seed 000: stepwise regression",
+               cost=5.0),
+    MethodSpec("BP", "bp", False, _plain(_bp), "seed 004: BP network", cost=2.0),
+    MethodSpec("RBF", "rbf", False, _plain(_rbf), "seed 001: RBF network", cost=3.0),
+    MethodSpec("LSSVM", "lssvm", False, _plain(_lssvm), "seed 000: LSSVM", max_samples=700,
+               cost=1.5),
     MethodSpec("IR-LSSVM", "ir-lssvm", False, _plain(_irlssvm),
-               "seed 000: IR-LSSVM, myriad weights", max_samples=700),
+               "seed 000: IR-LSSVM, myriad weights", max_samples=700, cost=10.0),
     MethodSpec("SVR (grid)", "svr-grid", True, _tuned_svr("grid"), "seed 004: SVR, grid search",
-               max_samples=1000),
+               max_samples=1000, tuner="grid", cost=6.0),
     MethodSpec("PSO-SVR", "pso-svr", True, _tuned_svr("pso"), "seed 004: PSO-tuned SVR",
-               max_samples=1000),
+               max_samples=1000, tuner="pso", cost=9.0),
     MethodSpec("GWO-SVR", "gwo-svr", True, _tuned_svr("gwo"), "seed 004: GWO-tuned SVR",
-               max_samples=1000),
+               max_samples=1000, tuner="gwo", cost=9.0),
     MethodSpec("SSA-SVR", "ssa-svr", True, _tuned_svr("ssa"), "seed 004: SSA-tuned SVR",
-               max_samples=1000),
+               max_samples=1000, tuner="ssa", cost=6.0),
     MethodSpec("HHO-RVR", "hho-rvr", True, _hho_rvr, "seed 003: HHO-tuned RVR",
-               max_samples=400),
+               max_samples=400, tuner="hho", cost=12.0),
     MethodSpec("TPE-SVR", "tpe-svr", True, _tuned_svr("tpe"),
-               "Optuna TPE-tuned SVR (optional 'tune' extra)", max_samples=1000),
+               "Optuna TPE-tuned SVR (optional 'tune' extra)", max_samples=1000, tuner="tpe",
+               cost=9.0),
 )
 
 #: Every method by key.

@@ -304,13 +304,21 @@ class MetaheuristicSearchCV(MetaEstimatorMixin, BaseEstimator):
         def decode(u):
             return {n: s.from_unit(v) for (n, s), v in zip(space, u)}
 
+        # Fold scores by candidate: a tuner that clips several positions to the same corner
+        # of the box, or comes back to a candidate, is answered without refitting.
+        memo: dict[tuple, np.ndarray] = {}
+
         with Parallel(n_jobs=self.n_jobs) as parallel:
             def objective_batch(U):
                 params = [decode(u) for u in U]
-                out = parallel(delayed(_fit_and_score)(clone(base).set_params(**p), X, y,
-                                                       train, test, scorer)
-                               for p in params for train, test in splits)
-                out = np.asarray(out, dtype=float).reshape(len(params), n_splits, 2)
+                keys = [tuple(sorted(p.items())) for p in params]
+                todo = list(dict.fromkeys(k for k in keys if k not in memo))
+                out = parallel(delayed(_fit_and_score)(clone(base).set_params(**dict(k)), X,
+                                                       y, train, test, scorer)
+                               for k in todo for train, test in splits)
+                out = np.asarray(out, dtype=float).reshape(len(todo), n_splits, 2)
+                memo.update(zip(todo, out))
+                out = np.stack([memo[k] for k in keys])
                 scores, times = out[..., 0], out[..., 1]
                 rows_params.extend(params)
                 rows_scores.extend(scores)

@@ -7,11 +7,20 @@ Protocol (seed 004, done on equal terms):
    in training.  The drift target is wavelet-separated; inputs are named thermometer features.
 2. Each method is fitted on the stacked, decimated training data.  Tuned methods search their
    hyperparameters with the same budget of evaluations of the same leave-one-run-out (one
-   start temperature out) validation error.
+   start temperature out) validation error, once per tuner seed (``tuner_seeds``; a grid
+   search, which draws nothing, once): the row shown is the seed whose mean is the median,
+   and the table gives the spread of the seeds' means.
 3. Test start-ups (the scenario's own runs, the ``before`` row): predict the drift from each
    run's thermometers, subtract it from the gyro output, north-find, score the start-up RMSE by
    start temperature.  The drift table scores the predicted drift against the separated drift
    of the test runs over the start-up stage (seed 004, Table 2).
+4. Uncertainty: every cell and row mean gets a 95 % interval from a two-level bootstrap over
+   the test start-ups and their cycles, and rows are compared in pairs on the same start-ups,
+   Holm-adjusted (:mod:`nfs.report.intervals`).
+
+The features of the test runs and their separated drift are computed once and shared by
+every method; the trainings (methods x tuner seeds) run in parallel on ``n_jobs`` workers,
+each seeded on its own, so the table does not depend on ``n_jobs``.
 """
 
 from __future__ import annotations
@@ -21,17 +30,21 @@ from dataclasses import dataclass, field
 from typing import Any, Callable
 
 import numpy as np
+from joblib import Parallel, delayed
 from sklearn.exceptions import ConvergenceWarning
 
 from ..denoise import separate_drift
 from ..errors import NfsError
-from .compensator import DriftCompensator, train_compensator
+from ..experiment import (northfind_runs, run_scenario, simulate_run, stage_errors,
+                          uncompensated_table)
+from ..report.table import TableRow, pooled_rmse
+from .compensator import DriftCompensator, PredictionPlan, prediction_plan, train_compensator
 from .dataset import DriftDataset, drift_dataset
-from .methods import TABLE_METHODS, get_method
+from .methods import TABLE_METHODS, MethodSpec, get_method
 from .modes import DEFAULT_FEATURE_MODE, FEATURE_MODE_NOTES, check_features_mode
 
-__all__ = ["CompensationSettings", "MethodResult", "CompensationStudy", "run_study",
-           "DriftRow"]
+__all__ = ["CompensationSettings", "MethodResult", "SeedResult", "CompensationStudy",
+           "run_study", "DriftRow", "errors_by_temperature"]
 
 
 @dataclass(frozen=True)
@@ -89,14 +102,38 @@ class DriftRow:
 
 
 @dataclass(frozen=True)
+class SeedResult:
+    """One training of a method (one tuner seed) scored on the test runs."""
+
+    seed: int
+    """The method's random_state."""
+    rmse_deg: tuple[float, ...]
+    """Start-up heading RMSE at each start temperature [deg]."""
+    mean_deg: float
+    """Their mean [deg]."""
+    best_params: dict
+    """Tuned hyperparameters (empty for an untuned method)."""
+    on_bound: tuple[str, ...] = ()
+    """Tuned hyperparameters found within 1 % (of the box's width in the tuner's scale) of
+    a bound of their box, e.g. ``('C high',)``."""
+
+
+@dataclass(frozen=True)
 class MethodResult:
-    """One method's compensator and its scores on the test runs."""
+    """One method's compensator and its scores on the test runs (the median tuner seed)."""
 
     compensator: DriftCompensator
     northfind: tuple[Any, ...]
     """NorthFindResult of each compensated test run."""
     drift: DriftRow
     """Drift residual statistics."""
+    seeds: tuple[SeedResult, ...] = ()
+    """Every training of the method, by seed (one for an untuned method or a grid)."""
+
+    @property
+    def seed_means_deg(self) -> tuple[float, ...]:
+        """Mean start-up RMSE of each seed [deg] (empty when trained once)."""
+        return tuple(r.mean_deg for r in self.seeds) if len(self.seeds) > 1 else ()
 
 
 @dataclass(frozen=True)
@@ -115,20 +152,26 @@ class CompensationStudy:
     uncompensated_drift: DriftRow | None = None
     """STD of the separated start-up drift of the test runs."""
 
-    def heading_table(self):
-        """The heading-RMSE table: before, every method, stable, floor."""
-        from ..experiment import stage_errors, uncompensated_table
-        from ..report import TableRow, pooled_rmse
+    def startup_errors(self, method: str) -> list[list[np.ndarray]]:
+        """Start-up heading errors [deg] of ``method``'s compensated test runs (``before``:
+        uncompensated; ``stable``: the stable stage, uncompensated), by start temperature,
+        one array per run."""
+        if method in ("before", "stable"):
+            return errors_by_temperature(self.test, stage=int(method == "stable"))
+        return errors_by_temperature(self.test, self.results[method].northfind)
+
+    def heading_table(self, *, n_boot: int | None = None):
+        """The heading-RMSE table: before, every method, stable, floor, with 95 % intervals
+        and the paired comparisons (every row against ``before``, SSA-SVR and the best row
+        against every other), Holm-adjusted together; ``n_boot`` replicates (default
+        :data:`~nfs.report.intervals.DEFAULT_N_BOOT`), seeded by ``random_state``."""
         base = uncompensated_table(self.test)
         sc = self.test.scenario
         rows = []
         for name, res in self.results.items():
-            vals = []
-            for i in range(len(sc.start_temperatures_c)):
-                errs = [stage_errors(res.northfind[k], sc.northfind)[0]
-                        for k in self.test.runs_at(i)]
-                vals.append(pooled_rmse(errs))
-            rows.append(TableRow(name, tuple(vals)))
+            errs = self.startup_errors(name)
+            rows.append(TableRow(name, tuple(pooled_rmse(e) for e in errs),
+                                 seed_means_deg=res.seed_means_deg))
         s = self.settings
         temps = (s.train_temperatures_c or sc.start_temperatures_c)
         mode = self.dataset.features_mode
@@ -145,12 +188,55 @@ class CompensationStudy:
                       f"{', '.join(map(str, te))} of {sc.units} ("
                       + ("different units" if not set(tr) & set(te) else "shared units")
                       + ").",)
-        tuned = [get_method(m).name for m in s.methods if get_method(m).tuned]
+        notes += self._method_notes()
+        table = base.with_rows(rows, notes, features_mode=self.dataset.features_mode)
+        names = list(self.results)
+        pairs = [(m, "before") for m in names]
+        best = table.best
+        for ref in ("SSA-SVR", best):
+            if ref in names:
+                pairs += [(ref, m) for m in names if m != ref]
+        errors = {n: self.startup_errors(n) for n in ("before", *names, "stable")}
+        return table.with_intervals(errors, pairs=pairs, random_state=s.random_state,
+                                    **({} if n_boot is None else {"n_boot": n_boot}))
+
+    def _method_notes(self) -> tuple[str, ...]:
+        """What the compensated rows rest on: samples, tuning, seeds, box bounds."""
+        s = self.settings
+        n_all = int(self.dataset.X.shape[0])
+        notes = ["Intervals: 95 %, bias-corrected, from a two-level bootstrap over the test "
+                 "start-ups and their cycles; vs best: tie = not distinguishable from the "
+                 "best compensated row (paired bootstrap of the difference of means, Holm)."]
+        fewer = {n: r.compensator.settings.get("n_samples") for n, r in self.results.items()}
+        fewer = {n: k for n, k in fewer.items() if k is not None and k < n_all}
+        if fewer:
+            notes.append(f"Training samples: {n_all} for every row but "
+                         + ", ".join(f"{n} ({k})" for n, k in fewer.items())
+                         + ": every k-th sample, the fit costing O(n^2)-O(n^3) per evaluation.")
+        else:
+            notes.append(f"Training samples: {n_all} for every row.")
+        tuned = [n for n in self.results if get_method(n).tuned]
         if tuned:
-            notes += (f"Tuned rows ({', '.join(tuned)}): {s.budget} evaluations each of the "
-                      "leave-one-start-temperature-out validation error (the residual's "
-                      "standard deviation within the held-out run).",)
-        return base.with_rows(rows, notes, features_mode=self.dataset.features_mode)
+            seeded = [n for n in tuned if len(self.results[n].seeds) > 1]
+            notes.append(
+                f"Tuned rows ({', '.join(tuned)}): {s.budget} evaluations each of the "
+                "leave-one-start-temperature-out validation error (the residual's standard "
+                "deviation within the held-out run)"
+                + (f"; {', '.join(seeded)} tuned with {s.tuner_seeds} seeds each, the row is "
+                   "the seed with the median mean, seeds (min-max) the spread of their means."
+                   if seeded else "."))
+            bound = []
+            for n in tuned:
+                res = self.results[n]
+                hits: dict[str, int] = {}
+                for r in res.seeds:
+                    for b in r.on_bound:
+                        hits[b] = hits.get(b, 0) + 1
+                bound += [f"{n} {b} ({k}/{len(res.seeds)} seeds)" for b, k in hits.items()]
+            if bound:
+                notes.append("Tuned optimum on a bound of its box: " + ", ".join(bound)
+                             + " (the validation error may fall further outside the box).")
+        return tuple(notes)
 
     def drift_rows(self) -> list[DriftRow]:
         """Drift table rows: the uncompensated separated drift, then each method."""
@@ -165,6 +251,27 @@ class CompensationStudy:
             if hasattr(est, "best_params_"):
                 out[name] = {k: float(v) for k, v in est.best_params_.items()}
         return out
+
+
+def errors_by_temperature(result, northfind=None, *, stage: int = 0
+                          ) -> list[list[np.ndarray]]:
+    """Heading errors [deg] of one stage of every run of a scenario result, by start
+    temperature, one array per run: the input of
+    :meth:`~nfs.report.table.HeadingTable.with_intervals`.
+
+    Parameters
+    ----------
+    result : ScenarioResult
+        The runs (:func:`~nfs.experiment.run_scenario`).
+    northfind : sequence of NorthFindResult, optional
+        North-finding of each run (default: the result's own, uncompensated).
+    stage : int
+        0: the start-up stage; 1: the stable stage.
+    """
+    sc = result.scenario
+    nf = result.northfind if northfind is None else northfind
+    return [[stage_errors(nf[k], sc.northfind)[stage] for k in result.runs_at(i)]
+            for i in range(len(sc.start_temperatures_c))]
 
 
 def _pooled_within_std(parts) -> float:
@@ -193,10 +300,10 @@ def run_study(scenario, settings: CompensationSettings | None = None, *,
 
     ``test`` is the scenario's :class:`~nfs.experiment.ScenarioResult` if already computed.
     """
-    from ..experiment import northfind_runs, run_scenario, simulate_run
     s = settings or scenario.compensation or CompensationSettings()
     specs = [get_method(m) for m in s.methods]
-    n_steps = 2 + len(specs)
+    jobs = [(spec, seed) for spec in specs for seed in _seeds(spec, s)]
+    n_steps = 3 + len(jobs)
     step = 0
 
     def tick(msg):
@@ -226,24 +333,79 @@ def run_study(scenario, settings: CompensationSettings | None = None, *,
                          features_mode=check_features_mode(s.features_mode))
     test_runs = [sim.run for sim in test.simulations]
     drifts = _test_drift(test_runs, s.cutoff_period_s, scenario.northfind.startup_end_s)
+    # the features of every test run, once for every method (they share features and mode)
+    plans = [prediction_plan(r, data.feature_names, features_mode=data.features_mode,
+                             rate_window_s=data.rate_window_s,
+                             stride_s=min(10.0, s.decimate_s)) for r in test_runs]
     study = CompensationStudy(
         settings=s, test=test, train_runs=train_runs, dataset=data,
         uncompensated_drift=DriftRow("denoised (no compensation)", float("nan"),
                                      _pooled_within_std([d[m] for d, m in drifts])))
+    # costliest trainings first, so that the workers finish together
+    order = sorted(range(len(jobs)), key=lambda j: -jobs[j][0].cost)
+    done: dict[int, SeedResult] = {}
+    fitted: dict[int, tuple] = {}
+    with Parallel(n_jobs=s.n_jobs, return_as="generator_unordered") as parallel:
+        out = parallel(delayed(_train_and_predict)(j, jobs[j][0].key, data, s, jobs[j][1],
+                                                   plans) for j in order)
+        for j, comp, preds in out:
+            spec, seed = jobs[j]
+            tick(f"trained {spec.name}" + (f" (seed {seed})" if spec.seeded else ""))
+            nf = northfind_runs([comp.compensate(r, drift_dph=p)
+                                 for r, p in zip(test_runs, preds)], scenario.northfind)
+            rmse = tuple(pooled_rmse(stage_errors(nf[k], scenario.northfind)[0]
+                                     for k in test.runs_at(i))
+                         for i in range(len(scenario.start_temperatures_c)))
+            params, bound = _tuned(comp.estimator)
+            done[j] = SeedResult(seed, rmse, float(np.nanmean(rmse)), params, bound)
+            fitted[j] = (comp, nf, preds)
+    tick("intervals")
     for spec in specs:
-        tick(f"training {spec.name}")
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", ConvergenceWarning)   # stated in the notes
-            comp = train_compensator(spec.key, data, budget=s.budget,
-                                     random_state=s.random_state, n_jobs=s.n_jobs)
-        preds = [comp.predict_drift(r) for r in test_runs]
-        compensated = [comp.compensate(r, drift_dph=p) for r, p in zip(test_runs, preds)]
-        nf = northfind_runs(compensated, scenario.northfind)
+        idx = [j for j in range(len(jobs)) if jobs[j][0] is spec]
+        ranked = sorted(idx, key=lambda j: (done[j].mean_deg, done[j].seed))
+        pick = ranked[len(ranked) // 2]                 # the median seed (upper for even)
+        comp, nf, preds = fitted[pick]
         parts = [(d - p)[m] for (d, m), p in zip(drifts, preds)]
         res = np.concatenate(parts)
         res = res[np.isfinite(res)]
         study.results[spec.name] = MethodResult(
             compensator=comp, northfind=tuple(nf),
-            drift=DriftRow(spec.name, float(np.mean(np.abs(res))), _pooled_within_std(parts)))
+            drift=DriftRow(spec.name, float(np.mean(np.abs(res))), _pooled_within_std(parts)),
+            seeds=tuple(done[j] for j in idx))
     tick("done")
     return study
+
+
+def _seeds(spec: MethodSpec, s: CompensationSettings) -> list[int]:
+    """The random_state of each training of ``spec``: ``tuner_seeds`` of them for a tuner
+    that draws (not the grid), one otherwise."""
+    n = s.tuner_seeds if spec.seeded else 1
+    return [s.random_state + k for k in range(n)]
+
+
+def _train_and_predict(j: int, key: str, data: DriftDataset, s: CompensationSettings,
+                       seed: int, plans: list[PredictionPlan]):
+    """Train method ``key`` with ``seed`` (one worker: the tuner's own evaluations are
+    serial) and predict the drift of every test run from its plan."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", ConvergenceWarning)   # stated in the notes
+        comp = train_compensator(key, data, budget=s.budget, random_state=seed, n_jobs=1)
+        preds = [comp.predict_drift(plan=p) for p in plans]
+    return j, comp, preds
+
+
+def _tuned(estimator) -> tuple[dict, tuple[str, ...]]:
+    """A search's best parameters and those within 1 % of a bound of its box."""
+    space = getattr(estimator, "param_space", None)
+    best = getattr(estimator, "best_params_", None)
+    if not space or best is None:
+        return {}, ()
+    params = {k: float(v) for k, v in best.items()}
+    bound = []
+    for name, dim in space.items():
+        u = dim.to_unit(params[name])
+        if u <= -0.98:
+            bound.append(f"{name} low ({dim.low:g})")
+        elif u >= 0.98:
+            bound.append(f"{name} high ({dim.high:g})")
+    return params, tuple(bound)

@@ -3,12 +3,16 @@
 Rows are methods (``before``: start-up, uncompensated; ``stable``: the stable stage;
 ``floor``: the white-noise limit of the schedule; the compensation study adds a row per
 compensator and states the features mode they were computed in), columns are start
-temperatures plus their mean.  Written as Markdown, CSV, JSON and a PNG
-bar chart, every file atomically.
+temperatures plus their mean.  Cells and means may carry 95 % intervals, and the table the
+paired comparisons of its rows (:mod:`nfs.report.intervals`: a two-level bootstrap over the
+start-ups and their cycles); a row that is not distinguishable from the best compensated row
+is marked as tied with it.  Written as Markdown, CSV, JSON and a PNG bar chart with error
+bars, every file atomically.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import io
 import json
 import math
@@ -19,9 +23,12 @@ from typing import Iterable, Sequence
 import numpy as np
 
 from ..io.atomic import atomic_write_bytes, atomic_write_text
+from .intervals import DEFAULT_N_BOOT, Comparison, cluster_bootstrap, compare_rows
 
 __all__ = ["TableRow", "HeadingTable", "pooled_rmse", "write_table", "plot_heading_table",
            "REFERENCE_ROWS"]
+
+_NAN2 = (math.nan, math.nan)
 
 #: Rows that are not a compensator: the uncompensated start-up, the stable stage, the floor.
 REFERENCE_ROWS = ("before", "stable", "floor")
@@ -42,12 +49,29 @@ class TableRow:
     """Row label (``before``, ``stable``, ``floor``, a compensator's name)."""
     rmse_deg: tuple[float, ...]
     """RMSE at each start temperature [deg]."""
+    cell_ci_deg: tuple[tuple[float, float], ...] | None = None
+    """95 % interval of each cell [deg] (None: not computed; ``floor`` has none)."""
+    mean_ci_deg: tuple[float, float] | None = None
+    """95 % interval of the mean [deg]."""
+    seed_means_deg: tuple[float, ...] = ()
+    """Mean of the row trained with each tuner seed [deg] (a tuned row shows the median
+    seed's; empty for a row trained once)."""
 
     @property
     def mean_deg(self) -> float:
         """Mean over the temperatures (NaN-aware) [deg]."""
         v = np.asarray(self.rmse_deg, dtype=float)
         return float(np.nanmean(v)) if np.any(np.isfinite(v)) else math.nan
+
+    @property
+    def ci_low_deg(self) -> float:
+        """Lower end of the mean's interval [deg] (NaN without one)."""
+        return (self.mean_ci_deg or _NAN2)[0]
+
+    @property
+    def ci_high_deg(self) -> float:
+        """Upper end of the mean's interval [deg] (NaN without one)."""
+        return (self.mean_ci_deg or _NAN2)[1]
 
 
 @dataclass(frozen=True)
@@ -63,6 +87,91 @@ class HeadingTable:
     features_mode: str | None = None
     """What the compensated rows' features could use: ``cycle``, ``causal`` or ``offline``
     (:mod:`nfs.compensate.modes`); None when the table has no compensated row."""
+    comparisons: tuple[Comparison, ...] = ()
+    """Paired comparisons of row means, Holm-adjusted together."""
+
+    @property
+    def best(self) -> str | None:
+        """The compensated row with the lowest mean (None without compensated rows)."""
+        comp = [r for r in self.rows if r.method not in REFERENCE_ROWS
+                and math.isfinite(r.mean_deg)]
+        return min(comp, key=lambda r: r.mean_deg).method if comp else None
+
+    def comparison(self, a: str, b: str) -> Comparison | None:
+        """The comparison of rows a and b (as a - b; None if not made)."""
+        for c in self.comparisons:
+            if (c.method_a, c.method_b) == (a, b):
+                return c
+            if (c.method_a, c.method_b) == (b, a):
+                return Comparison(a, b, -c.difference_deg, -c.ci_high_deg, -c.ci_low_deg,
+                                  c.p_value, c.p_adjusted, c.alpha)
+        return None
+
+    def versus_best(self, method: str) -> str:
+        """``best``, ``tie`` (not distinguishable from the best row), ``worse`` or ``''``
+        (no comparison with the best row)."""
+        best = self.best
+        if best is None:
+            return ""
+        if method == best:
+            return "best"
+        c = self.comparison(method, best)
+        if c is None:
+            return ""
+        return "worse" if c.distinguishable else "tie"
+
+    def key_comparisons(self) -> list[Comparison]:
+        """The comparisons that the text states: every row against ``before``, SSA-SVR (the
+        method of the start-up experiment reproduced) against every other, and the best
+        row against the runner-up."""
+        names = [r.method for r in self.rows if r.method not in REFERENCE_ROWS]
+        want = [(m, "before") for m in names]
+        if "SSA-SVR" in names:
+            want += [("SSA-SVR", m) for m in names if m != "SSA-SVR"]
+        ranked = sorted((r for r in self.rows if r.method in names
+                         and math.isfinite(r.mean_deg)), key=lambda r: r.mean_deg)
+        if len(ranked) > 1:
+            want.append((ranked[1].method, ranked[0].method))
+        out, seen = [], set()
+        for a, b in want:
+            c = self.comparison(a, b)
+            if c is not None and frozenset((a, b)) not in seen:
+                seen.add(frozenset((a, b)))
+                out.append(c)
+        return out
+
+    def with_intervals(self, errors_deg: dict, *, pairs=(), n_boot: int = DEFAULT_N_BOOT,
+                       random_state: int = 0) -> "HeadingTable":
+        """This table with 95 % intervals on the rows of ``errors_deg`` and comparisons.
+
+        Parameters
+        ----------
+        errors_deg : dict
+            Row name -> ``errors[column][start-up]``: the heading errors [deg] of the cycles
+            behind each cell, one array per start-up; every row on the same start-ups
+            (:func:`~nfs.report.intervals.cluster_bootstrap`).
+        pairs : sequence of (str, str)
+            Row pairs (a, b) to compare as a - b, Holm-adjusted together.
+        n_boot, random_state : int
+            Replicates and seed of the bootstrap.
+
+        Returns
+        -------
+        HeadingTable
+        """
+        names = list(errors_deg)
+        if not names:
+            return self
+        boot = cluster_bootstrap([errors_deg[n] for n in names], n_boot=n_boot,
+                                 random_state=random_state)
+        cells, means = boot.cell_intervals(), boot.row_intervals()
+        ci = {n: (tuple((float(a), float(b)) for a, b in cells[i]),
+                  (float(means[i][0]), float(means[i][1]))) for i, n in enumerate(names)}
+        rows = tuple(dataclasses.replace(r, cell_ci_deg=ci[r.method][0],
+                                         mean_ci_deg=ci[r.method][1])
+                     if r.method in ci else r for r in self.rows)
+        comps = tuple(compare_rows(boot, names, list(pairs)))
+        return dataclasses.replace(self, rows=rows, comparisons=comps)
 
     def row(self, method: str) -> TableRow:
         """The row of ``method`` (KeyError listing the rows if absent)."""
@@ -90,50 +199,102 @@ class HeadingTable:
         """
         tail = [r for r in self.rows if r.method in ("stable", "floor")]
         head = [r for r in self.rows if r.method not in ("stable", "floor")]
-        return HeadingTable(self.temperatures_c, tuple(head + list(rows) + tail),
-                            self.notes + tuple(notes), features_mode or self.features_mode)
+        return dataclasses.replace(self, rows=tuple(head + list(rows) + tail),
+                                   notes=self.notes + tuple(notes),
+                                   features_mode=features_mode or self.features_mode)
 
     def _labels(self) -> list[str]:
         return [f"{t:g}" for t in self.temperatures_c]
 
+    def _has_ci(self) -> bool:
+        return any(r.mean_ci_deg is not None for r in self.rows)
+
     def to_markdown(self, digits: int = 4) -> str:
-        """A Markdown table: method, one column per T0, mean; notes below."""
-        head = ["method", *self._labels(), "mean"]
+        """A Markdown table: method, one column per T0, mean; with intervals also the mean's
+        95 % interval, the spread of the tuned rows over their seeds and the verdict against
+        the best row; notes and the key comparisons below (cells' intervals: CSV, JSON)."""
+        ci = self._has_ci()
+        seeds = any(r.seed_means_deg for r in self.rows)
+        head = ["method", *self._labels(), "mean"] + (["95 % CI"] if ci else []) + \
+            (["seeds (min-max)"] if seeds else []) + (["vs best"] if self.comparisons else [])
         lines = ["| " + " | ".join(head) + " |",
                  "|" + "|".join(["---"] + ["---:"] * (len(head) - 1)) + "|"]
         for r in self.rows:
             cells = [_fmt(v, digits) for v in (*r.rmse_deg, r.mean_deg)]
+            if ci:
+                cells.append(f"[{_fmt(r.ci_low_deg, digits)}, {_fmt(r.ci_high_deg, digits)}]"
+                             if math.isfinite(r.ci_low_deg) else "")
+            if seeds:
+                sm = r.seed_means_deg
+                cells.append(f"{_fmt(min(sm), digits)}-{_fmt(max(sm), digits)} ({len(sm)})"
+                             if sm else "")
+            if self.comparisons:
+                cells.append(self.versus_best(r.method))
             lines.append("| " + " | ".join([r.method, *cells]) + " |")
         text = "\n".join(lines) + "\n"
         if self.notes:
             text += "\n" + "\n".join(self.notes) + "\n"
+        key = self.key_comparisons()
+        if key:
+            text += ("\nPaired comparisons of the means (difference, its 95 % interval, "
+                     f"Holm-adjusted over the {len(self.comparisons)} comparisons made):\n\n"
+                     + "".join(f"- {c.sentence(digits)}\n" for c in key))
         return text
 
     def to_csv(self) -> str:
         """CSV: header ``method,<T0>...,mean``, one line per row, values in deg.
 
-        With compensated rows, a last column ``features_mode`` gives their mode (empty for
-        ``before``, ``stable`` and ``floor``, which use no feature).
+        With intervals, then ``mean_ci_low,mean_ci_high``, ``<T0>_ci_low,<T0>_ci_high`` per
+        start temperature, ``seeds_min,seeds_max,n_seeds`` (tuned rows) and ``vs_best``
+        (empty where not computed).  With compensated rows, a last column ``features_mode``
+        gives their mode (empty for ``before``, ``stable`` and ``floor``, which use no
+        feature).
         """
         mode = self.features_mode
-        lines = [",".join(["method", *self._labels(), "mean"]
-                          + (["features_mode"] if mode else []))]
+        ci = self._has_ci()
+        labels = self._labels()
+        head = ["method", *labels, "mean"]
+        if ci:
+            head += ["mean_ci_low", "mean_ci_high"]
+            head += [f"{t}_ci_{e}" for t in labels for e in ("low", "high")]
+            head += ["seeds_min", "seeds_max", "n_seeds", "vs_best"]
+        lines = [",".join(head + (["features_mode"] if mode else []))]
         for r in self.rows:
             cells = [r.method, *(_fmt(v, 6) for v in (*r.rmse_deg, r.mean_deg))]
+            if ci:
+                cells += ["" if r.mean_ci_deg is None else _fmt(v, 6) for v in
+                          (r.ci_low_deg, r.ci_high_deg)]
+                cells += ([_fmt(v, 6) for lo_hi in r.cell_ci_deg for v in lo_hi]
+                          if r.cell_ci_deg else [""] * (2 * len(labels)))
+                sm = r.seed_means_deg
+                cells += ([_fmt(min(sm), 6), _fmt(max(sm), 6), str(len(sm))] if sm
+                          else ["", "", ""])
+                cells.append(self.versus_best(r.method))
             if mode:
                 cells.append("" if r.method in REFERENCE_ROWS else mode)
             lines.append(",".join(cells))
         return "\n".join(lines) + "\n"
 
     def to_dict(self) -> dict:
-        """The JSON form: ``{"temperatures_c": [...], "features_mode": ..., "rows":
-        [{"method", "rmse_deg", "mean_deg"}, ...], "notes": [...]}`` (NaN as null;
-        ``features_mode`` null without compensated rows)."""
+        """The JSON form: ``{"temperatures_c": [...], "features_mode": ..., "best": ...,
+        "rows": [{"method", "rmse_deg", "mean_deg", "ci_low_deg", "ci_high_deg",
+        "cell_ci_deg": [[low, high], ...], "seed_means_deg": [...], "vs_best"}, ...],
+        "comparisons": [{"method_a", "method_b", "difference_deg", "ci_low_deg",
+        "ci_high_deg", "p_value", "p_adjusted", "distinguishable"}, ...], "notes": [...]}``
+        (NaN as null; ``features_mode`` null without compensated rows; intervals null where
+        not computed)."""
         return {
             "temperatures_c": [float(t) for t in self.temperatures_c],
             "features_mode": self.features_mode,
+            "best": self.best,
             "rows": [{"method": r.method, "rmse_deg": [_json(v) for v in r.rmse_deg],
-                      "mean_deg": _json(r.mean_deg)} for r in self.rows],
+                      "mean_deg": _json(r.mean_deg), "ci_low_deg": _json(r.ci_low_deg),
+                      "ci_high_deg": _json(r.ci_high_deg),
+                      "cell_ci_deg": None if r.cell_ci_deg is None else
+                      [[_json(a), _json(b)] for a, b in r.cell_ci_deg],
+                      "seed_means_deg": [_json(v) for v in r.seed_means_deg],
+                      "vs_best": self.versus_best(r.method) or None} for r in self.rows],
+            "comparisons": [c.to_dict() for c in self.comparisons],
             "notes": list(self.notes),
         }
 
@@ -173,7 +334,13 @@ def plot_heading_table(table: HeadingTable, title: str = ""):
         color = fixed.get(r.method)
         if color is None:
             color, k = palette[k % len(palette)], k + 1
-        ax.bar(x - 0.4 + width * (i + 0.5), r.rmse_deg, width, label=r.method, color=color)
+        yerr = None
+        if r.cell_ci_deg is not None:
+            v = np.asarray(r.rmse_deg, dtype=float)
+            lo_hi = np.asarray(r.cell_ci_deg, dtype=float)
+            yerr = np.nan_to_num(np.vstack([v - lo_hi[:, 0], lo_hi[:, 1] - v]).clip(0.0))
+        ax.bar(x - 0.4 + width * (i + 0.5), r.rmse_deg, width, label=r.method, color=color,
+               yerr=yerr, error_kw={"elinewidth": 0.6, "capsize": 0.0, "ecolor": "0.2"})
     for r in table.rows:
         if r.method == "floor":
             ax.axhline(r.mean_deg, color="k", ls="--", lw=1.0, label="white-noise floor")
@@ -184,6 +351,9 @@ def plot_heading_table(table: HeadingTable, title: str = ""):
     if table.features_mode:
         title += f" (features: {table.features_mode})"
     ax.set_title(title)
+    if any(r.cell_ci_deg is not None for r in bars):
+        ax.text(0.99, 0.98, "bars: 95 % intervals (two-level bootstrap)", ha="right",
+                va="top", transform=ax.transAxes, fontsize=7, color="0.3")
     ax.grid(axis="y", alpha=0.3)
     ax.legend(fontsize=8, ncol=2)
     fig.tight_layout()
