@@ -25,8 +25,7 @@ from .io.measurement import Run, RunMeta
 from .noise import gyro_noise_dph, white_noise
 from .sensors import (Schedule, axis_elevation_deg, earth_rate_along_axis_dph,
                       thermometer_reading, turntable_motion)
-from .variability import (Variability, chamber_terms, describe_units, initial_temperatures,
-                          unit_instrument)
+from .variability import Variability, describe_units, start_up_state, unit_instrument
 
 __all__ = ["RunConditions", "SimulationResult", "simulate_run", "effect_context",
            "conditions_from_run", "thermal_power",
@@ -277,8 +276,8 @@ def simulate_run(inst: Instrument, cond: RunConditions) -> SimulationResult:
     ambient = cond.start_temperature_c if cond.chamber_c is None else cond.chamber_c(t)
     initial = cond.start_temperature_c
     if var is not None and var.per_start_up:
-        initial = initial_temperatures(inst, var, cond.start_temperature_c, cond.seed)
-        ambient = ambient + chamber_terms(var, t, cond.seed)
+        initial, terms = start_up_state(inst, var, cond.start_temperature_c, t, cond.seed)
+        ambient = ambient + terms
     th = thermal.simulate(inst.network, t, ambient_c=ambient, initial_c=initial,
                           power_w=power)
     for e, j, params in stateful:

@@ -7,17 +7,6 @@ All values below are standard deviations (absolute [K], [s], or relative [1]).
 
 Per start-up (run-to-run)
 -------------------------
-Initial node temperatures at power-on (the soak), node j:
-
-    T_j(0) = T0 + d_soak + e_j + r_j(T0),       d_soak ~ N(0, soak_offset_c^2),
-                                                e_j ~ N(0, soak_node_c^2)              [degC]
-
-r_j is the residual of an unfinished soak: the unpowered network brought from
-``soak_from_c`` into the chamber at T0 and left there for t_soak (its duration scattered
-log-normally by ``soak_h_rel_std`` about ``soak_h``), solved exactly
-(:func:`thermal.simulate`): r(t_soak) = expm(A t_soak) (T_from - T0) 1; the slowest mode
-(the housing's global time constant) remains, so r grows with |T_from - T0|.
-
 Chamber air temperature, on top of the scenario's own profile (``[chamber]``):
 
     T_amb(t) = T0 [+ ripple] + w(t) + a_c s(2 pi t / P + phi)                          [degC]
@@ -31,6 +20,22 @@ controller heating and cooling at constant rates between its thresholds, s = (2/
 arcsin(sin)), amplitude a_c = ``cycling_c``, phase phi uniform in [0, 2 pi) (power-on is not
 synchronised with the controller) and period P = ``cycling_period_s`` scattered log-normally
 by ``cycling_period_rel_std``.
+
+Initial node temperatures at power-on (the soak), node j:
+
+    T_j(0) = S_j + d_soak + e_j,      d_soak ~ N(0, soak_offset_c^2),
+                                      e_j ~ N(0, soak_node_c^2)                        [degC]
+
+S is the soak, solved exactly (:func:`thermal.simulate`): the unpowered network, from
+``soak_from_c`` (an unfinished soak: the unit brought from the laboratory) or from T0, left
+for t_soak (``soak_h``, scattered log-normally by ``soak_h_rel_std``) in the chamber air
+T0 + w(t) + cycling(t) for -t_soak <= t < 0, the same wander and cycling that go on after
+power-on.  In still air S - T0 = expm(A t_soak) (T_from - T0) 1: the slowest mode (the
+housing's global time constant) remains, so the residual grows with |T_from - T0|; the
+wander and the cycling add what the network's low-pass lets through, the housing lagging the
+air and the coil lagging the housing (gradients of a few thousandths of a kelvin, where
+independent draws e_j of the same size per node would be tenths).  d_soak and e_j stand for
+what a lumped chamber misses (the door opened to cable the unit, unevenly stirred air).
 
 Per unit (unit-to-unit, drawn once per unit)
 --------------------------------------------
@@ -70,8 +75,9 @@ from .instrument import Instrument
 from .parameters import ParameterError, expand_paths, get_param, param_paths, set_params
 
 __all__ = ["Variability", "NO_VARIABILITY", "REALISTIC", "VARIABILITY_PRESETS",
-           "CYCLING_SHAPES", "unit_scatter", "unit_instrument", "initial_temperatures",
-           "chamber_terms", "lognormal_factor", "describe_units", "VARIABILITY_KEYS"]
+           "VARIABILITY_KEYS", "CYCLING_SHAPES", "SOAK_STEP_S", "unit_scatter",
+           "unit_instrument", "start_up_state", "chamber_terms", "lognormal_factor",
+           "describe_units"]
 
 #: Shapes of the chamber controller's cycling.
 CYCLING_SHAPES = ("sine", "triangle")
@@ -200,12 +206,15 @@ REALISTIC = Variability(
     # deviation in IEC 60068-3-5 terms) and the door is opened to cable the unit before
     # power-on: the unit sits a few tenths of a kelvin off the air it is then held in.
     soak_offset_c=0.2,
-    # Spatial non-uniformity of the chamber air (+-0.5-1 K over the workspace, IEC 60068-3-5)
-    # across a unit of about 0.3 m: a tenth of a kelvin between its parts.
-    soak_node_c=0.1,
+    # What the soak under the wandering chamber does not give: a steady spatial spread of the
+    # air (+-0.5-1 K over the workspace, IEC 60068-3-5) sets a steady gradient that persists
+    # after power-on and drives no rate; only its unsteady part, a few hundredths of a kelvin
+    # between parts coupled within minutes, relaxes after power-on.
+    soak_node_c=0.02,
     # Soaks end when the thermometers look steady (about 0.01 K/min), which leaves about
     # 0.5 K behind a 48 min global time constant (the default network's): 4 h +-15 % from a
-    # 23 C laboratory leaves 0.2-0.8 K at -32 C, 0.1-0.4 K at 54 C.
+    # 23 C laboratory leaves 0.2-0.8 K at -32 C, 0.1-0.4 K at 54 C (about twice as much in a
+    # unit whose housing couples 15 % less to the air).
     unfinished_soak=True, soak_from_c=23.0, soak_h=4.0, soak_h_rel_std=0.15,
     # The same fluctuation band as a slow wander: 0.1 K, correlated over 10 min (the
     # chamber's outer control loop and its refrigeration duty cycle).
@@ -317,28 +326,23 @@ def _unpowered(network: thermal.Network) -> thermal.Network:
                            links=network.links)
 
 
-def initial_temperatures(inst: Instrument, var: Variability, start_temperature_c: float,
-                         entropy) -> np.ndarray:
-    """Node temperatures at power-on T_j(0) [degC], shape (n_nodes,): T0 plus the common
-    offset, each node's scatter and the residual of an unfinished soak (module docstring).
-
-    ``entropy`` is the start-up's seed (a :class:`numpy.random.SeedSequence` entropy).
-    """
-    net = inst.network
-    t0 = float(start_temperature_c)
-    rng = _run_rng(entropy, _SOAK_KEY)
-    common, z_soak = rng.standard_normal(2)
-    out = np.full(len(net.node_names), t0 + var.soak_offset_c * common)
-    if var.soak_node_c:
-        for j, name in enumerate(net.node_names):
-            z = _run_rng(entropy, _NODE_KEY, _crc(name)).standard_normal()
-            out[j] += var.soak_node_c * z
-    if var.unfinished_soak:
-        soak_s = 3600.0 * var.soak_h * float(lognormal_factor(z_soak, var.soak_h_rel_std))
-        th = thermal.simulate(_unpowered(net), np.array([0.0, soak_s]), ambient_c=t0,
-                              initial_c=var.soak_from_c)
-        out += th.temperature_c[-1] - t0
-    return out
+def _ou(t: np.ndarray, sigma: float, tau_s: float, z: np.ndarray) -> np.ndarray:
+    """Ornstein-Uhlenbeck samples on the grid t from standard normals z, started stationary:
+    w_0 = sigma z_0, w_{k+1} = a_k w_k + sigma sqrt(1 - a_k^2) z_{k+1}, a_k = exp(-h_k / tau);
+    one linear filter per run of equal steps (equal to 1e-12: a grid k / fs has steps that
+    differ in their last bits)."""
+    a = np.exp(-np.diff(t) / tau_s)
+    x = sigma * np.concatenate([z[:1], np.sqrt(1.0 - a ** 2) * z[1:]])
+    w = np.empty_like(x)
+    w[0] = x[0]
+    k = 0                                           # w[k] known; fill the run of equal steps
+    while k < a.size:
+        j = k + 1
+        while j < a.size and abs(a[j] - a[k]) <= 1e-12:
+            j += 1
+        w[k + 1:j + 1] = lfilter([1.0], [1.0, -a[k]], x[k + 1:j + 1], zi=[a[k] * w[k]])[0]
+        k = j
+    return w
 
 
 def chamber_terms(var: Variability, time_s: np.ndarray, entropy) -> np.ndarray:
@@ -348,15 +352,7 @@ def chamber_terms(var: Variability, time_s: np.ndarray, entropy) -> np.ndarray:
     out = np.zeros(t.shape)
     if var.chamber_wander_c and t.size:
         z = _run_rng(entropy, _WANDER_KEY).standard_normal(t.size)
-        a = np.exp(-np.diff(t) / var.chamber_wander_tau_s)
-        x = var.chamber_wander_c * np.concatenate([z[:1], np.sqrt(1.0 - a ** 2) * z[1:]])
-        if a.size and np.ptp(a) == 0.0:             # a uniform grid: one linear filter
-            w = lfilter([1.0], [1.0, -a[0]], x)
-        else:
-            w = x.copy()
-            for k in range(1, t.size):
-                w[k] += a[k - 1] * w[k - 1]
-        out += w
+        out += _ou(t, var.chamber_wander_c, var.chamber_wander_tau_s, z)
     if var.cycling_c:
         rng = _run_rng(entropy, _CYCLING_KEY)
         phase = rng.uniform(0.0, 2.0 * np.pi)
@@ -367,6 +363,48 @@ def chamber_terms(var: Variability, time_s: np.ndarray, entropy) -> np.ndarray:
             (2.0 / np.pi) * np.arcsin(np.sin(arg))
         out += var.cycling_c * wave
     return out
+
+
+#: Step of the soak's grid [s]: resolves the chamber's wander and cycling (minutes).
+SOAK_STEP_S = 10.0
+
+
+def start_up_state(inst: Instrument, var: Variability, start_temperature_c: float,
+                   time_s: np.ndarray, entropy) -> tuple[np.ndarray, np.ndarray]:
+    """(T_j(0) [degC], shape (n_nodes,); the chamber's terms over the run [K], shape (n_t,)).
+
+    The soak: the unpowered network from ``soak_from_c`` (an unfinished soak) or from T0,
+    for t_soak before power-on, in the chamber air T0 + w(t) + cycling(t) (the same wander
+    and cycling that go on over the run, so the unit enters the run in step with its
+    chamber), solved exactly on a :data:`SOAK_STEP_S` grid held over each step; then the
+    common offset and each node's scatter (module docstring).  Without an unfinished soak,
+    a wander or a cycling, no soak is solved: T_j(0) = T0 + offsets.
+
+    ``entropy`` is the start-up's seed (a :class:`numpy.random.SeedSequence` entropy).
+    """
+    net = inst.network
+    t0 = float(start_temperature_c)
+    t = np.asarray(time_s, dtype=float)
+    rng = _run_rng(entropy, _SOAK_KEY)
+    common, z_soak = rng.standard_normal(2)
+    chamber = bool(var.chamber_wander_c or var.cycling_c)
+    out = np.full(len(net.node_names), t0)
+    terms = np.zeros(t.shape)
+    if var.unfinished_soak or chamber:
+        soak_s = 3600.0 * var.soak_h * float(lognormal_factor(z_soak, var.soak_h_rel_std))
+        n = max(int(np.ceil(soak_s / SOAK_STEP_S)), 1)
+        soak_t = t[0] - soak_s + SOAK_STEP_S * np.arange(n)
+        both = chamber_terms(var, np.concatenate([soak_t, t]), entropy)
+        terms = both[n:]
+        th = thermal.simulate(_unpowered(net), np.append(soak_t, t[0]),
+                              ambient_c=t0 + both[:n + 1],
+                              initial_c=var.soak_from_c if var.unfinished_soak else t0)
+        out = th.temperature_c[-1].copy()
+    out += var.soak_offset_c * common
+    if var.soak_node_c:
+        for j, name in enumerate(net.node_names):
+            out[j] += var.soak_node_c * _run_rng(entropy, _NODE_KEY, _crc(name)).standard_normal()
+    return out, terms
 
 
 def describe_units(units: int, run_units: Sequence[int]) -> str:

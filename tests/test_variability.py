@@ -21,8 +21,7 @@ from nfs.io.measurement import write_run
 from nfs.io.scenario import load_scenario
 from nfs.parameters import get_param
 from nfs.variability import (NO_VARIABILITY, REALISTIC, Variability, chamber_terms,
-                             initial_temperatures, lognormal_factor, unit_instrument,
-                             unit_scatter)
+                             lognormal_factor, start_up_state, unit_instrument, unit_scatter)
 
 SHORT = 1300.0          # two 4-position cycles
 
@@ -217,12 +216,17 @@ def test_unit_scatter_matches_its_stated_std(default):
     assert "effects.tec_power.T_set" not in unit_scatter(inst, var)
 
 
+def _initial(inst, var, t0_c, entropy):
+    return start_up_state(inst, var, t0_c, np.arange(10.0), entropy)[0]
+
+
 def test_soak_scatter_matches_its_stated_std(default):
-    # Complete soak: T_j(0) - T0 = common + node, so over 600 start-ups its std is
-    # sqrt(soak_offset^2 + soak_node^2) and a difference of two nodes has std sqrt(2) soak_node.
-    var = dataclasses.replace(REALISTIC, unfinished_soak=False)
+    # Complete soak in still air: T_j(0) - T0 = common + node, so over 600 start-ups its std
+    # is sqrt(soak_offset^2 + soak_node^2) and a difference of two nodes has std
+    # sqrt(2) soak_node.
+    var = Variability(soak_offset_c=0.2, soak_node_c=0.1)
     inst = default.instrument
-    t0 = np.array([initial_temperatures(inst, var, 17.0, (3, k)) for k in range(600)]) - 17.0
+    t0 = np.array([_initial(inst, var, 17.0, (3, k)) for k in range(600)]) - 17.0
     total = np.hypot(var.soak_offset_c, var.soak_node_c)
     assert t0[:, 0].std(ddof=1) == pytest.approx(total, rel=0.15)
     assert (t0[:, 0] - t0[:, 1]).std(ddof=1) == pytest.approx(np.sqrt(2) * var.soak_node_c,
@@ -235,8 +239,24 @@ def test_unfinished_soak_of_one_node_is_exponential():
     net = thermal.Network(nodes=(thermal.Node("m", 3600.0, power_w=5.0),),
                           links=(thermal.Link("m", "chamber", 1.0),))
     var = Variability(unfinished_soak=True, soak_from_c=23.0, soak_h=2.0)
-    got = initial_temperatures(SimpleNamespace(network=net), var, -32.0, 1)
+    got = _initial(SimpleNamespace(network=net), var, -32.0, 1)
     assert got[0] - (-32.0) == pytest.approx(55.0 * np.exp(-2.0), rel=1e-9)
+
+
+def test_soak_under_a_wandering_chamber_is_its_low_pass():
+    # Closed form: a node of time constant tau_n = C / G driven by Ornstein-Uhlenbeck air
+    # (sigma, tau_w) has the stationary variance sigma^2 tau_w / (tau_w + tau_n); at power-on
+    # after a 4 h soak, over 400 start-ups within 15 % (std), and the node follows its air
+    # (positive correlation with the chamber's wander at t = 0, which the run continues).
+    net = thermal.Network(nodes=(thermal.Node("m", 600.0),),
+                          links=(thermal.Link("m", "chamber", 1.0),))
+    var = Variability(chamber_wander_c=0.1, chamber_wander_tau_s=600.0)
+    got = [start_up_state(SimpleNamespace(network=net), var, 5.0, np.arange(10.0), (8, k))
+           for k in range(400)]
+    node = np.array([g[0][0] for g in got]) - 5.0
+    air = np.array([g[1][0] for g in got])
+    assert node.std() == pytest.approx(0.1 * np.sqrt(600.0 / 1200.0), rel=0.15)
+    assert np.corrcoef(node, air)[0, 1] > 0.5
 
 
 def test_chamber_wander_and_cycling_statistics():
@@ -318,7 +338,8 @@ def test_preset_none_switches_a_written_table_off(tmp_path):
     text = load_scenario().path.read_text().replace('preset = "realistic"', 'preset = "none"')
     sc = load_scenario(_write(tmp_path, text))
     assert sc.variability == NO_VARIABILITY and sc.units == 3
-    bad = text.replace("soak_node_c = 0.1", "soak_node_c = -0.1")
+    bad = text.replace("soak_node_c = ", "soak_node_c = -")
+    assert bad != text
     with pytest.raises(ScenarioError, match="variability.soak_node_c"):
         load_scenario(_write(tmp_path, bad, "bad.toml"))
 
