@@ -92,6 +92,13 @@ def effect_unit(inst, path: str) -> str | None:
 
 
 def fit_bounds(inst, path: str) -> tuple[float, float]:
-    """:func:`default_bounds` of ``path`` at its value in ``inst``, effect units looked up."""
+    """:func:`default_bounds` of ``path`` at its value in ``inst``, effect units looked up,
+    within the physical bounds an effect parameter is registered with (shupe_stress's c_m)."""
     path = canonical_path(inst, path)
-    return default_bounds(path, get_param(inst, path), effect_unit(inst, path))
+    lo, hi = default_bounds(path, get_param(inst, path), effect_unit(inst, path))
+    if path.startswith("effects."):
+        label, name = path[len("effects."):].rsplit(".", 1)
+        physical = inst.effect(label).spec.parameter(name).bounds
+        if physical is not None:
+            lo, hi = max(lo, physical[0]), min(hi, physical[1])
+    return lo, hi

@@ -75,7 +75,8 @@ def test_patterns(inst):
     assert got == ["thermal.links.housing-chamber.conductance_w_per_k",
                    "thermometers.fog.lag_s", "thermometers.acc_x.lag_s",
                    "thermometers.acc_y.lag_s", "effects.shupe_gradient.k_r",
-                   "effects.shupe_rate.k_s", "effects.shupe_product.k_p"]
+                   "effects.shupe_rate.k_s", "effects.shupe_stress.k_m",
+                   "effects.shupe_stress.c_m"]
     with pytest.raises(ParameterError, match="matches no parameter"):
         expand_paths(inst, "thermal.nodes.*.capacity_w")
 
