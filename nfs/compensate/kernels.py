@@ -724,6 +724,24 @@ class RVRRegressor(_KernelRegressor):
         mu = beta * (Sigma @ Ptt)
         return mu, Sigma
 
+    @staticmethod
+    def _posterior_diag(PtP: np.ndarray, Ptt: np.ndarray, alpha: np.ndarray, beta: float
+                        ) -> tuple[np.ndarray, np.ndarray]:
+        """mu and the diagonal of Sigma, all that a re-estimation sweep needs: from the
+        Cholesky factor H = L L^T, Sigma_ii = sum_k (L^-1)_ki^2 and mu = beta L^-T L^-1
+        Phi^T t, without forming Sigma (the eigen-decomposition of :func:`_spd_inverse`
+        when the factorisation fails)."""
+        H = beta * PtP
+        H[np.diag_indices_from(H)] += alpha
+        c, info = scipy.linalg.lapack.dpotrf(H, lower=True, clean=True)
+        if info == 0:
+            Li, info = scipy.linalg.lapack.dtrtri(c, lower=True)
+        if info == 0:
+            return beta * (Li.T @ (Li @ Ptt)), np.einsum("ki,ki->i", Li, Li)
+        w, V = np.linalg.eigh(H)
+        w = np.maximum(w, np.finfo(float).eps * max(w.max(), np.finfo(float).tiny))
+        return beta * (V @ ((V.T @ Ptt) / w)), np.einsum("ik,ik->i", V / w, V)
+
     def fit(self, X, y):
         """Fit on features X (n_samples, n_features) and drift y (n_samples,). Returns self."""
         X, y = self._validate_fit(X, y)
@@ -747,8 +765,9 @@ class RVRRegressor(_KernelRegressor):
         n_iter, converged = 0, False
         for n_iter in range(1, max_iter + 1):
             Phi_k = Phi[:, keep]
-            mu, Sigma = self._posterior(PtP[np.ix_(keep, keep)], Ptt[keep], alpha[keep], beta)
-            g = np.clip(1.0 - alpha[keep] * np.diag(Sigma), eps, 1.0)
+            mu, diag = self._posterior_diag(PtP[np.ix_(keep, keep)], Ptt[keep], alpha[keep],
+                                            beta)
+            g = np.clip(1.0 - alpha[keep] * diag, eps, 1.0)
             with np.errstate(divide="ignore"):
                 alpha_new = g / (mu * mu)
             rss = float(np.sum((t - Phi_k @ mu) ** 2))
