@@ -482,7 +482,7 @@ class LSSVMRegressor(_KernelRegressor):
     n_features_in_ : int
 
     Cost: fit O(n^3 / 3) flops and n^2 doubles (n = 3000: ~9e9 flops, 72 MB); predict
-    O(n_test n).  Decimate long records (the caller uses ~1000 samples).
+    O(n_test n) (n = 3934, the default training set: 0.8 s to fit).
     """
 
     def __init__(self, gamma: float = 1.0, sigma: float = 1.0, standardize: bool = True):

@@ -106,16 +106,23 @@ def bc_pvalue(replicates: np.ndarray, estimate: float, null: float = 0.0) -> flo
     b = b[np.isfinite(b)]
     if b.size == 0 or not math.isfinite(estimate):
         return math.nan
+    return float(min(1.0, 2.0 * norm.cdf(-abs(norm.ppf(_below(b, null))
+                                              - 2.0 * _z0(b, estimate)))))
+
+
+def _below(b: np.ndarray, value: float) -> float:
+    """Fraction of replicates below ``value``, ties counted half, kept inside
+    [1/(B+1), B/(B+1)].  A replicate within 1e-9 (relative) of ``value`` is a tie: a
+    resample that draws the original data again reproduces the estimate up to rounding,
+    which must not decide the side (the same table on another number of BLAS threads)."""
     n = b.size
-    f0 = (np.count_nonzero(b < null) + 0.5 * np.count_nonzero(b == null)) / n
-    f0 = min(max(f0, 1.0 / (n + 1)), n / (n + 1))
-    return float(min(1.0, 2.0 * norm.cdf(-abs(norm.ppf(f0) - 2.0 * _z0(b, estimate)))))
+    tol = 1e-9 * max(abs(value), float(np.max(np.abs(b))), np.finfo(float).tiny)
+    f = (np.count_nonzero(b < value - tol) + 0.5 * np.count_nonzero(np.abs(b - value) <= tol)) / n
+    return min(max(f, 1.0 / (n + 1)), n / (n + 1))
 
 
 def _z0(b: np.ndarray, estimate: float) -> float:
-    n = b.size
-    f = (np.count_nonzero(b < estimate) + 0.5 * np.count_nonzero(b == estimate)) / n
-    return float(norm.ppf(min(max(f, 1.0 / (n + 1)), n / (n + 1))))
+    return float(norm.ppf(_below(b, estimate)))
 
 
 def holm(pvalues: Sequence[float]) -> np.ndarray:
