@@ -29,7 +29,7 @@ def study():
     settings = CompensationSettings(methods=("ls", "bp", "svr-grid", "pso-svr", "gwo-svr",
                                              "ssa-svr"), budget=30, test_repeats=3, n_jobs=2,
                                     features_mode="offline")
-    return run_study(load_scenario(), settings)
+    return run_study(load_scenario().nominal(), settings)
 
 
 def test_expected_shape(study):
@@ -69,7 +69,7 @@ def test_cycle_mode_ssa_svr_within_the_paper_ratio():
     # at most 0.6x, and below before at every start temperature but the 28 C one, where the
     # uncompensated start-up is already at the stable stage's level (0.0082 deg).
     settings = CompensationSettings(methods=("ssa-svr",), budget=30, test_repeats=3, n_jobs=2)
-    table = run_study(load_scenario(), settings).heading_table()
+    table = run_study(load_scenario().nominal(), settings).heading_table()
     assert table.features_mode == "cycle"
     ssa, before = table.row("SSA-SVR"), table.row("before")
     assert ssa.mean_deg <= 0.6 * before.mean_deg

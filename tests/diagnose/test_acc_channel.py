@@ -35,7 +35,7 @@ def _without_y(inst):
 @pytest.fixture(scope="module")
 def case():
     truth = load_instrument("default")
-    scen = dataclasses.replace(load_scenario(), duration_s=5400.0, seed=21)
+    scen = dataclasses.replace(load_scenario().nominal(), duration_s=5400.0, seed=21)
     runs = [simulate_run(truth, c).run for c in scen.conditions()]
     return truth, _without_y(truth), runs
 

@@ -32,7 +32,7 @@ TEMPS = (-32.0, -5.0, 17.0, 43.0, 54.0)
 
 @pytest.fixture(scope="module")
 def scenario():
-    return load_scenario()
+    return load_scenario().nominal()
 
 
 def _runs(scenario, inst, seed, temps=TEMPS):

@@ -36,7 +36,7 @@ THERMOMETER_FLOOR_K = math.hypot(0.01, 0.0625 / math.sqrt(12.0))
 
 @pytest.fixture(scope="module")
 def scenario():
-    return load_scenario()
+    return load_scenario().nominal()
 
 
 @pytest.fixture(scope="module")

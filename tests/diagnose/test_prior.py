@@ -27,7 +27,7 @@ from nfs.io.scenario import load_scenario
 
 @pytest.fixture(scope="module")
 def scenario():
-    return load_scenario()
+    return load_scenario().nominal()
 
 
 def test_table_widths(scenario):

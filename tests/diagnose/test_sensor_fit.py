@@ -50,7 +50,7 @@ def test_level_closed_form():
 
 @pytest.fixture(scope="module")
 def drift_fit():
-    sc = load_scenario()
+    sc = load_scenario().nominal()
     truth = set_params(sc.instrument, TRUTH)
     runs = [simulate_run(truth, c).run for c in sc.conditions()]
     return truth, fit_model(sc.instrument, runs, stages=("drift",))

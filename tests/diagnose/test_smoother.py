@@ -1,9 +1,10 @@
 """Tests of nfs.diagnose.smoother: node temperatures of runs from their thermometers.
 
-"Measured" runs: the default scenario's conditions (``load_scenario()``) at T0 = -32, 17 and
-54 C, cut to 1 h, simulated (nfs.experiment.simulate_run, with thermometer noise and the
-0.0625 K quantum) by an instrument whose network differs from the model's; the model is the
-default instrument.  Oracle: the simulator's node temperatures and rates
+"Measured" runs: the default scenario's conditions in its nominal world
+(``load_scenario().nominal()``: soaked exactly at T0) at T0 = -32, 17 and 54 C, cut to
+1 h, simulated (nfs.experiment.simulate_run, with thermometer noise and the 0.0625 K quantum)
+by an instrument whose network differs from the model's; the model is the default
+instrument.  Oracle: the simulator's node temperatures and rates
 (``SimulationResult.thermal``), the hidden truth, against the model's open-loop solution
 (thermal.simulate from the chamber temperature, as the diagnosis does without the smoother).
 
@@ -57,7 +58,7 @@ T0_INDEX = (0, 3, 6)            # -32, 17, 54 C
 
 @pytest.fixture(scope="module")
 def scenario():
-    return load_scenario()
+    return load_scenario().nominal()
 
 
 def simulated(inst, scenario, which=T0_INDEX):

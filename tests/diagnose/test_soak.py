@@ -23,7 +23,7 @@ OFFSETS = {"fog": 0.37, "acc_x": -0.21, "acc_y": 0.03}
 
 @pytest.fixture(scope="module")
 def setup():
-    sc = load_scenario()
+    sc = load_scenario().nominal()
     truth = set_params(sc.instrument, {f"thermometers.{k}.offset_c": v
                                        for k, v in OFFSETS.items()})
     conds = [replace(c, duration_s=600.0) for c in sc.conditions()]
@@ -75,7 +75,7 @@ def test_unit_warming_slower_than_the_model(setup):
     # warms 3x slower in the first minute): the fitted amplitude of the model's warming
     # absorbs it and the offsets still come back within 0.02 K.
     inst, _ = setup
-    sc = load_scenario()
+    sc = load_scenario().nominal()
     slow = set_params(inst, {**{f"thermometers.{k}.offset_c": v for k, v in OFFSETS.items()},
                              "thermal.nodes.electronics.power_w": 4.0 / 3,
                              "thermal.nodes.board.power_w": 7.0 / 3,

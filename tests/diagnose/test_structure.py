@@ -33,11 +33,11 @@ HIDDEN_G = 0.3
 
 @pytest.fixture(scope="module")
 def default():
-    return load_scenario().instrument
+    return load_scenario().nominal().instrument
 
 
 def _runs(inst):
-    sc = load_scenario()
+    sc = load_scenario().nominal()
     conds = [dataclasses.replace(c, duration_s=7200.0) for c in sc.conditions()
              if c.start_temperature_c in TEMPS]
     return [simulate_run(inst, c).run for c in conds]
@@ -226,7 +226,7 @@ def test_effect_alternative_is_one_sided(default):
 
 def test_bad_input(default):
     """Oracle: leave-one-start-temperature-out needs two start temperatures."""
-    sc = load_scenario()
+    sc = load_scenario().nominal()
     cond = dataclasses.replace(sc.conditions()[0], duration_s=1200.0)
     run = simulate_run(default, cond).run
     with pytest.raises(NfsError, match="two start temperatures"):
