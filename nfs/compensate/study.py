@@ -115,7 +115,10 @@ class SeedResult:
     """Tuned hyperparameters (empty for an untuned method)."""
     on_bound: tuple[str, ...] = ()
     """Tuned hyperparameters found within 1 % (of the box's width in the tuner's scale) of
-    a bound of their box, e.g. ``('C high',)``."""
+    a bound of their box, e.g. ``('C high (100)',)``."""
+    startup_errors_deg: tuple = ()
+    """Start-up heading errors of its compensated test runs [deg], by start temperature,
+    one array per run."""
 
 
 @dataclass(frozen=True)
@@ -197,7 +200,10 @@ class CompensationStudy:
             if ref in names:
                 pairs += [(ref, m) for m in names if m != ref]
         errors = {n: self.startup_errors(n) for n in ("before", *names, "stable")}
-        return table.with_intervals(errors, pairs=pairs, random_state=s.random_state,
+        variants = {n: [r.startup_errors_deg for r in res.seeds]
+                    for n, res in self.results.items() if len(res.seeds) > 1}
+        return table.with_intervals(errors, pairs=pairs, variants=variants,
+                                    random_state=s.random_state,
                                     **({} if n_boot is None else {"n_boot": n_boot}))
 
     def _method_notes(self) -> tuple[str, ...]:
@@ -206,7 +212,8 @@ class CompensationStudy:
         n_all = int(self.dataset.X.shape[0])
         notes = ["Intervals: 95 %, bias-corrected, from a two-level bootstrap over the test "
                  "start-ups and their cycles; vs best: tie = not distinguishable from the "
-                 "best compensated row (paired bootstrap of the difference of means, Holm)."]
+                 "best compensated row (paired bootstrap of the difference of means over the "
+                 "same start-ups, a tuned row drawing one of its seeds per replicate; Holm)."]
         fewer = {n: r.compensator.settings.get("n_samples") for n, r in self.results.items()}
         fewer = {n: k for n, k in fewer.items() if k is not None and k < n_all}
         if fewer:
@@ -353,11 +360,11 @@ def run_study(scenario, settings: CompensationSettings | None = None, *,
             tick(f"trained {spec.name}" + (f" (seed {seed})" if spec.seeded else ""))
             nf = northfind_runs([comp.compensate(r, drift_dph=p)
                                  for r, p in zip(test_runs, preds)], scenario.northfind)
-            rmse = tuple(pooled_rmse(stage_errors(nf[k], scenario.northfind)[0]
-                                     for k in test.runs_at(i))
-                         for i in range(len(scenario.start_temperatures_c)))
+            errs = errors_by_temperature(test, nf)
+            rmse = tuple(pooled_rmse(e) for e in errs)
             params, bound = _tuned(comp.estimator)
-            done[j] = SeedResult(seed, rmse, float(np.nanmean(rmse)), params, bound)
+            done[j] = SeedResult(seed, rmse, float(np.nanmean(rmse)), params, bound,
+                                 tuple(tuple(e) for e in errs))
             fitted[j] = (comp, nf, preds)
     tick("intervals")
     for spec in specs:

@@ -43,7 +43,11 @@ mean, where the bias of seven cells adds up while their spread averages down.
 
 Paired comparisons: two rows scored on the same start-ups are resampled with the same draws
 (common random numbers), so the replicates of the difference of their row means carry the
-pairing.  Its p-value inverts the bias-corrected interval: the largest level at which the
+pairing.  A row trained several times (a tuner run with several seeds, the row showing one
+of them) has its variants: in each replicate of a comparison it is represented by one of
+its variants drawn at random, so that the difference between two methods carries the spread
+of their trainings as well as that of the test start-ups (two trained models scored on the
+same start-ups can differ consistently while their tuners cannot be told apart).  Its p-value inverts the bias-corrected interval: the largest level at which the
 interval still excludes zero, p = 2 Phi(-|Phi^-1(F0) - 2 z0|), F0 = #{d* < 0} / B, with F0
 kept inside [1/(B+1), B/(B+1)].  Several comparisons are adjusted with Holm's step-down
 method (Holm 1979, Scand. J. Statist. 6, 65-70), which controls the family-wise error rate.
@@ -153,6 +157,9 @@ class ClusterBootstrap:
     """Replicates of every cell, shape (n_rows, n_columns, n_boot)."""
     level: float = LEVEL
     """Confidence level of the intervals."""
+    compare_replicates: np.ndarray | None = None
+    """Replicates of each row mean for comparisons, shape (n_rows, n_boot): a row with
+    variants takes a variant drawn at random in each replicate (None: the row itself)."""
 
     @property
     def row_means(self) -> np.ndarray:
@@ -184,7 +191,9 @@ class ClusterBootstrap:
         """Row mean i minus row mean j, its interval and its two-sided p-value (paired:
         both rows were resampled with the same draws)."""
         d = float(self.row_means[i] - self.row_means[j])
-        reps = self.row_replicates[i] - self.row_replicates[j]
+        r = self.row_replicates if self.compare_replicates is None else \
+            self.compare_replicates
+        reps = r[i] - r[j]
         lo, hi = bc_interval(reps, d, self.level)
         return d, lo, hi, bc_pvalue(reps, d)
 
@@ -198,8 +207,8 @@ def _nanmean(a: np.ndarray, axis: int) -> np.ndarray:
         return np.where(n > 0, s / np.maximum(n, 1), np.nan)
 
 
-def cluster_bootstrap(errors, *, n_boot: int = DEFAULT_N_BOOT, random_state: int = 0,
-                      level: float = LEVEL) -> ClusterBootstrap:
+def cluster_bootstrap(errors, *, variants=None, n_boot: int = DEFAULT_N_BOOT,
+                      random_state: int = 0, level: float = LEVEL) -> ClusterBootstrap:
     """Two-level bootstrap of a table of pooled RMSEs (see the module docstring).
 
     Parameters
@@ -211,6 +220,11 @@ def cluster_bootstrap(errors, *, n_boot: int = DEFAULT_N_BOOT, random_state: int
         are resampled with the same draws, so differences between rows are paired.  A
         cluster's arrays may differ in length between rows (shorter ones are padded with
         NaN); non-finite errors are left out of every RMSE.
+    variants : sequence, optional
+        ``variants[row]``: None, or a list of tables like ``errors[row]`` (e.g. the same
+        method trained with each tuner seed, ``errors[row]`` among them), on the same
+        clusters.  Comparisons draw one of them per replicate (uniformly, from a stream of
+        its own, so the cluster draws do not depend on it).
     n_boot : int
         Replicates.
     random_state : int
@@ -224,16 +238,42 @@ def cluster_bootstrap(errors, *, n_boot: int = DEFAULT_N_BOOT, random_state: int
     """
     if n_boot < 1:
         raise ValueError(f"n_boot must be >= 1, got {n_boot}")
-    rows = [list(r) for r in errors]
-    n_rows = len(rows)
-    n_cols = len(rows[0]) if rows else 0
-    if any(len(r) != n_cols for r in rows):
+    shown = [list(r) for r in errors]
+    n_rows = len(shown)
+    variants = list(variants) if variants is not None else [None] * n_rows
+    if len(variants) != n_rows:
+        raise ValueError("variants needs one entry per row")
+    # every table resampled: the rows, then each row's variants
+    tables, owner = list(shown), []
+    for i, v in enumerate(variants):
+        for t in v or ():
+            tables.append(list(t))
+            owner.append(i)
+    cells, reps = _bootstrap_tables(tables, n_boot, np.random.default_rng(random_state))
+    compare = None
+    if owner:
+        compare = _nanmean(reps[:n_rows], axis=1)
+        pick = np.random.default_rng([random_state, 1])
+        means = _nanmean(reps, axis=1)
+        for i in range(n_rows):
+            idx = np.array([n_rows + k for k, o in enumerate(owner) if o == i])
+            if idx.size:
+                compare[i] = means[idx[pick.integers(0, idx.size, n_boot)],
+                                   np.arange(n_boot)]
+    return ClusterBootstrap(cells=cells[:n_rows], cell_replicates=reps[:n_rows], level=level,
+                            compare_replicates=compare)
+
+
+def _bootstrap_tables(tables, n_boot: int, rng) -> tuple[np.ndarray, np.ndarray]:
+    """Cells and replicates of every table, all resampled with the same draws."""
+    n_rows = len(tables)
+    n_cols = len(tables[0]) if tables else 0
+    if any(len(r) != n_cols for r in tables):
         raise ValueError("every row needs the same number of columns")
-    rng = np.random.default_rng(random_state)
     cells = np.full((n_rows, n_cols), np.nan)
     reps = np.full((n_rows, n_cols, n_boot), np.nan)
     for j in range(n_cols):
-        clusters = [[np.asarray(c, dtype=float).ravel() for c in r[j]] for r in rows]
+        clusters = [[np.asarray(c, dtype=float).ravel() for c in r[j]] for r in tables]
         n_cl = len(clusters[0])
         if any(len(c) != n_cl for c in clusters):
             raise ValueError(f"column {j}: every row needs the same clusters")
@@ -260,7 +300,7 @@ def cluster_bootstrap(errors, *, n_boot: int = DEFAULT_N_BOOT, random_state: int
         n = fin[:, pick[..., None], slot] & valid
         with np.errstate(invalid="ignore", divide="ignore"):
             reps[:, j, :] = np.sqrt(np.where(n, s, 0.0).sum(axis=(2, 3)) / n.sum(axis=(2, 3)))
-    return ClusterBootstrap(cells=cells, cell_replicates=reps, level=level)
+    return cells, reps
 
 
 @dataclass(frozen=True)

@@ -140,8 +140,9 @@ class HeadingTable:
                 out.append(c)
         return out
 
-    def with_intervals(self, errors_deg: dict, *, pairs=(), n_boot: int = DEFAULT_N_BOOT,
-                       random_state: int = 0) -> "HeadingTable":
+    def with_intervals(self, errors_deg: dict, *, pairs=(), variants: dict | None = None,
+                       n_boot: int = DEFAULT_N_BOOT, random_state: int = 0
+                       ) -> "HeadingTable":
         """This table with 95 % intervals on the rows of ``errors_deg`` and comparisons.
 
         Parameters
@@ -152,6 +153,10 @@ class HeadingTable:
             (:func:`~nfs.report.intervals.cluster_bootstrap`).
         pairs : sequence of (str, str)
             Row pairs (a, b) to compare as a - b, Holm-adjusted together.
+        variants : dict, optional
+            Row name -> the errors of each of its trainings (e.g. tuner seeds), like
+            ``errors_deg``'s; comparisons draw one per replicate, so they carry the spread
+            of the trainings too (the row's own intervals are those of ``errors_deg``).
         n_boot, random_state : int
             Replicates and seed of the bootstrap.
 
@@ -162,7 +167,9 @@ class HeadingTable:
         names = list(errors_deg)
         if not names:
             return self
-        boot = cluster_bootstrap([errors_deg[n] for n in names], n_boot=n_boot,
+        variants = variants or {}
+        boot = cluster_bootstrap([errors_deg[n] for n in names],
+                                 variants=[variants.get(n) for n in names], n_boot=n_boot,
                                  random_state=random_state)
         cells, means = boot.cell_intervals(), boot.row_intervals()
         ci = {n: (tuple((float(a), float(b)) for a, b in cells[i]),

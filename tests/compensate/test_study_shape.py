@@ -3,16 +3,19 @@ expect (by regime, not digits: the simulated instrument is not the paper's).
 
 Oracle: seed 004, Table 3 (../shared/reference/seed004_table3_heading_rmse_deg.csv):
 SSA-SVR 0.0101 deg vs 0.0209 before (ratio 0.48), every SVR variant ahead of BP.  Checked:
-SSA-SVR mean <= 0.6 x before; each SVR-family mean below BP's; every compensated mean above
-the white-noise floor.  Reduced: 3 test start-ups per temperature instead of 5, 6 of the 11
-methods (about 30 s); the tuners keep the default budget of 30 evaluations (at 12 or 20 the
-tuned SVR rows scatter between 0.008 and 0.018 deg).
+SSA-SVR mean <= 0.6 x before, and below it beyond the table's uncertainty (paired bootstrap
+over the test start-ups, Holm); each SVR-family mean below BP's, and BP better than none of
+them beyond the uncertainty; every compensated mean above the white-noise floor; every
+interval holds its estimate.  Reduced: 3 test start-ups per temperature instead of 5, 6 of
+the 11 methods; the default budget (30 evaluations) and 3 tuner seeds.
 
-The paper's comparison is a bench analysis of recorded runs, so it is reproduced with the
-offline features (the centred rate window).  With the features an instrument computes
-(cycle mode, the default) the SVR rows and BP trade places from one training draw to the
-next (over five training seeds BP's mean scatters from 0.008 to 0.016 deg); the slow test
-below checks the cycle-mode figure that matters, SSA-SVR against no compensation.
+The paper trains and tests on one unit, and its comparison is a bench analysis of recorded
+runs: the check runs in the default scenario's world without variability
+(:meth:`~nfs.io.scenario.Scenario.nominal`: one unit, every start-up soaked exactly at T0;
+training and test start-ups differ by their seeds) on the offline features (the centred rate
+window).  The slow tests check SSA-SVR against no compensation with the features an
+instrument computes (cycle mode), on that unit and on the default scenario, where the
+compensator trained on two units is scored on a third.
 """
 
 
@@ -21,23 +24,51 @@ import pytest
 
 from nfs.compensate.study import CompensationSettings, run_study
 from nfs.io.scenario import load_scenario
-from nfs.report.compensation import shape_checks
+from nfs.report.compensation import SVR_FAMILY, shape_checks
 
 
 @pytest.fixture(scope="module")
 def study():
     settings = CompensationSettings(methods=("ls", "bp", "svr-grid", "pso-svr", "gwo-svr",
                                              "ssa-svr"), budget=30, test_repeats=3, n_jobs=2,
-                                    features_mode="offline")
+                                    features_mode="offline", tuner_seeds=3)
     return run_study(load_scenario().nominal(), settings)
 
 
-def test_expected_shape(study):
-    table = study.heading_table()
+@pytest.fixture(scope="module")
+def table(study):
+    return study.heading_table()
+
+
+def test_expected_shape(table):
     checks = {c.name: c for c in shape_checks(table)}
     for name in ("SSA-SVR mean <= 0.6 x before", "SVR family ahead of BP",
                  "every compensated mean above the floor"):
         assert checks[name].passed, checks[name].detail
+
+
+def test_expected_shape_beyond_the_uncertainty(table):
+    ssa = table.comparison("SSA-SVR", "before")
+    assert ssa.distinguishable and ssa.ci_high_deg < 0, ssa.sentence()
+    # the table compares every row with SSA-SVR and with the best row
+    compared = [c for c in (table.comparison("BP", n) for n in SVR_FAMILY) if c is not None]
+    assert "SSA-SVR" in [c.method_b for c in compared]
+    for c in compared:
+        assert not (c.distinguishable and c.difference_deg < 0), c.sentence()
+    for r in table.rows:
+        if r.method != "floor":
+            assert r.ci_low_deg <= r.mean_deg <= r.ci_high_deg, r.method
+            lo_hi = np.asarray(r.cell_ci_deg)
+            assert np.all(lo_hi[:, 0] <= np.asarray(r.rmse_deg) + 1e-12), r.method
+            assert np.all(np.asarray(r.rmse_deg) <= lo_hi[:, 1] + 1e-12), r.method
+
+
+def test_tuned_rows_show_their_median_seed(study, table):
+    for name in ("PSO-SVR", "GWO-SVR", "SSA-SVR"):
+        means = [r.mean_deg for r in study.results[name].seeds]
+        assert len(means) == 3
+        assert table.row(name).mean_deg == pytest.approx(float(np.median(means)))
+    assert table.row("SVR (grid)").seed_means_deg == ()
 
 
 def test_drift_table_regime(study):
@@ -65,14 +96,24 @@ def test_same_seed_same_model(study):
 
 @pytest.mark.slow
 def test_cycle_mode_ssa_svr_within_the_paper_ratio():
-    # Seed 004's ratio (SSA-SVR 0.48x before) with the features an instrument computes:
-    # at most 0.6x, and below before at every start temperature but the 28 C one, where the
-    # uncompensated start-up is already at the stable stage's level (0.0082 deg).
+    # Seed 004's ratio (SSA-SVR 0.48x before) with the features an instrument computes, on
+    # one unit: at most 0.6x, and below before beyond the uncertainty.
     settings = CompensationSettings(methods=("ssa-svr",), budget=30, test_repeats=3, n_jobs=2)
     table = run_study(load_scenario().nominal(), settings).heading_table()
     assert table.features_mode == "cycle"
     ssa, before = table.row("SSA-SVR"), table.row("before")
     assert ssa.mean_deg <= 0.6 * before.mean_deg
-    for t0, a, b in zip(table.temperatures_c, ssa.rmse_deg, before.rmse_deg):
-        if t0 != 28.0:
-            assert a < b, (t0, a, b)
+    c = table.comparison("SSA-SVR", "before")
+    assert c.distinguishable and c.difference_deg < 0, c.sentence()
+
+
+@pytest.mark.slow
+def test_cycle_mode_ssa_svr_on_another_unit():
+    # The default scenario: trained on two units, scored on a third.  The unit-to-unit
+    # scatter of the drift coefficients is not in the training units' data, so the paper's
+    # ratio is not expected; the compensation must still help beyond the uncertainty.
+    settings = CompensationSettings(methods=("ssa-svr",), budget=30, test_repeats=3, n_jobs=2,
+                                    train_units=(0, 1), test_units=(2,))
+    table = run_study(load_scenario(), settings).heading_table()
+    c = table.comparison("SSA-SVR", "before")
+    assert c.distinguishable and c.difference_deg < 0, c.sentence()

@@ -120,3 +120,22 @@ def test_empty_cells_are_nan():
                             cell_replicates=np.array([[[np.nan] * 3, [1.0, 0.9, 1.1]]]))
     assert boot.row_means[0] == 1.0
     assert np.all(np.isnan(boot.cell_intervals()[0, 0]))
+
+
+def test_a_seed_spread_larger_than_the_gap_is_not_distinguishable():
+    # Method b is 5 % worse than the shown training of method a on every cycle of the same
+    # start-ups: as two trained models they differ.  Trained with three seeds whose errors
+    # scale by 0.9, 1.0 and 1.2, method a cannot be told from b: the comparison draws a
+    # seed per replicate.  The rows' own intervals do not depend on the variants.
+    rng = np.random.default_rng(7)
+    a = _draw(rng, 0.3, 1.0)
+    b = [[1.05 * c for c in col] for col in a]
+    seeds = [[[f * c for c in col] for col in a] for f in (0.9, 1.0, 1.2)]
+    plain = cluster_bootstrap([a, b], n_boot=2000, random_state=3)
+    mixed = cluster_bootstrap([a, b], variants=[seeds, None], n_boot=2000, random_state=3)
+    np.testing.assert_array_equal(plain.cell_replicates, mixed.cell_replicates)
+    (c_plain,) = compare_rows(plain, ["a", "b"], [("a", "b")])
+    (c_mixed,) = compare_rows(mixed, ["a", "b"], [("a", "b")])
+    assert c_plain.difference_deg == c_mixed.difference_deg < 0
+    assert c_plain.distinguishable and not c_mixed.distinguishable
+    assert c_mixed.ci_low_deg < 0 < c_mixed.ci_high_deg
