@@ -49,7 +49,7 @@ its variants drawn at random, so that the difference between two methods carries
 of their trainings as well as that of the test start-ups (two trained models scored on the
 same start-ups can differ consistently while their tuners cannot be told apart).  Its p-value inverts the bias-corrected interval: the largest level at which the
 interval still excludes zero, p = 2 Phi(-|Phi^-1(F0) - 2 z0|), F0 = #{d* < 0} / B, with F0
-kept inside [1/(B+1), B/(B+1)].  Several comparisons are adjusted with Holm's step-down
+kept inside [1/(B+1), B/(B+1)] and p no smaller than 2/(B+1).  Several comparisons are adjusted with Holm's step-down
 method (Holm 1979, Scand. J. Statist. 6, 65-70), which controls the family-wise error rate.
 Every draw comes from ``numpy.random.default_rng(random_state)``: same seed, same intervals.
 """
@@ -104,14 +104,15 @@ def bc_pvalue(replicates: np.ndarray, estimate: float, null: float = 0.0) -> flo
     """Two-sided p-value of ``estimate`` against ``null`` that inverts :func:`bc_interval`.
 
     The largest 1 - level at which the bias-corrected interval excludes ``null``:
-    p = 2 Phi(-|Phi^-1(F0) - 2 z0|), F0 the fraction of replicates below ``null``.
+    p = 2 Phi(-|Phi^-1(F0) - 2 z0|), F0 the fraction of replicates below ``null``; never
+    below 2 / (B + 1), the smallest p-value B replicates can resolve.
     """
     b = np.asarray(replicates, dtype=float)
     b = b[np.isfinite(b)]
     if b.size == 0 or not math.isfinite(estimate):
         return math.nan
-    return float(min(1.0, 2.0 * norm.cdf(-abs(norm.ppf(_below(b, null))
-                                              - 2.0 * _z0(b, estimate)))))
+    p = 2.0 * norm.cdf(-abs(norm.ppf(_below(b, null)) - 2.0 * _z0(b, estimate)))
+    return float(min(1.0, max(p, 2.0 / (b.size + 1))))
 
 
 def _below(b: np.ndarray, value: float) -> float:
