@@ -87,6 +87,10 @@ def _cmd_table(args) -> int:
             settings = dataclasses.replace(settings, test_repeats=args.repeats)
         if args.n_jobs is not None:
             settings = dataclasses.replace(settings, n_jobs=args.n_jobs)
+        if args.tuner_seeds is not None:
+            if args.tuner_seeds < 1:
+                raise NfsError(f"--tuner-seeds must be >= 1, got {args.tuner_seeds}")
+            settings = dataclasses.replace(settings, tuner_seeds=args.tuner_seeds)
         if args.features_mode is not None:
             settings = dataclasses.replace(settings, features_mode=args.features_mode)
         study = run_study(scenario, settings, progress=progress)
@@ -380,7 +384,11 @@ def build_parser() -> argparse.ArgumentParser:
     t.add_argument("--budget", type=int, default=None,
                    help="evaluations per tuned method (default: the scenario's, 30)")
     t.add_argument("--n-jobs", type=int, default=None,
-                   help="parallel evaluations of the tuners (default: the scenario's; -1 all)")
+                   help="trainings (methods x tuner seeds) run in parallel (default: the "
+                        "scenario's; -1 every core)")
+    t.add_argument("--tuner-seeds", type=int, default=None,
+                   help="seeds of each stochastic tuner; a tuned row is the median seed's "
+                        "(default: the scenario's, 3)")
     t.add_argument("--features-mode", default=None, metavar="MODE",
                    help=FEATURES_MODE_HELP + " (default: the scenario's, cycle)")
     t.add_argument("--no-compensation", action="store_true",

@@ -9,6 +9,7 @@ import pytest
 COMPENSATION = """[compensation]
 methods = ["ls", "ssa-svr"]
 budget = 6
+tuner_seeds = 2
 train_seed = 9
 test_repeats = 1
 n_jobs = 1
@@ -64,6 +65,9 @@ def test_table_with_compensation_writes_every_output(tmp_path, cli, scen_text):
         assert c["p_value"] <= c["p_adjusted"] <= 1.0
         assert c["distinguishable"] == (c["p_adjusted"] < 0.05)
     assert doc["best"] in ("LS", "SSA-SVR")
+    rows = {r["method"]: r for r in doc["rows"]}
+    assert len(rows["SSA-SVR"]["seed_means_deg"]) == 2 and rows["LS"]["seed_means_deg"] == []
+    assert rows["SSA-SVR"]["mean_deg"] == max(rows["SSA-SVR"]["seed_means_deg"])
     assert "95 % CI" in out.splitlines()[0] and "SSA-SVR vs LS: " in out
     row_csv = next(line for line in csv if line.startswith("SSA-SVR,")).split(",")
     assert row_csv[head.index("vs_best")] in ("best", "tie", "worse")
@@ -180,6 +184,7 @@ def test_compensate_refuses_runs_without_its_channels(tmp_path, cli, scen_text):
      "--features-mode: unknown mode 'live'; choose one of cycle, causal, offline"),
     (["table", "--features-mode", "centred", "-o", "out"],
      "--features-mode: unknown mode 'centred'; choose one of cycle, causal, offline"),
+    (["table", "--tuner-seeds", "0", "-o", "out"], "--tuner-seeds must be >= 1, got 0"),
 ])
 def test_bad_compensation_input(tmp_path, cli, scen_text, argv, msg):
     scen = tmp_path / "s.toml"
@@ -188,3 +193,12 @@ def test_bad_compensation_input(tmp_path, cli, scen_text, argv, msg):
     argv = [a.replace("RUNS", str(tmp_path / "runs")) for a in argv]
     code, _, err = cli(*argv)
     assert code == 2 and msg in err and len(err.strip().splitlines()) == 1
+
+
+def test_bad_tuner_seeds_in_the_scenario_names_the_key(tmp_path, cli, scenario_text):
+    scen = tmp_path / "s.toml"
+    scen.write_text(scenario_text("bad", 5, (-20.0, 40.0), 1300.0,
+                                  extra="[compensation]\ntuner_seeds = 0\n"))
+    code, _, err = cli("table", str(scen), "-o", str(tmp_path / "out"), "-q")
+    assert code == 2 and "compensation.tuner_seeds" in err and "Traceback" not in err
+    assert len(err.strip().splitlines()) == 1

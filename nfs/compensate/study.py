@@ -77,7 +77,7 @@ class CompensationSettings:
     """Seeds of each stochastic tuner (``random_state``, ``random_state + 1``, ...): a tuned
     row is the seed whose mean is the median, and the table gives the spread over seeds."""
     n_jobs: int | None = -1
-    """Parallel evaluations of a tuner's population (joblib; -1: every core)."""
+    """Trainings run in parallel (methods x tuner seeds; joblib workers; -1: every core)."""
     test_repeats: int | None = 5
     """Test start-ups per temperature (None: the scenario's ``repeats``).  The start-up and
     stable RMSE of a single run rest on 5 cycles each (+-30 %); five runs pool 25 (+-14 %)."""
