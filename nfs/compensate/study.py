@@ -395,7 +395,8 @@ def _train_and_predict(j: int, key: str, data: DriftDataset, s: CompensationSett
     """Train method ``key`` with ``seed`` (one worker: the tuner's own evaluations are
     serial) and predict the drift of every test run from its plan."""
     with warnings.catch_warnings():
-        warnings.simplefilter("ignore", ConvergenceWarning)   # stated in the notes
+        # capped iterations (RVR's evidence sweeps, BP's epochs) are part of the recipes
+        warnings.simplefilter("ignore", ConvergenceWarning)
         comp = train_compensator(key, data, budget=s.budget, random_state=seed, n_jobs=1)
         preds = [comp.predict_drift(plan=p) for p in plans]
     return j, comp, preds
