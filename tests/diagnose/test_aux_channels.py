@@ -32,7 +32,7 @@ def _runs(hidden: bool, seed: int = 21):
     if hidden:
         truth = truth.with_effects(list(truth.effects) + [make_effect(
             "aux_linear", {"channel": CURRENT.name, "k": K})])
-    sc = dataclasses.replace(load_scenario(), seed=seed)
+    sc = dataclasses.replace(load_scenario().nominal(), seed=seed)
     return [simulate_run(truth, c).run for c in sc.conditions()]
 
 
