@@ -9,6 +9,7 @@ correlation exp(-lag / tau)); and sample statistics over many draws, each with i
 """
 
 import dataclasses
+from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
@@ -92,15 +93,24 @@ def test_zero_scatter_is_the_nominal_world(tmp_path, scenario_text):
 
 @pytest.fixture(scope="module")
 def default():
-    """The default scenario (3 units, the realistic set), shortened to 2 cycles."""
-    return dataclasses.replace(load_scenario(), duration_s=SHORT)
+    """The default scenario (the realistic set) made by 3 units, shortened to 2 cycles."""
+    return dataclasses.replace(load_scenario(), units=3, duration_s=SHORT)
 
 
-def test_default_scenario_holds_the_realistic_set(default):
-    assert default.units == 3
-    assert default.variability == dataclasses.replace(REALISTIC, unit_seed=default.seed)
-    assert default.compensation.train_units == (0, 1)
-    assert default.compensation.test_units == (2,)
+def test_default_scenario_holds_the_realistic_set():
+    sc = load_scenario()
+    assert sc.units == 1
+    assert sc.variability == dataclasses.replace(REALISTIC, unit_seed=sc.seed)
+    assert sc.unit_split(sc.compensation.train_units, sc.compensation.test_units) == \
+        ((0,), (0,))
+
+
+def test_fleet_scenario_trains_and_tests_on_different_units():
+    sc = load_scenario(Path(__file__).resolve().parents[1] / "scenarios"
+                       / "startup_7temps_fleet.toml")
+    assert sc.units == 3 and sc.variability == dataclasses.replace(REALISTIC, unit_seed=sc.seed)
+    assert sc.compensation.train_units == (0, 1)
+    assert sc.compensation.test_units == (2,)
 
 
 def test_same_seed_same_bytes(default, tmp_path):
@@ -337,7 +347,7 @@ def test_preset_none_switches_a_written_table_off(tmp_path):
     # (the keys are still checked: a negative one is still an error).
     text = load_scenario().path.read_text().replace('preset = "realistic"', 'preset = "none"')
     sc = load_scenario(_write(tmp_path, text))
-    assert sc.variability == NO_VARIABILITY and sc.units == 3
+    assert sc.variability == NO_VARIABILITY and sc.units == 1
     bad = text.replace("soak_node_c = ", "soak_node_c = -")
     assert bad != text
     with pytest.raises(ScenarioError, match="variability.soak_node_c"):
