@@ -8,8 +8,8 @@ apart?".  This benchmark answers it on the problem the SVR rows of ``nfs table``
 Problem: the training start-ups of the default scenario (its ``[compensation]`` settings:
 training seed, features, features mode; 7 start temperatures x 2.5 h), the drift target
 separated by the wavelet, decimated to one sample every ``--decimate-s`` seconds (default
-60 s, half the table's density, to keep the benchmark near 15 min on 2 cores; ``--decimate-s
-30`` is the table's own).  Estimator, search box and validation score are those of the
+180 s: 350 samples, one evaluation about 30 ms, the whole benchmark about 9 min on 2 cores;
+``--decimate-s 30``, the table's own density, costs hours: a fit grows as n^2 to n^3).  Estimator, search box and validation score are those of the
 SSA-SVR row (:func:`nfs.compensate.methods.get_method`): the SVR (C, sigma, epsilon) box,
 the residual's standard deviation on the held-out start temperature (leave one start
 temperature out).
@@ -31,7 +31,7 @@ Printed:
    and scores), and the ratio (goal < 1 %).
 
 Run: ``python benchmarks/bench_tuning.py [--seeds 10] [--budgets 10,25,50,100,200]
-[--tuners ssa,pso,gwo,hho,random,grid,tpe] [--decimate-s 60] [--n-jobs 2] [--mealpy]
+[--tuners ssa,pso,gwo,hho,random,grid,tpe] [--decimate-s 180] [--n-jobs 2] [--mealpy]
 [--quick]``.
 """
 
@@ -185,7 +185,7 @@ def main(argv=None) -> None:
     ap.add_argument("--seeds", type=int, default=10, help="tuner seeds per (tuner, budget)")
     ap.add_argument("--budgets", default="10,25,50,100,200")
     ap.add_argument("--tuners", default=",".join(DEFAULT_TUNERS))
-    ap.add_argument("--decimate-s", type=float, default=60.0,
+    ap.add_argument("--decimate-s", type=float, default=180.0,
                     help="one training sample every S seconds (nfs table: 30)")
     ap.add_argument("--n-jobs", type=int, default=-1, help="parallel fold fits (joblib)")
     ap.add_argument("--mealpy", action="store_true", help="add mealpy's OriginalSSA")
