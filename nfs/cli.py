@@ -417,7 +417,8 @@ def build_parser() -> argparse.ArgumentParser:
                     help="wavelet cutoff period of the drift separation (default 512 s)")
     tr.add_argument("--seed", type=int, default=0, help="random state of models and tuners")
     tr.add_argument("--n-jobs", type=int, default=-1, help="parallel tuner evaluations")
-    tr.add_argument("-q", "--quiet", action="store_true")
+    tr.add_argument("-q", "--quiet", action="store_true",
+                    help="no progress on standard error")
     tr.set_defaults(func=_cmd_train)
 
     co = sub.add_parser("compensate", help="subtract a trained compensator's drift from runs",
@@ -468,7 +469,10 @@ def build_parser() -> argparse.ArgumentParser:
     fi.add_argument("--free", nargs="+", default=None,
                     help="free parameter paths or patterns (default: see nfs.diagnose.fit)")
     fi.add_argument("--stages", nargs="+", default=["thermal", "drift"],
-                    choices=["thermal", "drift"])
+                    choices=["thermal", "drift"],
+                    help="what to fit: thermal (network against the thermometers), drift "
+                         "(effect coefficients against the gyro), or both in that order "
+                         "(default)")
     fi.add_argument("--decimate-s", type=float, default=10.0,
                     help="time step of the fit [s] (default 10)")
     fi.add_argument("--prior-scale", type=float, default=1.0,
@@ -482,7 +486,8 @@ def build_parser() -> argparse.ArgumentParser:
     fi.add_argument("--no-noise-fit", action="store_true",
                     help="keep the model's gyro noise instead of fitting it to the Allan "
                          "deviation of the drift residual")
-    fi.add_argument("-q", "--quiet", action="store_true")
+    fi.add_argument("-q", "--quiet", action="store_true",
+                    help="no progress on standard error")
     fi.set_defaults(func=_cmd_fit)
 
     cm = sub.add_parser("compare", help="a model beside measured runs, channel by channel",
@@ -494,9 +499,11 @@ def build_parser() -> argparse.ArgumentParser:
     cm.add_argument("-o", "--output", required=True, help="report folder")
     cm.add_argument("--json", default=None, help="also write the comparison JSON here")
     cm.add_argument("--seed", type=int, default=0, help="seed of the model's noise")
-    cm.add_argument("--startup-end-s", type=float, default=3600.0)
+    cm.add_argument("--startup-end-s", type=float, default=3600.0,
+                    help="start-up stage: cycles ending before this time [s] (default 3600)")
     cm.add_argument("--stable-start-s", type=float, default=5400.0)
-    cm.add_argument("-q", "--quiet", action="store_true")
+    cm.add_argument("-q", "--quiet", action="store_true",
+                    help="no progress on standard error")
     cm.set_defaults(func=_cmd_compare)
 
     dg = sub.add_parser("diagnose", help="which physical effect the model is missing",
@@ -532,10 +539,14 @@ def build_parser() -> argparse.ArgumentParser:
     pr = sub.add_parser("preset", help="print a built-in instrument preset (TOML)",
                         description="Print a built-in instrument preset to copy and edit; "
                                     "without a name, list the presets.")
-    pr.add_argument("name", nargs="?", default=None)
+    pr.add_argument("name", nargs="?", default=None,
+                    help="preset to print (default: list the presets)")
     pr.set_defaults(func=_cmd_preset)
 
-    e = sub.add_parser("effects", help="list the registered physical effects")
+    e = sub.add_parser("effects", help="list the registered physical effects",
+                       description="List every registered physical effect (built-in and your own\n"
+                                   "registered ones): name, kind (gyro, accelerometer, thermal, "
+                                   "thermometer) and parameters.")
     e.set_defaults(func=_cmd_effects)
     return p
 
