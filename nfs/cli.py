@@ -501,7 +501,8 @@ def build_parser() -> argparse.ArgumentParser:
     cm.add_argument("--seed", type=int, default=0, help="seed of the model's noise")
     cm.add_argument("--startup-end-s", type=float, default=3600.0,
                     help="start-up stage: cycles ending before this time [s] (default 3600)")
-    cm.add_argument("--stable-start-s", type=float, default=5400.0)
+    cm.add_argument("--stable-start-s", type=float, default=5400.0,
+                    help="stable stage: cycles starting after this time [s] (default 5400)")
     cm.add_argument("-q", "--quiet", action="store_true",
                     help="no progress on standard error")
     cm.set_defaults(func=_cmd_compare)

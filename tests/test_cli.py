@@ -171,3 +171,26 @@ def test_console_script_exit_code(tmp_path):
     h = subprocess.run([sys.executable, "-m", "nfs.cli", "--help"], capture_output=True,
                        text=True)
     assert h.returncode == 0 and "table" in h.stdout and "northfind" in h.stdout
+
+
+def test_every_command_and_option_has_help():
+    # Invariant: `nfs --help` and `nfs CMD --help` explain every command, option and
+    # positional argument (argparse leaves help=None when none is given).
+    import argparse
+
+    from nfs.cli import build_parser
+    parser = build_parser()
+    subs = [a for a in parser._actions if isinstance(a, argparse._SubParsersAction)]
+    assert subs
+    missing = []
+    for action in subs:
+        helps = {c.dest: c.help for c in action._choices_actions}
+        for name, sub in action.choices.items():
+            if not helps.get(name) and not sub.description:
+                missing.append(name)
+            for a in sub._actions:
+                if isinstance(a, argparse._HelpAction):
+                    continue
+                if not a.help:
+                    missing.append(f"{name} {'/'.join(a.option_strings) or a.dest}")
+    assert not missing, f"no help text: {', '.join(missing)}"
