@@ -1,5 +1,6 @@
 """The nfs command: outputs, JSON form, and one-line errors with exit code 2 on bad input."""
 
+import argparse
 import json
 import subprocess
 import sys
@@ -8,6 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from nfs.cli import build_parser
 from nfs.io.scenario import default_scenario_path
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -176,9 +178,6 @@ def test_console_script_exit_code(tmp_path):
 def test_every_command_and_option_has_help():
     # Invariant: `nfs --help` and `nfs CMD --help` explain every command, option and
     # positional argument (argparse leaves help=None when none is given).
-    import argparse
-
-    from nfs.cli import build_parser
     parser = build_parser()
     subs = [a for a in parser._actions if isinstance(a, argparse._SubParsersAction)]
     assert subs
