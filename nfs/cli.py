@@ -183,20 +183,24 @@ def _cmd_northfind(args) -> int:
     from .io.atomic import atomic_write_text
     from .io.measurement import read_runs
     from .northfind import heading_rmse, north_find
+    if args.heading_hint is not None and not math.isfinite(args.heading_hint):
+        raise NfsError(f"--heading-hint: {args.heading_hint} is not a finite angle in degrees")
     runs = read_runs(args.data)
     rows = []
     out = {"runs": []}
     for run in runs:
-        res = north_find(run, tilt_correction=not args.no_tilt, settle_s=args.settle_s)
+        res = north_find(run, tilt_correction=not args.no_tilt, settle_s=args.settle_s,
+                         heading_hint_deg=args.heading_hint)
         known = res.true_heading_deg is not None
         st = heading_rmse(res, startup_end_s=args.startup_end_s,
                           stable_start_s=args.stable_start_s) if known else None
-        rows.append((run.name, run.meta.start_temperature_c, res.n_cycles,
+        rows.append((run.name, run.meta.start_temperature_c, res.n_cycles, res.ambiguous,
                      _circ_mean(res.heading_deg),
                      st.startup_deg if st else math.nan, st.stable_deg if st else math.nan))
         out["runs"].append({
             "name": run.name, "start_temperature_c": run.meta.start_temperature_c,
             "latitude_deg": run.meta.latitude_deg, "true_heading_deg": res.true_heading_deg,
+            "ambiguous": bool(res.ambiguous),
             "startup_rmse_deg": _j(st.startup_deg) if st else None,
             "stable_rmse_deg": _j(st.stable_deg) if st else None,
             "cycles": [{"t_start_s": _j(a), "t_end_s": _j(b), "heading_deg": _j(h),
@@ -206,8 +210,17 @@ def _cmd_northfind(args) -> int:
         })
     print("| run | T0 [C] | cycles | mean heading [deg] | start-up RMSE [deg] | stable RMSE [deg] |")
     print("|---|---:|---:|---:|---:|---:|")
-    for name, t0, n, h, su, sb in rows:
-        print(f"| {name} | {t0:g} | {n} | {h:.4f} | {_f(su)} | {_f(sb)} |")
+    for name, t0, n, amb, h, su, sb in rows:
+        if amb:
+            print(f"| {name} | {t0:g} | {n} | ambiguous | - | - |")
+        else:
+            print(f"| {name} | {t0:g} | {n} | {h:.4f} | {_f(su)} | {_f(sb)} |")
+    ambiguous = [r[0] for r in rows if r[3]]
+    if ambiguous:
+        print(f"ambiguous: {', '.join(ambiguous)}: a schedule whose positions lie on one "
+              "line (e.g. 0 and 180 deg) cannot tell the heading from its mirror image about "
+              "that line; give --heading-hint DEG (a coarse heading, e.g. from a magnetic "
+              "compass) to pick the branch (the JSON holds one branch, marked ambiguous)")
     if args.json:
         atomic_write_text(args.json, json.dumps(out, indent=1) + "\n")
     return 0
@@ -450,6 +463,9 @@ def build_parser() -> argparse.ArgumentParser:
     _runs(n)
     n.add_argument("--json", default=None, help="write per-cycle results as JSON")
     n.add_argument("--no-tilt", action="store_true", help="no tilt correction")
+    n.add_argument("--heading-hint", type=float, default=None, metavar="DEG",
+                   help="coarse heading of the axis at position 0 [deg] (e.g. a magnetic "
+                        "compass) that picks the branch a 2-position schedule cannot decide")
     n.add_argument("--settle-s", type=float, default=0.0,
                    help="seconds skipped at the start of each dwell (default 0)")
     n.add_argument("--startup-end-s", type=float, default=3600.0,

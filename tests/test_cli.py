@@ -10,7 +10,9 @@ import numpy as np
 import pytest
 
 from nfs.cli import build_parser
+from nfs.io.measurement import write_run
 from nfs.io.scenario import default_scenario_path
+from nfs.northfind.synthetic import synthetic_run
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -193,3 +195,25 @@ def test_every_command_and_option_has_help():
                 if not a.help:
                     missing.append(f"{name} {'/'.join(a.option_strings) or a.dest}")
     assert not missing, f"no help text: {', '.join(missing)}"
+
+
+def test_northfind_flags_a_two_position_run_and_takes_a_hint(tmp_path, cli):
+    # Oracle: an ideal 2-position run (0, 180 deg) at heading 290 deg determines the heading
+    # only up to its mirror (70 deg); a coarse hint picks the true branch to 1e-9 deg.
+    write_run(synthetic_run(heading_deg=290.0, latitude_deg=35.0, positions_deg=(0.0, 180.0),
+                            n_cycles=3, bias_dph=2.0, name="two"), tmp_path / "runs")
+    code, out, err = cli("northfind", str(tmp_path / "runs"), "--json",
+                         str(tmp_path / "a.json"))
+    assert code == 0
+    assert "| two |" in out and "ambiguous" in out.splitlines()[2]
+    assert any(line.startswith("ambiguous: two:") and "--heading-hint" in line
+               for line in out.splitlines())
+    assert json.loads((tmp_path / "a.json").read_text())["runs"][0]["ambiguous"] is True
+    code, out, err = cli("northfind", str(tmp_path / "runs"), "--heading-hint", "280",
+                         "--json", str(tmp_path / "b.json"))
+    assert code == 0 and "ambiguous" not in out
+    run = json.loads((tmp_path / "b.json").read_text())["runs"][0]
+    assert run["ambiguous"] is False
+    assert max(abs(c["error_deg"]) for c in run["cycles"]) < 1e-9
+    code, out, err = cli("northfind", str(tmp_path / "runs"), "--heading-hint", "nan")
+    assert "--heading-hint" in one_line_error(code, err)
