@@ -202,6 +202,20 @@ def _generations(budget: int, population: int, per_generation: int) -> int:
     return max(1, math.ceil((budget - population) / per_generation))
 
 
+def _evaluate_fixed(objective_batch: ObjectiveBatch, n_dims: int, budget: int,
+                    points: np.ndarray, population: int | None, method: str) -> TuneResult:
+    """Evaluate a set of positions fixed in advance (grid, random search) in batches of
+    ``population`` (default: one batch), up to the budget."""
+    ev = _Evaluator(objective_batch, n_dims, budget)
+    step = population or len(points)
+    try:
+        for start in range(0, len(points), step):
+            ev(points[start:start + step])
+    except _BudgetExhausted:
+        pass
+    return ev.result(method)
+
+
 # --------------------------------------------------------------------------------------
 # grid
 
@@ -243,14 +257,7 @@ def grid(objective_batch: ObjectiveBatch, n_dims: int, *, budget: int,
         with warnings.catch_warnings():  # a count that is not a power of 2 is fine here
             warnings.simplefilter("ignore", UserWarning)
             points = LOW + (HIGH - LOW) * sampler.random(budget)
-    ev = _Evaluator(objective_batch, n_dims, budget)
-    step = population or len(points)
-    try:
-        for start in range(0, len(points), step):
-            ev(points[start:start + step])
-    except _BudgetExhausted:
-        pass
-    return ev.result("grid")
+    return _evaluate_fixed(objective_batch, n_dims, budget, points, population, "grid")
 
 
 # --------------------------------------------------------------------------------------
@@ -269,14 +276,7 @@ def random_search(objective_batch: ObjectiveBatch, n_dims: int, *, budget: int,
     _check(n_dims, budget, population)
     rng = _rng(random_state)
     points = _uniform(rng, budget, n_dims)
-    ev = _Evaluator(objective_batch, n_dims, budget)
-    step = population or budget
-    try:
-        for start in range(0, budget, step):
-            ev(points[start:start + step])
-    except _BudgetExhausted:
-        pass
-    return ev.result("random")
+    return _evaluate_fixed(objective_batch, n_dims, budget, points, population, "random")
 
 
 # --------------------------------------------------------------------------------------
