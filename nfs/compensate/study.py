@@ -109,8 +109,6 @@ class SeedResult:
     """The method's random_state."""
     rmse_deg: tuple[float, ...]
     """Start-up heading RMSE at each start temperature [deg]."""
-    mean_deg: float
-    """Their mean [deg]."""
     best_params: dict
     """Tuned hyperparameters (empty for an untuned method)."""
     on_bound: tuple[str, ...] = ()
@@ -119,6 +117,11 @@ class SeedResult:
     startup_errors_deg: tuple = ()
     """Start-up heading errors of its compensated test runs [deg], by start temperature,
     one array per run."""
+
+    @property
+    def mean_deg(self) -> float:
+        """Mean of :attr:`rmse_deg` over the start temperatures [deg]."""
+        return float(np.nanmean(self.rmse_deg))
 
 
 @dataclass(frozen=True)
@@ -363,7 +366,7 @@ def run_study(scenario, settings: CompensationSettings | None = None, *,
             errs = errors_by_temperature(test, nf)
             rmse = tuple(pooled_rmse(e) for e in errs)
             params, bound = _tuned(comp.estimator)
-            done[j] = SeedResult(seed, rmse, float(np.nanmean(rmse)), params, bound,
+            done[j] = SeedResult(seed, rmse, params, bound,
                                  tuple(tuple(e) for e in errs))
             fitted[j] = (comp, nf, preds)
     tick("intervals")
