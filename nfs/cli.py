@@ -64,7 +64,10 @@ def _cmd_table(args) -> int:
     from .report import write_table
     if args.features_mode is not None:
         check_features_mode(args.features_mode, "--features-mode")
+    from .io.provenance import scenario_provenance
     scenario = _with_overrides(load_scenario(args.scenario), args)
+    _file(args.json, "--json")
+    folder = _folder(args, "table")
     title = f"{scenario.name}: heading RMSE by start temperature"
     progress = Progress("", args.quiet)
     if args.no_compensation:
@@ -96,6 +99,8 @@ def _cmd_table(args) -> int:
         study = run_study(scenario, settings, progress=progress)
         table = study.heading_table()
         paths = write_study(study, args.output, json_path=args.json, title=title)
+    _finish(folder, args, {"scenario": scenario_provenance(scenario),
+                           "compensation": not args.no_compensation})
     print(table.to_markdown(), end="")
     if not args.quiet:
         print("\nwrote " + ", ".join(str(p) for p in paths), file=sys.stderr)
@@ -109,6 +114,7 @@ def _cmd_train(args) -> int:
     get_method(args.method)                  # a bad name fails before any work
     resolve_features(args.features, ["aux_*"])
     check_features_mode(args.features_mode, "--features-mode")
+    _file(args.output, "-o")
     runs = read_runs(args.data)
     missing = [r.name for r in runs if r.meta.true_heading_deg is None]
     if missing:
@@ -140,13 +146,48 @@ def _cmd_compensate(args) -> int:
         raise NfsError(f"--features-mode {args.features_mode}: the model was trained in "
                        f"{comp.features_mode} mode, and is applied in the mode it was "
                        "trained in")
+    from .io.provenance import runs_provenance
     runs = read_runs(args.data)
+    folder = _folder(args, "compensate")
     # Every run is compensated before anything is written: a run that lacks an input
     # channel stops the command with nothing half-written.
     out = [comp.compensate(r) for r in runs]
     for r in out:
         print(write_run(r, args.output))
+    _finish(folder, args, {"runs": runs_provenance(runs), "model": str(args.model)})
     return 0
+
+
+def _folder(args, command: str):
+    """The checked output folder of a folder-writing command (before any work)."""
+    from .io.outdir import OutputFolder
+    return OutputFolder(args.output, command, overwrite=args.overwrite)
+
+
+def _file(path, option: str):
+    """Check an output file's place before any work (None passes)."""
+    from .io.outdir import check_output_file
+    if path is not None:
+        check_output_file(path, option)
+
+
+def _finish(folder, args, inputs: dict) -> None:
+    """Write the folder's manifest and say what happened to an earlier output's files."""
+    # The command line without the folder itself: the same command into two folders writes
+    # the same manifest.
+    argv, skip = [], False
+    for tok in getattr(args, "argv", []):
+        if skip:
+            skip = False
+        elif tok in ("-o", "--output"):
+            skip = True
+        elif not tok.startswith("--output=") and not (tok.startswith("-o") and
+                                                      not tok.startswith("--")):
+            argv.append(tok)
+    folder.finish(arguments=argv, inputs=inputs)
+    note = folder.summary()
+    if note:
+        print(f"nfs: {note}", file=sys.stderr)
 
 
 def _with_overrides(scenario, args):
@@ -165,7 +206,9 @@ def _cmd_simulate(args) -> int:
     from .experiment import simulate_run
     from .io.measurement import write_run
     from .io.scenario import load_scenario
+    from .io.provenance import scenario_provenance
     scenario = _with_overrides(load_scenario(args.scenario), args)
+    folder = _folder(args, "simulate")
     out = Path(args.output)
     conds = scenario.conditions()
     progress = Progress("simulating", args.quiet)
@@ -174,6 +217,7 @@ def _cmd_simulate(args) -> int:
         progress(i, len(conds), cond.name)
         written.append(write_run(simulate_run(scenario.instrument, cond).run, out))
     progress(len(conds), len(conds), "done")
+    _finish(folder, args, {"scenario": scenario_provenance(scenario)})
     for p in written:
         print(p)
     return 0
@@ -185,6 +229,7 @@ def _cmd_northfind(args) -> int:
     from .northfind import heading_rmse, north_find
     if args.heading_hint is not None and not math.isfinite(args.heading_hint):
         raise NfsError(f"--heading-hint: {args.heading_hint} is not a finite angle in degrees")
+    _file(args.json, "--json")
     runs = read_runs(args.data)
     rows = []
     out = {"runs": []}
@@ -253,6 +298,7 @@ def _cmd_fit(args) -> int:
     from .diagnose import fit_model, write_fitted_model
     from .io.measurement import read_runs
     inst = _load_model(args.model)
+    _file(args.output, "-o")
     runs = read_runs(args.data)
     if not args.quiet:
         print(f"fitting {inst.name} to {len(runs)} run(s)...", file=sys.stderr)
@@ -270,17 +316,21 @@ def _cmd_compare(args) -> int:
     from .diagnose import compare, write_report
     from .io.atomic import atomic_write_text
     from .io.measurement import read_runs
+    from .io.provenance import instrument_provenance, runs_provenance
     inst = _load_model(args.model)
+    _file(args.json, "--json")
     runs = read_runs(args.data)
+    folder = _folder(args, "compare")
     if not args.quiet:
         print(f"simulating {inst.name} beside {len(runs)} run(s)...", file=sys.stderr)
     c = compare(inst, runs, seed=args.seed, startup_end_s=args.startup_end_s,
                 stable_start_s=args.stable_start_s)
     paths = write_report(c, args.output)
-    for line in c.sentences():
-        print(f"- {line}")
     if args.json:
         atomic_write_text(args.json, json.dumps(c.to_dict(), indent=1) + "\n")
+    _finish(folder, args, {"runs": runs_provenance(runs), "model": instrument_provenance(inst)})
+    for line in c.sentences():
+        print(f"- {line}")
     if not args.quiet:
         print("wrote " + ", ".join(str(p) for p in paths[:3]) + " ...", file=sys.stderr)
     return 0
@@ -291,11 +341,13 @@ def _cmd_diagnose(args) -> int:
     from .io.atomic import atomic_write_text
     from .io.measurement import read_runs
     inst = _load_model(args.model)
+    if args.apply and args.output is None:
+        raise NfsError("--apply needs -o FILE for the new model")
+    _file(args.output, "-o")
+    _file(args.json, "--json")
     runs = read_runs(args.data)
     if args.apply:
         name, _, target = args.apply.partition(":")
-        if args.output is None:
-            raise NfsError("--apply needs -o FILE for the new model")
         new, fit, report = apply_candidate(inst, runs, name, target or None)
         from .diagnose import write_fitted_model
         write_fitted_model(fit, args.output)
@@ -407,6 +459,10 @@ def build_parser() -> argparse.ArgumentParser:
     t.add_argument("--no-compensation", action="store_true",
                    help="only the uncompensated rows (before, stable, floor)")
     t.add_argument("-q", "--quiet", action="store_true", help="no progress on stderr")
+    t.add_argument("--overwrite", action="store_true",
+                   help="write into a folder that holds another command's output or files "
+                        "of unknown origin (files of the earlier output that are not "
+                        "rewritten are removed)")
     t.set_defaults(func=_cmd_table)
 
     tr = sub.add_parser("train", help="train a drift compensator on measured runs",
@@ -445,6 +501,10 @@ def build_parser() -> argparse.ArgumentParser:
     co.add_argument("--features-mode", default=None, metavar="MODE",
                     help="check that the model was trained in this features mode (it is "
                          "always applied in its own)")
+    co.add_argument("--overwrite", action="store_true",
+                    help="write into a folder that holds another command's output or files "
+                         "of unknown origin (files of the earlier output that are not "
+                         "rewritten are removed)")
     co.set_defaults(func=_cmd_compensate)
 
     s = sub.add_parser("simulate", help="write measurement files for a scenario",
@@ -455,6 +515,10 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--seed", type=int, default=None, help="override the scenario's seed")
     s.add_argument("--repeats", type=int, default=None, help="override runs per temperature")
     s.add_argument("-q", "--quiet", action="store_true", help="no progress on stderr")
+    s.add_argument("--overwrite", action="store_true",
+                    help="write into a folder that holds another command's output or files "
+                         "of unknown origin (files of the earlier output that are not "
+                         "rewritten are removed)")
     s.set_defaults(func=_cmd_simulate)
 
     n = sub.add_parser("northfind", help="north-find measured or simulated runs",
@@ -521,6 +585,10 @@ def build_parser() -> argparse.ArgumentParser:
                     help="stable stage: cycles starting after this time [s] (default 5400)")
     cm.add_argument("-q", "--quiet", action="store_true",
                     help="no progress on standard error")
+    cm.add_argument("--overwrite", action="store_true",
+                    help="write into a folder that holds another command's output or files "
+                         "of unknown origin (files of the earlier output that are not "
+                         "rewritten are removed)")
     cm.set_defaults(func=_cmd_compare)
 
     dg = sub.add_parser("diagnose", help="which physical effect the model is missing",
@@ -572,6 +640,7 @@ def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``nfs`` console script; returns the exit code."""
     parser = build_parser()
     args = parser.parse_args(argv)
+    args.argv = list(sys.argv[1:] if argv is None else argv)
     try:
         return args.func(args)
     except NfsError as exc:

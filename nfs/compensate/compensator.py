@@ -9,7 +9,6 @@ refuses runs that lack one of its input channels.
 from __future__ import annotations
 
 import io
-import platform
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
@@ -18,14 +17,11 @@ from typing import Any
 
 import joblib
 import numpy as np
-import pywt
-import scipy
-import sklearn
 
-from .. import __version__
 from ..errors import NfsError
 from ..io.atomic import atomic_write_bytes
 from ..io.measurement import Run
+from ..io.provenance import library_versions
 from .dataset import DriftDataset, drift_dataset
 from .features import compute_features
 from .methods import get_method
@@ -41,13 +37,6 @@ __all__ = ["DriftCompensator", "PredictionPlan", "prediction_plan", "train_compe
 
 #: Format tag of a saved compensator.
 FORMAT = "nfs-compensator/1"
-
-
-def _versions() -> dict[str, str]:
-    """Versions of the libraries a model is trained with (saved beside it)."""
-    return {"nfs": __version__, "numpy": np.__version__, "scipy": scipy.__version__,
-            "scikit-learn": sklearn.__version__, "pywavelets": pywt.__version__,
-            "joblib": joblib.__version__, "python": platform.python_version()}
 
 
 @dataclass(frozen=True)
@@ -328,4 +317,4 @@ def train_compensator(method: str, runs: Sequence[Run] | DriftDataset, *,
         settings={"decimate_s": decimate_s, "cutoff_period_s": cutoff_period_s,
                   "budget": budget if spec.tuned else None, "random_state": random_state,
                   "n_samples": int(data.X.shape[0]), "features_mode": data.features_mode},
-        trained_on=data.run_names, fit_time_s=dt, versions=_versions())
+        trained_on=data.run_names, fit_time_s=dt, versions=library_versions())

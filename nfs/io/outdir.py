@@ -1,0 +1,211 @@
+"""Output folders that hold one experiment: checked before work, a manifest after it.
+
+Every command that writes a folder (``nfs table``, ``simulate``, ``compensate``, ``compare``)
+goes through :class:`OutputFolder`:
+
+1. **Before any work** the destination is checked: it must be a folder (or not exist yet) in
+   a writable place. A folder that holds files of another command, or files of unknown
+   origin, is refused with the list of those files unless the user passes ``--overwrite``:
+   a folder holds one experiment, so nothing of an earlier one is read as part of this one.
+2. **After the work**, :meth:`OutputFolder.finish` finds what this command wrote (every file
+   created or replaced since the check: the writers replace files atomically, so a rewritten
+   file has a new inode and modification time), removes the files that the folder's earlier
+   manifest listed and this command did not rewrite (they are stale), and writes the
+   manifest ``nfs-manifest.json``: the command, its arguments, what it read, the package
+   version and every written file with its SHA-256.
+
+The manifest holds no time stamp, so the same command on the same inputs writes the same
+bytes. Stale files are removed only after everything new is in place: a command that fails
+midway leaves the earlier experiment's files (and manifest) as they were, apart from the
+files it had already replaced atomically.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from .. import __version__
+from ..errors import NfsError
+from .atomic import atomic_write_text
+
+__all__ = ["MANIFEST_NAME", "OutputFolder", "check_output_file", "read_manifest"]
+
+#: File name of the manifest in every folder the package writes.
+MANIFEST_NAME = "nfs-manifest.json"
+_FORMAT = "nfs-manifest/1"
+
+
+def read_manifest(folder: str | os.PathLike) -> dict | None:
+    """The manifest of *folder* as a dict, or None when it has none (or an unreadable one)."""
+    path = Path(folder) / MANIFEST_NAME
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return None
+    if not isinstance(data, dict) or data.get("format") != _FORMAT:
+        return None
+    return data
+
+
+def _files(folder: Path) -> dict[str, tuple[int, int]]:
+    """Relative POSIX path -> (inode, mtime_ns) of every regular file under *folder*
+    (hidden temporary files of the atomic writers excluded)."""
+    out = {}
+    for root, dirs, names in os.walk(folder):
+        dirs[:] = sorted(d for d in dirs if not d.startswith("."))
+        for name in names:
+            if name.startswith(".") and name.endswith(".tmp"):
+                continue
+            p = Path(root) / name
+            try:
+                st = p.stat()
+            except OSError:
+                continue
+            out[p.relative_to(folder).as_posix()] = (st.st_ino, st.st_mtime_ns)
+    return out
+
+
+def _sha256(path: Path) -> str:
+    h = hashlib.sha256()
+    with open(path, "rb") as f:
+        for block in iter(lambda: f.read(1 << 20), b""):
+            h.update(block)
+    return h.hexdigest()
+
+
+def _writable_place(path: Path, option: str) -> None:
+    """Raise a located NfsError unless *path*'s nearest existing ancestor is a writable folder."""
+    probe = path
+    while not probe.exists():
+        if probe.parent == probe:
+            break
+        probe = probe.parent
+    if probe.exists() and not probe.is_dir():
+        raise NfsError(f"{option} {path}: '{probe}' is a file, so no folder can be made there")
+    if not os.access(probe, os.W_OK | os.X_OK):
+        raise NfsError(f"{option} {path}: '{probe}' is not writable")
+
+
+def check_output_file(path: str | os.PathLike, option: str = "-o") -> Path:
+    """Check, before any work, that a single output file can be written at *path*.
+
+    The file may exist (it is replaced atomically); *path* must not be a folder, and its
+    folder must exist and be writable.
+    """
+    p = Path(path)
+    if p.is_dir():
+        raise NfsError(f"{option} {p}: is a folder; give a file name")
+    if not p.parent.is_dir():
+        raise NfsError(f"{option} {p}: folder '{p.parent}' does not exist")
+    if not os.access(p.parent, os.W_OK | os.X_OK):
+        raise NfsError(f"{option} {p}: folder '{p.parent}' is not writable")
+    return p
+
+
+@dataclass
+class OutputFolder:
+    """A folder checked for one command's output before the work starts.
+
+    Parameters
+    ----------
+    path : path-like
+        The folder (created when missing, after the checks).
+    command : str
+        The command that writes it, e.g. ``"table"``; recorded in the manifest and compared
+        with an earlier manifest's.
+    overwrite : bool
+        Write into a folder that holds another command's files or files of unknown origin.
+        The earlier manifest's files that this command does not rewrite are still removed;
+        files of unknown origin are left alone (and reported).
+    option : str
+        The option that named the folder, for messages.
+    """
+
+    path: Path
+    command: str
+    overwrite: bool = False
+    option: str = "-o"
+    removed: list[str] = field(default_factory=list, init=False)
+    """Files of the earlier experiment removed by :meth:`finish`."""
+    foreign: list[str] = field(default_factory=list, init=False)
+    """Files of unknown origin left in the folder (only with ``overwrite``)."""
+    _before: dict = field(default_factory=dict, init=False, repr=False)
+    _earlier: list[str] = field(default_factory=list, init=False, repr=False)
+
+    def __post_init__(self) -> None:
+        self.path = Path(self.path)
+        p = self.path
+        if p.exists() and not p.is_dir():
+            raise NfsError(f"{self.option} {p}: is a file, not a folder; give a folder name")
+        _writable_place(p, self.option)
+        if p.is_dir():
+            self._before = _files(p)
+        manifest = read_manifest(p) if p.is_dir() else None
+        listed = set()
+        if manifest is not None:
+            listed = {f["path"] for f in manifest.get("files", []) if isinstance(f, dict)
+                      and isinstance(f.get("path"), str)}
+            self._earlier = sorted(listed)
+        unknown = sorted(set(self._before) - listed - {MANIFEST_NAME})
+        other_command = manifest is not None and manifest.get("command") != self.command
+        if not self.overwrite:
+            if other_command:
+                raise NfsError(
+                    f"{self.option} {p}: the folder holds the output of 'nfs "
+                    f"{manifest.get('command')}' ({len(listed)} files); a folder holds one "
+                    "experiment: choose another folder, or --overwrite to replace it")
+            if unknown:
+                shown = ", ".join(unknown[:5]) + (", ..." if len(unknown) > 5 else "")
+                raise NfsError(
+                    f"{self.option} {p}: the folder holds {len(unknown)} file(s) this package "
+                    f"did not list as its output ({shown}); choose an empty folder, or "
+                    "--overwrite to write into it anyway")
+        self.foreign = unknown  # the folder itself is made by the writers, when there is output
+
+    def finish(self, *, arguments: list[str] | None = None, inputs: dict | None = None) -> Path:
+        """Remove the earlier experiment's stale files and write the manifest; return its path.
+
+        Parameters
+        ----------
+        arguments : list of str, optional
+            The command line after ``nfs`` (recorded as given).
+        inputs : dict, optional
+            What the output was made from (scenario name and hash, data files, model), as
+            JSON-serialisable values.
+        """
+        self.path.mkdir(parents=True, exist_ok=True)
+        after = _files(self.path)
+        written = sorted(k for k, v in after.items()
+                         if k != MANIFEST_NAME and self._before.get(k) != v)
+        stale = [k for k in self._earlier if k not in written and k in after]
+        for rel in stale:
+            (self.path / rel).unlink(missing_ok=True)
+        self.removed = stale
+        self.foreign = [k for k in self.foreign if k not in written]
+        manifest = {
+            "format": _FORMAT,
+            "command": self.command,
+            "arguments": list(arguments or []),
+            "package_version": __version__,
+            "inputs": inputs or {},
+            "files": [{"path": rel, "sha256": _sha256(self.path / rel)} for rel in written],
+        }
+        out = self.path / MANIFEST_NAME
+        atomic_write_text(out, json.dumps(manifest, indent=1, sort_keys=False) + "\n")
+        return out
+
+    def summary(self) -> str:
+        """One line on what happened to files of an earlier experiment ('' when nothing)."""
+        parts = []
+        if self.removed:
+            shown = ", ".join(self.removed[:5]) + (", ..." if len(self.removed) > 5 else "")
+            parts.append(f"removed {len(self.removed)} file(s) of the earlier output that "
+                         f"this run did not rewrite ({shown})")
+        if self.foreign:
+            shown = ", ".join(self.foreign[:5]) + (", ..." if len(self.foreign) > 5 else "")
+            parts.append(f"left {len(self.foreign)} file(s) of unknown origin ({shown})")
+        return "; ".join(parts)

@@ -1,0 +1,78 @@
+"""What produced an output: package and library versions, hashes of what was read.
+
+Recorded in every output folder's manifest (:mod:`nfs.io.outdir`), in the JSON outputs and
+beside a saved compensator, so that a number can be traced to the code and the inputs that
+made it. Versions are read from the installed distributions' metadata
+(:func:`importlib.metadata.version`), which needs no import of the libraries themselves.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import platform
+from collections.abc import Iterable
+from importlib.metadata import PackageNotFoundError, version
+
+from .. import __version__
+
+__all__ = ["library_versions", "sha256_of_text", "runs_provenance", "scenario_provenance",
+           "instrument_provenance"]
+
+#: Distributions whose versions change the numbers (name in the metadata -> key written).
+_LIBRARIES = (("numpy", "numpy"), ("scipy", "scipy"), ("scikit-learn", "scikit-learn"),
+              ("PyWavelets", "pywavelets"), ("joblib", "joblib"))
+
+
+def library_versions() -> dict[str, str]:
+    """Versions of the package, the numerical libraries and Python (``"absent"`` if one is not
+    installed)."""
+    out = {"nfs": __version__}
+    for dist, key in _LIBRARIES:
+        try:
+            out[key] = version(dist)
+        except PackageNotFoundError:
+            out[key] = "absent"
+    out["python"] = platform.python_version()
+    return out
+
+
+def sha256_of_text(text: str) -> str:
+    """SHA-256 (hex) of *text* encoded as UTF-8."""
+    return hashlib.sha256(text.encode("utf-8")).hexdigest()
+
+
+def runs_provenance(runs: Iterable) -> list[dict]:
+    """Name, file and SHA-256 of each run's CSV file (as read), in the order given."""
+    out = []
+    for run in runs:
+        entry = {"name": run.name}
+        path = getattr(run, "path", None)
+        if path is not None:
+            entry["file"] = str(path)
+            try:
+                entry["sha256"] = hashlib.sha256(path.read_bytes()).hexdigest()
+            except OSError:
+                pass
+        out.append(entry)
+    return out
+
+
+def instrument_provenance(instrument) -> dict:
+    """Name and SHA-256 of an instrument as loaded (its TOML text, every parameter)."""
+    return {"name": instrument.name, "sha256": sha256_of_text(instrument.to_toml())}
+
+
+def scenario_provenance(scenario) -> dict:
+    """Name, file, seed and SHA-256 of a scenario as loaded, and its instrument's.
+
+    The scenario's hash covers every setting but its instrument (hashed apart, from its TOML
+    text) and the file path, so that a copy of a scenario file in another folder hashes the
+    same.
+    """
+    rest = dataclasses.replace(scenario, instrument=None, path=None)
+    return {"name": scenario.name,
+            "file": str(scenario.path) if scenario.path is not None else "built-in default",
+            "seed": scenario.seed,
+            "sha256": sha256_of_text(repr(rest)),
+            "instrument": instrument_provenance(scenario.instrument)}
