@@ -15,6 +15,7 @@
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import math
 import sys
@@ -71,14 +72,18 @@ def _cmd_table(args) -> int:
     title = f"{scenario.name}: heading RMSE by start temperature"
     progress = Progress("", args.quiet)
     if args.no_compensation:
+        # the start-ups of the full table's before row: its test start-ups
+        from .compensate.study import CompensationSettings, test_scenario
+        settings = scenario.compensation or CompensationSettings()
+        if args.repeats is not None:
+            settings = dataclasses.replace(settings, test_repeats=args.repeats)
         progress.what = "simulating"
-        res = run_scenario(scenario, progress=progress)
+        res = run_scenario(test_scenario(scenario, settings), progress=progress)
         table = uncompensated_table(res).with_intervals(
             {"before": errors_by_temperature(res), "stable": errors_by_temperature(res, stage=1)},
             random_state=scenario.seed)
         paths = write_table(table, args.output, json_path=args.json, title=title)
     else:
-        import dataclasses
         from .compensate.study import CompensationSettings, run_study
         from .report.compensation import write_study
         settings = scenario.compensation or CompensationSettings()
@@ -191,7 +196,6 @@ def _finish(folder, args, inputs: dict) -> None:
 
 
 def _with_overrides(scenario, args):
-    import dataclasses
     changes = {}
     if getattr(args, "seed", None) is not None:
         changes["seed"] = args.seed
@@ -445,7 +449,8 @@ def build_parser() -> argparse.ArgumentParser:
     t.add_argument("--json", default=None, help="also write the table as JSON to this file")
     t.add_argument("--seed", type=int, default=None, help="override the scenario's seed")
     t.add_argument("--repeats", type=int, default=None,
-                   help="override the runs per start temperature (Monte Carlo)")
+                   help="test start-ups per start temperature (overrides the "
+                        "compensation's test_repeats; the before row is theirs in both modes)")
     t.add_argument("--budget", type=int, default=None,
                    help="evaluations per tuned method (default: the scenario's, 30)")
     t.add_argument("--n-jobs", type=int, default=None,

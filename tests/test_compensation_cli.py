@@ -202,3 +202,20 @@ def test_bad_tuner_seeds_in_the_scenario_names_the_key(tmp_path, cli, scenario_t
     code, _, err = cli("table", str(scen), "-o", str(tmp_path / "out"), "-q")
     assert code == 2 and "compensation.tuner_seeds" in err and "Traceback" not in err
     assert len(err.strip().splitlines()) == 1
+
+
+def test_before_row_is_the_same_start_ups_with_and_without_compensation(tmp_path, cli,
+                                                                         scenario_text):
+    # One name, one number: --no-compensation tabulates the full table's test start-ups
+    # (test_repeats = 2 here, against repeats = 1 of the scenario itself).
+    scen = tmp_path / "s.toml"
+    scen.write_text(scenario_text("before", 5, (-20.0, 40.0), 2600.0,
+                                  extra=LS_ONLY.replace("test_repeats = 1", "test_repeats = 2")))
+    rows = []
+    for extra in ([], ["--no-compensation"]):
+        code, _, err = cli("table", scen, "-o", tmp_path / f"o{len(extra)}", "-q",
+                           "--json", tmp_path / f"t{len(extra)}.json", *extra)
+        assert code == 0, err
+        doc = json.loads((tmp_path / f"t{len(extra)}.json").read_text())
+        rows.append(next(r for r in doc["rows"] if r["method"] == "before"))
+    assert rows[0]["rmse_deg"] == rows[1]["rmse_deg"]

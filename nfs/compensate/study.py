@@ -44,7 +44,7 @@ from .methods import TABLE_METHODS, MethodSpec, get_method
 from .modes import DEFAULT_FEATURE_MODE, FEATURE_MODE_NOTES, check_features_mode
 
 __all__ = ["CompensationSettings", "MethodResult", "SeedResult", "CompensationStudy",
-           "run_study", "DriftRow", "errors_by_temperature"]
+           "run_study", "test_scenario", "DriftRow", "errors_by_temperature"]
 
 
 @dataclass(frozen=True)
@@ -303,6 +303,18 @@ def _test_drift(runs, cutoff_period_s: float, startup_end_s: float):
     return out
 
 
+def test_scenario(scenario, settings: CompensationSettings | None = None):
+    """The scenario's test start-ups: ``test_repeats`` per start temperature by each test unit.
+
+    The one definition of the start-ups behind a table's uncompensated rows, whether or not
+    the table also compensates (``nfs table --no-compensation`` tabulates the same start-ups
+    as the full table's ``before`` row).
+    """
+    s = settings or scenario.compensation or CompensationSettings()
+    _, test_units = scenario.unit_split(s.train_units, s.test_units)
+    return scenario.made_by(test_units, s.test_repeats or scenario.repeats)
+
+
 def run_study(scenario, settings: CompensationSettings | None = None, *,
               test=None, progress: Callable[[int, int, str], None] | None = None
               ) -> CompensationStudy:
@@ -324,7 +336,7 @@ def run_study(scenario, settings: CompensationSettings | None = None, *,
 
     train_units, test_units = scenario.unit_split(s.train_units, s.test_units)
     if test is None:
-        scenario = scenario.made_by(test_units, s.test_repeats or scenario.repeats)
+        scenario = test_scenario(scenario, s)
         tick("simulating the test start-ups")
         test = run_scenario(scenario)
     else:

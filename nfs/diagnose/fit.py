@@ -67,6 +67,7 @@ with what it says about the model's structure (:func:`nfs.diagnose.bound_advice.
 from __future__ import annotations
 
 import math
+import os
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any, Iterable, Mapping, Sequence
@@ -94,7 +95,8 @@ from .sensor_fit import LEVEL_PATHS, LevelData, level_from_means
 from .soak import SoakAnchor, anchor_offsets, soak_offsets
 from .stage import StageReport, solve_stage
 
-__all__ = ["StageReport", "FitResult", "fit_model", "default_free", "write_fitted_model",
+__all__ = ["StageReport", "FitResult", "fit_model", "fitted_name", "default_free",
+           "write_fitted_model",
            "model_drift_dph", "STAGES", "DEFAULT_DECIMATE_S"]
 
 #: The stages of :func:`fit_model`, in order.
@@ -656,6 +658,21 @@ def _noise_of(model: Instrument, data_d: list[_DriftRun]) -> GyroNoiseEstimate:
     return gyro_noise_from_residual(recs, fs)
 
 
+def fitted_name(model_name: str, runs: Sequence[Run]) -> str:
+    """Name of a model fitted to ``runs``: ``'<model> fitted to <source>'``, the source being
+    the runs' common folder, else their names' common prefix, else their count (a model that
+    was itself fitted keeps the name of the model it started from)."""
+    folders = {r.path.parent.name for r in runs if r.path is not None}
+    if len(folders) == 1 and all(r.path is not None for r in runs) and folders != {""}:
+        source = f"the runs in {folders.pop()}/"
+    else:
+        prefix = os.path.commonprefix([r.name for r in runs]).rstrip("_-. ")
+        source = f"{prefix}*" if len(runs) > 1 and prefix else \
+            (runs[0].name if len(runs) == 1 else f"{len(runs)} runs")
+    base = model_name.split(" fitted to ")[0]  # a refit names the first model, not a chain
+    return f"{base} fitted to {source}"
+
+
 def fit_model(inst: Instrument, runs: Sequence[Run], free: Iterable[str] | None = None, *,
               stages: Sequence[str] = STAGES, decimate_s: float = DEFAULT_DECIMATE_S,
               max_nfev: int | None = 100, drift_signal: str = "raw",
@@ -836,6 +853,7 @@ def fit_model(inst: Instrument, runs: Sequence[Run], free: Iterable[str] | None 
                         "the start temperature cannot be separated; "
                         + (", ".join(unident) if unident else "none flagged by the Jacobian")
                         + " reported as not identifiable")
+    current = replace(current, name=fitted_name(inst.name, runs))
     return FitResult(instrument=current, initial=inst, params=params,
                      initial_params=initial_params, stderr=stderr, bounds=bounds,
                      at_bound=tuple(at_bound), unidentifiable=unident, stages=stage_reports,

@@ -96,6 +96,22 @@ def test_write_fitted_model(fitted, tmp_path):
     back = load_instrument(path)
     for p, v in fitted.params.items():
         assert get_param(back, p) == pytest.approx(v, rel=1e-12)
+    # named after what it came from, and the name survives the file
+    assert fitted.instrument.name.startswith(f"{fitted.initial.name} fitted to ")
+    assert back.name == fitted.instrument.name
+
+
+def test_fitted_name_says_where_the_model_came_from(tmp_path):
+    from nfs.diagnose.fit import fitted_name
+    from nfs.io.measurement import Run
+    mk = lambda name, path=None: Run(name=name, columns={}, meta=None, path=path)  # noqa: E731
+    assert fitted_name("default", [mk("a", tmp_path / "chamber" / "a.csv"),
+                                   mk("b", tmp_path / "chamber" / "b.csv")]) == \
+        "default fitted to the runs in chamber/"
+    assert fitted_name("default", [mk("unit3_m32"), mk("unit3_p54")]) == \
+        "default fitted to unit3*"
+    assert fitted_name("default fitted to x", [mk("r1")]) == "default fitted to r1"
+    assert fitted_name("m", [mk("a"), mk("b")]) == "m fitted to 2 runs"
 
 
 def _shift(run, column, delta):
