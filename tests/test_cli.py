@@ -51,7 +51,8 @@ def test_table_simulate_northfind(tmp_path, cli, scenario_text):
     scen = tmp_path / "small.toml"
     scen.write_text(_small(scenario_text))
     code, out, err = cli("table", str(scen), "-o", str(tmp_path / "tab"),
-                             "--json", str(tmp_path / "h.json"), "--no-compensation")
+                             "--json", str(tmp_path / "h.json"), "--no-compensation",
+                             "--repeats", "1")
     assert code == 0
     assert out.splitlines()[0] == "| method | -20 | 40 | mean | 95 % CI |"
     for suffix in (".md", ".csv", ".json", ".png"):
@@ -217,3 +218,17 @@ def test_northfind_flags_a_two_position_run_and_takes_a_hint(tmp_path, cli):
     assert max(abs(c["error_deg"]) for c in run["cycles"]) < 1e-9
     code, out, err = cli("northfind", str(tmp_path / "runs"), "--heading-hint", "nan")
     assert "--heading-hint" in one_line_error(code, err)
+
+
+def test_runs_are_listed_by_start_temperature(tmp_path, cli, scenario_text):
+    # File names sort as text (+17, -32, -5); the runs come out by T0, repeats numerically.
+    scen = tmp_path / "order.toml"
+    scen.write_text(scenario_text("order", 3, (17.0, -32.0, -5.0), 700.0))
+    assert cli("simulate", scen, "-o", tmp_path / "runs", "--repeats", "11", "-q")[0] == 0
+    code, out, _ = cli("northfind", tmp_path / "runs", "--json", tmp_path / "nf.json")
+    assert code == 0
+    runs = json.loads((tmp_path / "nf.json").read_text())["runs"]
+    t0 = [r["start_temperature_c"] for r in runs]
+    assert t0 == sorted(t0) and t0[0] == -32.0 and t0[-1] == 17.0
+    names = [r["name"] for r in runs if r["start_temperature_c"] == -32.0]
+    assert names == sorted(names, key=lambda n: int(n.rsplit("r", 1)[1]))

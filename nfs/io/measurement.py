@@ -623,9 +623,18 @@ def read_run(path: str | os.PathLike) -> Run:
     return Run(name=csv_path.stem, columns=columns, meta=meta, path=csv_path)
 
 
+def _natural_key(name: str) -> tuple:
+    """Sort key of a run name with its digit groups compared as numbers (``r2`` < ``r10``)."""
+    return tuple((0, int(part), "") if part.isdigit() else (1, 0, part)
+                 for part in re.split(r"(\d+)", name) if part)
+
+
 def read_runs(paths: str | os.PathLike | Iterable[str | os.PathLike]) -> list[Run]:
-    """Read every run that *paths* name (files, stems or folders; see :func:`find_runs`)."""
-    return [read_run(csv_path) for csv_path in find_runs(paths)]
+    """Read every run that *paths* name (files, stems or folders; see :func:`find_runs`),
+    ordered by start temperature, then by name (digit groups as numbers), so that tables,
+    reports and figures list -32 C before -5 C before +17 C whatever the file names."""
+    runs = [read_run(csv_path) for csv_path in find_runs(paths)]
+    return sorted(runs, key=lambda r: (r.meta.start_temperature_c, _natural_key(r.name)))
 
 
 # ---------------------------------------------------------------------------------------------
