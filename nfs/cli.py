@@ -341,7 +341,8 @@ def _cmd_compare(args) -> int:
 
 
 def _cmd_diagnose(args) -> int:
-    from .diagnose import apply_candidate, diagnose
+    from .diagnose import apply_candidate, candidate_finding, diagnose
+    from .effects import get_effect
     from .io.atomic import atomic_write_text
     from .io.measurement import read_runs
     inst = _load_model(args.model)
@@ -352,10 +353,30 @@ def _cmd_diagnose(args) -> int:
     runs = read_runs(args.data)
     if args.apply:
         name, _, target = args.apply.partition(":")
+        get_effect(name)  # an unknown name fails before any work
+        if args.diagnosis is not None:
+            try:
+                found = json.loads(Path(args.diagnosis).read_text(encoding="utf-8"))
+            except (OSError, ValueError) as exc:
+                raise NfsError(f"--diagnosis {args.diagnosis}: not a readable JSON file "
+                               f"written by nfs diagnose --json ({exc})") from None
+            source = f"the diagnosis in {args.diagnosis}"
+        else:
+            if not args.quiet:
+                print(f"diagnosing {inst.name} on {len(runs)} run(s) before adding "
+                      f"{args.apply}...", file=sys.stderr)
+            found = diagnose(inst, runs, random_state=args.seed, alpha=args.alpha,
+                             node_temperatures=args.node_temperatures,
+                             check_structure=not args.no_structure).to_dict()
+            source = "the diagnosis of these runs"
+        significant, finding = candidate_finding(found, name, target or None)
+        if not significant:
+            print(f"nfs: warning: {source} does not support this effect: {finding}; "
+                  "adding it as asked", file=sys.stderr)
         new, fit, report = apply_candidate(inst, runs, name, target or None)
         from .diagnose import write_fitted_model
         write_fitted_model(fit, args.output)
-        print(f"added {args.apply}; refitted:")
+        print(f"added {args.apply} ({source}: {finding}); refitted:")
         print(fit.summary())
         for ch, after in report.get("rms_after", {}).items():
             before = report.get("rms_before", {}).get(ch, math.nan)
@@ -610,6 +631,10 @@ def build_parser() -> argparse.ArgumentParser:
     dg.add_argument("--apply", default=None, metavar="NAME[:TARGET]",
                     help="add this effect, refit and write the model to -o")
     dg.add_argument("-o", "--output", default=None, help="new model TOML (with --apply)")
+    dg.add_argument("--diagnosis", default=None, metavar="JSON",
+                    help="with --apply: what an earlier nfs diagnose --json found on these "
+                         "runs (default: diagnose them first); adding an effect it did not "
+                         "find significant gives a warning")
     dg.add_argument("--top", type=int, default=10, help="rows of the printed ranking")
     dg.add_argument("--seed", type=int, default=0, help="seed of the run bootstrap")
     dg.add_argument("--alpha", type=float, default=0.05,

@@ -272,8 +272,20 @@ def _thermometers(tbl: dict, network: Network, file: Any) -> dict[str, Thermomet
             lag_s=number(spec, "lag_s", p, file, 20.0, minimum=0.0),
             offset_c=number(spec, "offset_c", p, file, 0.0),
             noise_c=number(spec, "noise_c", p, file, 0.01, minimum=0.0),
-            quantum_c=number(spec, "quantum_c", p, file, 0.0625, minimum=0.0))
+            quantum_c=_kelvin_step(spec, "quantum_c", p, file, 0.0625))
     return out
+
+
+def _kelvin_step(spec: dict, key: str, prefix: str, file: Any, default: float) -> float:
+    """A thermometer's resolution [K]: 0 (none) up to 1 K; a larger value is refused as a
+    unit mistake (a quartz or platinum sensor of a north finder resolves 1/16 K or better:
+    62.5 is 0.0625 K written in mK)."""
+    value = number(spec, key, prefix, file, default, minimum=0.0)
+    if value > 1.0:
+        raise ScenarioError(f"{value!r} K is not a plausible thermometer resolution (at most "
+                            f"1 K); was it given in mK? (e.g. 0.0625 for 1/16 K)",
+                            file=file, key=f"{prefix}.{key}")
+    return value
 
 
 def _aux(val: Any, network: Network, file: Any) -> tuple[AuxChannel, ...]:

@@ -232,3 +232,15 @@ def test_runs_are_listed_by_start_temperature(tmp_path, cli, scenario_text):
     assert t0 == sorted(t0) and t0[0] == -32.0 and t0[-1] == 17.0
     names = [r["name"] for r in runs if r["start_temperature_c"] == -32.0]
     assert names == sorted(names, key=lambda n: int(n.rsplit("r", 1)[1]))
+
+
+def test_thermometer_resolution_in_millikelvin_is_refused(tmp_path, cli):
+    from nfs.instrument import preset_path
+    text = preset_path("default").read_text()
+    assert "quantum_c = 0.0625" in text
+    (tmp_path / "mk.toml").write_text(text.replace("quantum_c = 0.0625", "quantum_c = 62.5", 1))
+    (tmp_path / "s.toml").write_text(default_scenario_path().read_text().replace(
+        'instrument = "default"', f'instrument = "{tmp_path / "mk.toml"}"'))
+    code, _, err = cli("table", tmp_path / "s.toml", "-o", tmp_path / "o", "--no-compensation")
+    line = one_line_error(code, err)
+    assert "quantum_c" in line and "62.5 K is not a plausible" in line and "mK?" in line

@@ -25,6 +25,7 @@ from .compare_report import write_report
 from .diagnose import Diagnosis, apply_candidate, candidates, diagnose
 from .fit import FitResult, default_free, fit_model, write_fitted_model
 from .adequacy import ThermalAdequacy, thermal_adequacy
+from .result import candidate_finding
 from .params import (ParameterError, default_bounds, expand_paths, get_param, list_params,
                      set_params)
 from .smoother import RunSmoothing, smooth_runs
@@ -34,4 +35,4 @@ __all__ = ["Comparison", "compare", "write_report", "Diagnosis", "apply_candidat
            "candidates", "diagnose", "FitResult", "default_free", "fit_model",
            "write_fitted_model", "ParameterError", "default_bounds", "expand_paths",
            "get_param", "list_params", "set_params", "ThermalAdequacy", "thermal_adequacy",
-           "RunSmoothing", "smooth_runs", "structural_alternatives"]
+           "RunSmoothing", "smooth_runs", "structural_alternatives", "candidate_finding"]

@@ -10,7 +10,7 @@ from .candidates import Candidate
 from .drift_structure import DriftStructure
 from .fit import FitResult
 
-__all__ = ["CandidateScore", "Diagnosis"]
+__all__ = ["CandidateScore", "Diagnosis", "candidate_finding"]
 
 
 @dataclass(frozen=True)
@@ -165,3 +165,41 @@ class Diagnosis:
                 "drift_structure": (None if self.drift_structure is None
                                     else self.drift_structure.to_dict()),
                 "unexplained": self.unexplained, "alpha": self.alpha, "time_s": self.time_s}
+
+
+def candidate_finding(diagnosis: dict[str, Any], effect: str, target: str | None
+                      ) -> tuple[bool | None, str]:
+    """What a diagnosis (:meth:`Diagnosis.to_dict`, or the JSON of ``nfs diagnose --json``)
+    found for one candidate: (significant, a sentence).
+
+    ``significant`` is None when the candidate was not scored (the sentence gives the
+    reason, or says that the diagnosis did not consider it).
+    """
+    label = effect + (f":{target}" if target else "")
+    ranking = diagnosis.get("ranking") or []
+    for rank, row in enumerate(ranking, 1):
+        if row.get("effect") == effect and row.get("target") == target:
+            sig = bool(row.get("significant"))
+            p = row.get("holm_p")
+            ptxt = f"Holm p = {p:.2g}, " if isinstance(p, (int, float)) else ""
+            what = "significant" if sig else "not significant"
+            extra = ""
+            if row.get("explained_by"):
+                extra = f"; explained by {row['explained_by']}"
+            bs = row.get("beyond_structure_p")
+            alpha = diagnosis.get("alpha", 0.05)
+            if sig and isinstance(bs, (int, float)) and bs > alpha:
+                extra += (f"; tied with a rate term on every node (p beyond it "
+                          f"{bs:.2g})")
+            return sig, (f"'{label}' is {what} ({ptxt}CV RMS {row['cv_rms_before']:.4g} -> "
+                         f"{row['cv_rms_after']:.4g} {_unit(row.get('channel'))}, rank {rank} "
+                         f"of {len(ranking)}{extra})")
+    for row in diagnosis.get("not_tried") or []:
+        if row.get("effect") == effect and row.get("target") == target:
+            return None, f"'{label}' was not scored: {row.get('reason')}"
+    return None, f"'{label}' was not among the candidates the diagnosis scored"
+
+
+def _unit(channel: str | None) -> str:
+    return {"drift_dph": "deg/h", "acc_x_g": "g", "acc_y_g": "g", "thermometers": "K"}.get(
+        channel or "", "")

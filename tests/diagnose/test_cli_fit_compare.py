@@ -55,6 +55,20 @@ def test_diagnose_cli(tmp_path, cli, scen_text):
                              "magnetic", "-o", str(tmp_path / "m2.toml"))
     assert code == 0, err
     assert "effects.magnetic.m" in out and (tmp_path / "m2.toml").exists()
+    # the runs hold no magnetic effect: the diagnosis did not find it, and the user is told
+    warning = [line for line in err.splitlines() if line.startswith("nfs: warning:")]
+    assert len(warning) == 1 and "'magnetic' is not significant" in warning[0]
+    assert "adding it as asked" in warning[0]
+    # the same from the saved diagnosis, without diagnosing again
+    code, out, err = cli("diagnose", str(tmp_path / "runs"), "--apply", "magnetic",
+                         "--diagnosis", str(tmp_path / "d.json"), "-o",
+                         str(tmp_path / "m3.toml"), "-q")
+    assert code == 0 and "the diagnosis in" in err and "is not significant" in err
+    assert "diagnosing" not in err
+    code, _, err = cli("diagnose", str(tmp_path / "runs"), "--apply", "magnetic",
+                       "--diagnosis", str(tmp_path / "nothing.json"), "-o",
+                       str(tmp_path / "m4.toml"))
+    assert code == 2 and "--diagnosis" in err and not (tmp_path / "m4.toml").exists()
     code, _, err = cli("diagnose", str(tmp_path / "runs"), "--apply",
                            "magnetc", "-o", str(tmp_path / "x.toml"))
     assert code == 2 and "unknown effect 'magnetc'" in err
