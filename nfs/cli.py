@@ -8,7 +8,8 @@
     nfs fit DATA... [--model M] -o FITTED.toml       calibrate a model to measured runs
     nfs compare DATA... --model M -o DIR             the model beside the runs
     nfs diagnose DATA... --model M [--apply NAME]    the missing effect, ranked
-    nfs preset [NAME]                                print a built-in instrument preset
+    nfs preset [NAME]                                print a built-in instrument or scenario
+    nfs init DIR                                     a starter scenario and instrument
     nfs effects                                      list the registered physical effects
 """
 
@@ -423,10 +424,50 @@ def _cmd_diagnose(args) -> int:
 
 def _cmd_preset(args) -> int:
     from .instrument import preset_names, preset_path
+    from .io.scenario import scenario_preset_names, scenario_preset_path
     if args.name is None:
-        print("\n".join(preset_names()))
+        print("instruments (nfs preset NAME > my_instrument.toml):")
+        print("\n".join(f"  {n}" for n in preset_names()))
+        print("scenarios (nfs preset NAME > my_scenario.toml; nfs init DIR writes both):")
+        print("\n".join(f"  {n}" for n in scenario_preset_names()))
         return 0
-    sys.stdout.write(preset_path(args.name).read_text(encoding="utf-8"))
+    if args.name in scenario_preset_names():
+        path = scenario_preset_path(args.name)
+    elif args.name in preset_names():
+        path = preset_path(args.name)
+    else:
+        raise NfsError(f"unknown preset '{args.name}'; instruments: "
+                       f"{', '.join(preset_names())}; scenarios: "
+                       f"{', '.join(scenario_preset_names())}")
+    sys.stdout.write(path.read_text(encoding="utf-8"))
+    return 0
+
+
+def _cmd_init(args) -> int:
+    import re
+    from .instrument import preset_path
+    from .io.atomic import atomic_write_files
+    from .io.scenario import load_scenario, scenario_preset_path
+    scen_text = scenario_preset_path(args.scenario).read_text(encoding="utf-8")
+    m = re.search(r'^instrument\s*=\s*"([^"]+)".*$', scen_text, flags=re.MULTILINE)
+    if m is None:  # every built-in scenario names its instrument preset
+        raise NfsError(f"scenario preset '{args.scenario}' names no instrument preset")
+    inst_text = preset_path(m.group(1)).read_text(encoding="utf-8")
+    scen_text = (scen_text[:m.start()] + 'instrument = "instrument.toml"      # the file beside '
+                 'this one (or a built-in preset name: nfs preset)' + scen_text[m.end():])
+    header = ("# Starter scenario written by `nfs init` from the built-in preset "
+              f"'{args.scenario}'.\n# Edit it and run:  nfs table scenario.toml -o results\n"
+              "# Its instrument is instrument.toml beside it (the preset "
+              f"'{m.group(1)}').\n#\n")
+    folder = _folder(args, "init")
+    out = Path(args.output)
+    out.mkdir(parents=True, exist_ok=True)
+    atomic_write_files({out / "scenario.toml": header + scen_text,
+                        out / "instrument.toml": inst_text})
+    load_scenario(out / "scenario.toml")  # what was written loads (a check of the package)
+    _finish(folder, args, {"scenario_preset": args.scenario, "instrument_preset": m.group(1)})
+    print(f"wrote {out / 'scenario.toml'} and {out / 'instrument.toml'}; run: "
+          f"nfs table {out / 'scenario.toml'} -o {out / 'results'}")
     return 0
 
 
@@ -651,12 +692,26 @@ def build_parser() -> argparse.ArgumentParser:
                     help="no progress line on standard error")
     dg.set_defaults(func=_cmd_diagnose)
 
-    pr = sub.add_parser("preset", help="print a built-in instrument preset (TOML)",
-                        description="Print a built-in instrument preset to copy and edit; "
-                                    "without a name, list the presets.")
+    pr = sub.add_parser("preset", help="print a built-in instrument or scenario preset (TOML)",
+                        description="Print a built-in instrument or scenario preset, with its "
+                                    "comments, to copy and edit; without a name, list the "
+                                    "presets.")
     pr.add_argument("name", nargs="?", default=None,
                     help="preset to print (default: list the presets)")
     pr.set_defaults(func=_cmd_preset)
+
+    ini = sub.add_parser("init", help="write a starter scenario and instrument into a folder",
+                         description="Write DIR/scenario.toml (a built-in scenario preset, "
+                                     "with its comments) and DIR/instrument.toml (the "
+                                     "instrument preset it names), the scenario pointing at "
+                                     "the instrument file: a start for your own experiment.")
+    ini.add_argument("output", metavar="DIR", help="folder to write (made when missing)")
+    ini.add_argument("--scenario", default="startup_7temps",
+                     help="scenario preset to start from (default: startup_7temps; "
+                          "nfs preset lists them)")
+    ini.add_argument("--overwrite", action="store_true",
+                     help="write into a folder that holds other files")
+    ini.set_defaults(func=_cmd_init)
 
     e = sub.add_parser("effects", help="list the registered physical effects",
                        description="List every registered physical effect (built-in and your own\n"

@@ -85,6 +85,31 @@ def test_preset_and_effects(cli):
     assert code == 0 and "[thermal.nodes.housing]" in out
     code, out, _ = cli("effects")
     assert code == 0 and "shupe_product (gyro)" in out
+    code, out, _ = cli("preset", "startup_7temps")
+    assert code == 0 and out == default_scenario_path().read_text()
+    code, out, _ = cli("preset")
+    assert out.split("scenarios")[1].split()[-1] == "startup_7temps"
+
+
+def test_init_writes_a_starter_that_runs(tmp_path, cli):
+    d = tmp_path / "mine"
+    code, out, err = cli("init", d)
+    assert code == 0, err
+    scen = (d / "scenario.toml").read_text()
+    assert 'instrument = "instrument.toml"' in scen and scen.count("\n#") > 10  # comments kept
+    from nfs.instrument import preset_path
+    from nfs.io.scenario import load_scenario
+    assert (d / "instrument.toml").read_text() == preset_path("default").read_text()
+    sc, ref = load_scenario(d / "scenario.toml"), load_scenario()
+    # the starter is the default experiment, its instrument read from the file beside it
+    assert sc.instrument.to_toml() == ref.instrument.to_toml()
+    assert sc.start_temperatures_c == ref.start_temperatures_c and sc.seed == ref.seed
+    # a second init into the folder, now holding the user's edits, is refused
+    (d / "notes.md").write_text("mine")
+    code, _, err = cli("init", d)
+    assert one_line_error(code, err) and "notes.md" in err
+    code, _, err = cli("init", tmp_path / "x", "--scenario", "nope")
+    assert "unknown scenario preset 'nope'" in one_line_error(code, err)
 
 
 # ---------------------------------------------------------------- bad scenario files

@@ -29,7 +29,7 @@ from ..variability import (CYCLING_SHAPES, NO_VARIABILITY, VARIABILITY_KEYS,
 from .tomlio import check_keys, load_toml, number, number_list, string, table
 
 __all__ = ["NorthFindSettings", "ChamberProfile", "Scenario", "load_scenario",
-           "default_scenario_path"]
+           "default_scenario_path", "scenario_preset_names", "scenario_preset_path"]
 
 _TOP = ("name", "description", "instrument", "seed", "start_temperatures_c", "repeats",
         "duration_s", "sample_rate_hz", "latitude_deg", "true_heading_deg", "effects_files",
@@ -191,6 +191,21 @@ class Scenario:
 def default_scenario_path() -> Path:
     """The built-in default scenario (seed 004's seven start temperatures)."""
     return Path(str(resources.files("nfs") / "presets" / "startup_7temps.toml"))
+
+
+def scenario_preset_names() -> list[str]:
+    """Names of the built-in scenario presets (``nfs preset`` lists them)."""
+    root = resources.files("nfs") / "presets"
+    return sorted(p.name[: -len(".toml")] for p in root.iterdir()
+                  if p.name.endswith(".toml") and not p.name.endswith("_instrument.toml"))
+
+
+def scenario_preset_path(name: str) -> Path:
+    """Path of a built-in scenario preset."""
+    if name not in scenario_preset_names():
+        raise ScenarioError(f"unknown scenario preset '{name}'; presets: "
+                            + ", ".join(scenario_preset_names()))
+    return Path(str(resources.files("nfs") / "presets" / f"{name}.toml"))
 
 
 def _bool(tbl, key, prefix, file, default):
