@@ -71,6 +71,7 @@ from scipy.signal import lfilter
 
 import thermal
 
+from .docfields import document_fields
 from .instrument import Instrument
 from .parameters import ParameterError, expand_paths, get_param, param_paths, set_params
 
@@ -92,6 +93,7 @@ _UNIT_TAG = 0x756E6974
 _REFERENCE_UNITS = ("degC", "deg", "rad", "channel unit")
 
 
+@document_fields
 @dataclass(frozen=True)
 class Variability:
     """How start-ups and units differ (``[variability]`` of a scenario); zero: no scatter.

@@ -33,6 +33,7 @@ import numpy as np
 from joblib import Parallel, delayed
 from sklearn.exceptions import ConvergenceWarning
 
+from ..docfields import document_fields
 from ..denoise import separate_drift
 from ..errors import NfsError
 from ..experiment import (northfind_runs, run_scenario, simulate_run, stage_errors,
@@ -47,6 +48,7 @@ __all__ = ["CompensationSettings", "MethodResult", "SeedResult", "CompensationSt
            "run_study", "test_scenario", "DriftRow", "errors_by_temperature"]
 
 
+@document_fields
 @dataclass(frozen=True)
 class CompensationSettings:
     """How the compensators are trained and compared (``[compensation]`` of a scenario)."""
@@ -89,6 +91,7 @@ class CompensationSettings:
     last unit)."""
 
 
+@document_fields
 @dataclass(frozen=True)
 class DriftRow:
     """Drift residual over the start-up stage of the test runs (seed 004, Table 2)."""
@@ -101,6 +104,7 @@ class DriftRow:
     a constant offset over a run cancels in north finding, its variation does not."""
 
 
+@document_fields
 @dataclass(frozen=True)
 class SeedResult:
     """One training of a method (one tuner seed) scored on the test runs."""
@@ -124,6 +128,7 @@ class SeedResult:
         return float(np.nanmean(self.rmse_deg))
 
 
+@document_fields
 @dataclass(frozen=True)
 class MethodResult:
     """One method's compensator and its scores on the test runs (the median tuner seed)."""
@@ -142,6 +147,7 @@ class MethodResult:
         return tuple(r.mean_deg for r in self.seeds) if len(self.seeds) > 1 else ()
 
 
+@document_fields
 @dataclass(frozen=True)
 class CompensationStudy:
     """Everything the study computed."""

@@ -58,6 +58,7 @@ from typing import Callable
 
 import numpy as np
 
+from nfs.docfields import document_fields
 from nfs.errors import NfsError
 
 __all__ = [
@@ -84,6 +85,7 @@ class TuningError(NfsError):
     """A bad tuner name, option, budget or objective."""
 
 
+@document_fields
 @dataclass(frozen=True)
 class TuneResult:
     """What a tuner found and how it got there (all positions in [-1, 1]^d)."""

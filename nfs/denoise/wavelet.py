@@ -43,6 +43,7 @@ from dataclasses import dataclass
 import numpy as np
 import pywt
 
+from nfs.docfields import document_fields
 from nfs.errors import InputError
 
 __all__ = [
@@ -414,6 +415,7 @@ def _mirror_extend(x: np.ndarray, pad: int) -> np.ndarray:
 # the denoiser
 
 
+@document_fields
 @dataclass(frozen=True)
 class DenoiseResult:
     """Result of :func:`wavelet_denoise`."""

@@ -68,6 +68,7 @@ import numpy as np
 from scipy.optimize import least_squares, lsq_linear
 from scipy.stats import norm
 
+from ..docfields import document_fields
 from ..effects.thermometer import THERMOMETERS
 from ..errors import NfsError
 from ..instrument import Instrument
@@ -186,6 +187,7 @@ class AlternativeScore:
                                         for k, v in self.cv_channels_after_k.items()}}
 
 
+@document_fields
 @dataclass(frozen=True)
 class ThermalAdequacy:
     """Does the model's thermal structure fit the thermometers?"""

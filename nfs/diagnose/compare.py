@@ -58,6 +58,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
+from ..docfields import document_fields
 from ..denoise import separate_drift
 from ..effects.thermometer import THERMOMETERS
 from ..errors import MeasurementError, NfsError
@@ -289,6 +290,7 @@ class RunHeading:
         return {k: _json(v) for k, v in vars(self).items()}
 
 
+@document_fields
 @dataclass(frozen=True)
 class Comparison:
     """The model against a set of runs (:func:`compare`)."""

@@ -34,6 +34,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
+from ..docfields import document_fields
 from .design import PreparedRun
 from .fit import _block
 from .stats import RunGrams, augmented_grams, clustered_fit, group_cv_rms
@@ -43,6 +44,7 @@ __all__ = ["DriftStructure", "rate_columns", "beyond_alternative"]
 _S_PER_MIN = 60.0
 
 
+@document_fields
 @dataclass(frozen=True)
 class DriftStructure:
     """The drift's thermal structure set against a rate term on every node."""

@@ -77,6 +77,7 @@ import numpy as np
 import thermal
 from thermal.solve import step_matrices
 
+from ..docfields import document_fields
 from ..constants import OMEGA_IE_DPH
 from ..denoise import earth_rate_projection_dph, separate_drift
 from ..effects.thermometer import THERMOMETERS
@@ -116,6 +117,7 @@ _ZERO_RNG = np.random.default_rng(0)
 # ---------------------------------------------------------------------------------------------
 # Results
 
+@document_fields
 @dataclass(frozen=True)
 class FitResult:
     """The fitted instrument and an honest account of the fit."""

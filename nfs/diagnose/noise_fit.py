@@ -29,12 +29,14 @@ from typing import Sequence
 
 import numpy as np
 
+from ..docfields import document_fields
 from ..errors import NfsError
 from ..noise.allan import allan_deviation, allan_relative_error, fit_noise_coefficients
 
 __all__ = ["GyroNoiseEstimate", "gyro_noise_from_residual"]
 
 
+@document_fields
 @dataclass(frozen=True)
 class GyroNoiseEstimate:
     """The gyro noise read from the drift residual at rest."""

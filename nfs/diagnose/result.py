@@ -5,6 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
+from ..docfields import document_fields
 from .adequacy import ThermalAdequacy
 from .candidates import Candidate
 from .drift_structure import DriftStructure
@@ -13,6 +14,7 @@ from .fit import FitResult
 __all__ = ["CandidateScore", "Diagnosis", "candidate_finding"]
 
 
+@document_fields
 @dataclass(frozen=True)
 class CandidateScore:
     """What one candidate explains."""
@@ -82,6 +84,7 @@ class CandidateScore:
                 "beyond_structure_p": self.beyond_structure_p}
 
 
+@document_fields
 @dataclass(frozen=True)
 class Diagnosis:
     """The ranked candidates and what is left unexplained."""

@@ -45,6 +45,7 @@ from thermal import (LinearSensor, NodeEstimate, ProcessNoiseFit, ThermalRecord,
                      estimate_states)
 from thermal.network import index_of
 
+from ..docfields import document_fields
 from ..effects.thermometer import THERMOMETERS
 from ..errors import InputError, NfsError, ThermalError
 from ..experiment import conditions_from_run, thermal_effects
@@ -108,6 +109,7 @@ class SmoothedThermal:
         return self.rate_c_per_s[:, index_of(self.node_names, name)]
 
 
+@document_fields
 @dataclass(frozen=True)
 class RunSmoothing:
     """Smoothed node temperatures of every run and the process noise they share."""

@@ -18,6 +18,7 @@ from typing import Sequence
 import numpy as np
 from scipy.optimize import least_squares
 
+from ..docfields import document_fields
 from .prior import Prior
 
 __all__ = ["StageReport", "solve_stage", "CHI2_SETTLED"]
@@ -27,6 +28,7 @@ __all__ = ["StageReport", "solve_stage", "CHI2_SETTLED"]
 CHI2_SETTLED = 1.5
 
 
+@document_fields
 @dataclass(frozen=True)
 class StageReport:
     """How one stage of the fit went."""

@@ -43,6 +43,7 @@ from pathlib import Path
 import numpy as np
 
 from nfs.constants import ABSOLUTE_ZERO_C
+from nfs.docfields import document_fields
 from nfs.errors import MeasurementError
 from nfs.io.atomic import atomic_write_files
 from nfs.io.tomlio import toml_key, toml_value
@@ -85,6 +86,7 @@ _TEMPERATURE_COLUMN = re.compile(r"temp_.*_c")
 _ACCELERATION_COLUMN = re.compile(r"acc_.*_g")
 
 
+@document_fields
 @dataclass(frozen=True)
 class RunMeta:
     """What the samples of a run do not say (``NAME.toml``)."""
@@ -109,6 +111,7 @@ class RunMeta:
     """Any other keys of the TOML file, kept and passed along."""
 
 
+@document_fields
 @dataclass(frozen=True)
 class Run:
     """One start-up run: named sample columns plus metadata.

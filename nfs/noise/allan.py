@@ -19,6 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import nnls
 
+from nfs.docfields import document_fields
 from nfs.errors import InputError
 from nfs.noise.generators import BI_FLOOR_FACTOR
 
@@ -32,6 +33,7 @@ __all__ = [
 ]
 
 
+@document_fields
 @dataclass(frozen=True)
 class AllanResult:
     """Overlapping Allan deviation of one record (:func:`allan_deviation`)."""

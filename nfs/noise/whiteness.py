@@ -49,6 +49,7 @@ from scipy.linalg import eigh, svd
 from scipy.optimize import minimize_scalar
 from scipy.stats import chi2
 
+from nfs.docfields import document_fields
 from nfs.errors import InputError
 from nfs.noise.covariance import cholesky_lower, whiten, window_mean_covariance
 from nfs.noise.generators import DEFAULT_CORRELATION_TIME_S
@@ -62,6 +63,7 @@ __all__ = [
 ]
 
 
+@document_fields
 @dataclass(frozen=True)
 class WhitenessResult:
     """Whiteness and scale of a residual against a noise model (:func:`whiteness_test`)."""

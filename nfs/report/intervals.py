@@ -63,6 +63,8 @@ from typing import Sequence
 import numpy as np
 from scipy.stats import norm
 
+from ..docfields import document_fields
+
 __all__ = ["ClusterBootstrap", "Comparison", "cluster_bootstrap", "bc_interval", "bc_pvalue",
            "holm", "compare_rows", "DEFAULT_N_BOOT", "LEVEL"]
 
@@ -304,6 +306,7 @@ def _bootstrap_tables(tables, n_boot: int, rng) -> tuple[np.ndarray, np.ndarray]
     return cells, reps
 
 
+@document_fields
 @dataclass(frozen=True)
 class Comparison:
     """A paired comparison of two rows' means (row a minus row b)."""

@@ -22,6 +22,7 @@ from typing import Iterable, Sequence
 
 import numpy as np
 
+from ..docfields import document_fields
 from ..io.atomic import atomic_write_bytes, atomic_write_text
 from .intervals import DEFAULT_N_BOOT, Comparison, cluster_bootstrap, compare_rows
 
@@ -41,6 +42,7 @@ def pooled_rmse(errors_deg: Iterable[np.ndarray]) -> float:
     return float(np.sqrt(np.mean(e * e))) if e.size else math.nan
 
 
+@document_fields
 @dataclass(frozen=True)
 class TableRow:
     """One method's heading RMSE at each start temperature."""
@@ -74,6 +76,7 @@ class TableRow:
         return (self.mean_ci_deg or _NAN2)[1]
 
 
+@document_fields
 @dataclass(frozen=True)
 class HeadingTable:
     """Heading RMSE by start temperature and method."""
