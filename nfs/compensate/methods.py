@@ -50,8 +50,8 @@ from .neural import BPNetwork, RBFNetwork
 from .regression import CubicLeastSquares, StepwiseRegression
 from .search import MetaheuristicSearchCV, Real
 
-__all__ = ["MethodSpec", "METHODS", "TABLE_METHODS", "get_method", "svr_space", "rvr_space",
-           "neg_residual_std"]
+__all__ = ["MethodSpec", "METHODS", "TABLE_METHODS", "STARTUP_GROUP", "get_method",
+           "svr_space", "rvr_space", "neg_residual_std"]
 
 
 @dataclass(frozen=True)
@@ -76,6 +76,10 @@ class MethodSpec:
     cost: float = 1.0
     """Cost of one training [s of CPU, default scenario, measured] (the study dispatches the
     costliest first, so that its workers finish together)."""
+    group: str = "other papers' methods"
+    """Panel of the table's figure the row is drawn in: :data:`STARTUP_GROUP` (the start-up
+    paper's BP and SVR rows, and the SVR tuned by other searches) or the methods of the other
+    papers."""
 
     @property
     def seeded(self) -> bool:
@@ -176,29 +180,33 @@ def _irlssvm(rs):
     return IRLSSVMRegressor(gamma=LSSVM_GAMMA, sigma=LSSVM_SIGMA, weight="myriad")
 
 
+#: Figure panel of the start-up paper's rows (BP, SVR by grid, PSO, GWO, SSA) and TPE-SVR.
+STARTUP_GROUP = "start-up paper: BP and tuned SVRs"
+
 _ALL = (
     MethodSpec("LS", "ls", False, _plain(_ls), "seed 000: cubic least squares", cost=0.2),
     MethodSpec("stepwise", "stepwise", False, _plain(_stepwise), "seed 000: stepwise regression",
                cost=0.2),
-    MethodSpec("BP", "bp", False, _plain(_bp), "seed 004: BP network", cost=0.7),
+    MethodSpec("BP", "bp", False, _plain(_bp), "seed 004: BP network", cost=0.7,
+               group=STARTUP_GROUP),
     MethodSpec("RBF", "rbf", False, _plain(_rbf), "seed 001: RBF network", cost=1.1),
     MethodSpec("LSSVM", "lssvm", False, _plain(_lssvm), "seed 000: LSSVM", max_samples=4000,
                cost=1.2),
     MethodSpec("IR-LSSVM", "ir-lssvm", False, _plain(_irlssvm),
                "seed 000: IR-LSSVM, myriad weights", max_samples=4000, cost=5.5),
     MethodSpec("SVR (grid)", "svr-grid", True, _tuned_svr("grid"), "seed 004: SVR, grid search",
-               max_samples=1000, tuner="grid", cost=3.6),
+               max_samples=1000, tuner="grid", cost=3.6, group=STARTUP_GROUP),
     MethodSpec("PSO-SVR", "pso-svr", True, _tuned_svr("pso"), "seed 004: PSO-tuned SVR",
-               max_samples=1000, tuner="pso", cost=8.7),
+               max_samples=1000, tuner="pso", cost=8.7, group=STARTUP_GROUP),
     MethodSpec("GWO-SVR", "gwo-svr", True, _tuned_svr("gwo"), "seed 004: GWO-tuned SVR",
-               max_samples=1000, tuner="gwo", cost=7.4),
+               max_samples=1000, tuner="gwo", cost=7.4, group=STARTUP_GROUP),
     MethodSpec("SSA-SVR", "ssa-svr", True, _tuned_svr("ssa"), "seed 004: SSA-tuned SVR",
-               max_samples=1000, tuner="ssa", cost=4.7),
+               max_samples=1000, tuner="ssa", cost=4.7, group=STARTUP_GROUP),
     MethodSpec("HHO-RVR", "hho-rvr", True, _hho_rvr, "seed 003: HHO-tuned RVR",
                max_samples=400, tuner="hho", cost=10.0),
     MethodSpec("TPE-SVR", "tpe-svr", True, _tuned_svr("tpe"),
                "Optuna TPE-tuned SVR (optional 'tune' extra)", max_samples=1000, tuner="tpe",
-               cost=9.0),
+               cost=9.0, group=STARTUP_GROUP),
 )
 
 #: Every method by key.

@@ -183,7 +183,8 @@ class CompensationStudy:
         for name, res in self.results.items():
             errs = self.startup_errors(name)
             rows.append(TableRow(name, tuple(pooled_rmse(e) for e in errs),
-                                 seed_means_deg=res.seed_means_deg))
+                                 seed_means_deg=res.seed_means_deg,
+                                 group=get_method(name).group))
         s = self.settings
         temps = (s.train_temperatures_c or sc.start_temperatures_c)
         mode = self.dataset.features_mode

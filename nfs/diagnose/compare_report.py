@@ -79,13 +79,17 @@ def plot_residuals(comparison: Comparison, i_run: int):
         ax = fig.add_subplot(len(CHANNELS), 1, j + 1)
         t_min = cr.time_s / 60.0
         fl = k * cr.stages["all"].floor_rms   # the run's floor RMS (the gyro's is a draw)
-        ax.axhspan(-fl, fl, color="0.85", lw=0, label="+-noise floor")
+        ax.axhspan(-fl, fl, color="0.85", lw=0,
+                   label=f"+-1 sigma noise floor of this run ({format_sig(fl)} {unit}): a "
+                         "right model's residual stays mostly inside")
         style = {"accelerometer": (".-", 3.0), "gyro": ("-", 0.0)}.get(spec.kind, (".", 0.5))
         ax.plot(t_min, k * cr.residual, style[0], lw=0.8, ms=style[1], color="tab:blue",
-                label="residual")
+                label="residual, measured - model")
         ax.axhline(0.0, color="k", lw=0.5)
-        ax.set_ylabel(f"{spec.key}\n[{unit}]", fontsize=8)
+        ax.set_ylabel(f"{spec.label}\n[{unit}]", fontsize=8)
         ax.grid(alpha=0.3)
+        if j == 0:
+            ax.legend(fontsize=7, loc="upper right")
     ax.set_xlabel("time after power-on [min]")
     fig.suptitle(f"{comparison.run_names[i_run]}: residual measured - model")
     fig.tight_layout()
@@ -106,14 +110,16 @@ def plot_rms_vs_t0(comparison: Comparison):
             v = np.array([cr.stages[stage].rms for cr in runs])
             ax.plot(t0[order], k * v[order], marker + "-", ms=4, lw=0.8, label=stage)
         fl = np.array([cr.stages["all"].floor_rms for cr in runs])
-        ax.plot(t0[order], k * fl[order], "k--", lw=1.0, label="floor")
-        ax.set_title(spec.key, fontsize=9)
-        ax.set_ylabel(f"RMS [{unit}]", fontsize=8)
-        ax.set_xlabel("T0 [C]", fontsize=8)
+        ax.plot(t0[order], k * fl[order], "k--", lw=1.0, label="noise floor of the run")
+        ax.set_title(spec.label, fontsize=9)
+        ax.set_ylabel(f"residual RMS [{unit}]", fontsize=8)
+        ax.set_xlabel("start temperature T0 [degC]", fontsize=8)
+        ax.set_ylim(bottom=0.0)  # from zero: a 2 % spread must not look like a factor 2
         ax.grid(alpha=0.3)
         if j == 0:
-            ax.legend(fontsize=7)
-    fig.suptitle("residual RMS vs start temperature")
+            ax.legend(fontsize=7, title="stage", title_fontsize=7)
+    fig.suptitle("residual RMS (measured - model) against start temperature, per stage: "
+                 "start-up, stable, all")
     fig.tight_layout()
     return fig
 

@@ -147,34 +147,57 @@ def drift_table_markdown(rows, features_mode: str | None = None) -> str:
     return "\n".join(lines) + "\n"
 
 
-def plot_drift_vs_compensated(study, run_index: int = 0, methods=("BP", "SSA-SVR")):
-    """Separated drift of one test run, the drift predicted by some methods, and the
-    residual, over time (matplotlib Figure)."""
+def plot_drift_vs_compensated(study, run_index: int | None = None, methods=None, *,
+                              best: str | None = None):
+    """Separated drift of one test run, the drift predicted by some rows, and the residual,
+    over time (matplotlib Figure).
+
+    By default the coldest test start-up (where the start-up drift is largest) and the rows
+    BP and SSA-SVR (the pair the start-up paper's figure sets side by side) plus ``best`` (the
+    table's best row, :attr:`HeadingTable.best`) when it is another; the figure says which
+    rows it shows and why.
+    """
     from matplotlib.figure import Figure
 
-    run = study.test.simulations[run_index].run
+    sims = study.test.simulations
+    if run_index is None:
+        run_index = int(np.argmin([s.conditions.start_temperature_c for s in sims]))
+    why = {}
+    if methods is None:
+        for m in ("BP", "SSA-SVR"):
+            if m in study.results:
+                why[m] = "as in the start-up paper's figure"
+        if best in study.results:
+            why[best] = (why[best] + "; best row" if best in why
+                         else "best row of the table")
+        methods = tuple(why)
+    run = sims[run_index].run
     sep = separate_drift(run, cutoff_period_s=study.settings.cutoff_period_s)
     t_min = np.asarray(run.columns["time_s"]) / 60.0
-    fig = Figure(figsize=(8.0, 5.5), dpi=110)
+    fig = Figure(figsize=(8.5, 6.0), dpi=110)
     ax1, ax2 = fig.subplots(2, 1, sharex=True)
-    ax1.plot(t_min, sep.raw_drift_dph, color="0.8", lw=0.5, label="gyro - Earth rate")
-    ax1.plot(t_min, sep.drift_dph, color="k", lw=1.2, label="separated drift")
+    ax1.plot(t_min, sep.raw_drift_dph, color="0.8", lw=0.5,
+             label="gyro output - Earth rate (noisy)")
+    ax1.plot(t_min, sep.drift_dph, color="k", lw=1.2,
+             label="thermal drift (wavelet-separated)")
     for m in methods:
         if m in study.results:
             p = study.results[m].compensator.predict_drift(run)
             ax1.plot(t_min, p, lw=1.0, label=f"{m} prediction")
-            ax2.plot(t_min, sep.drift_dph - p, lw=1.0, label=f"{m} residual")
+            ax2.plot(t_min, sep.drift_dph - p, lw=1.0, label=f"{m}: drift - prediction")
     lo, hi = np.percentile(sep.drift_dph, [0.5, 99.5])
     pad = 0.5 * (hi - lo) + 1e-3
     ax1.set_ylim(lo - pad, hi + pad)
     ax1.set_ylabel("drift [deg/h]")
     ax1.legend(fontsize=8)
-    ax1.set_title(f"{run.name}: drift and its compensation "
-                  f"(T0 = {run.meta.start_temperature_c:g} C)")
+    shown = "; ".join(f"{m} ({why[m]})" if m in why else m for m in methods
+                      if m in study.results)
+    ax1.set_title(f"{run.name} (T0 = {run.meta.start_temperature_c:g} C, the coldest test "
+                  "start-up: largest drift)\nrows shown: " + (shown or "none"), fontsize=9)
     ax2.axhline(0.0, color="k", lw=0.5)
-    ax2.set_ylabel("residual [deg/h]")
+    ax2.set_ylabel("residual drift [deg/h]")
     ax2.set_xlabel("time since power-on [min]")
-    if ax2.get_legend_handles_labels()[0]:      # none when the table has neither method
+    if ax2.get_legend_handles_labels()[0]:      # none when the table has none of the rows
         ax2.legend(fontsize=8)
     fig.tight_layout()
     return fig
@@ -222,9 +245,8 @@ def write_study(study, out_dir, *, json_path=None, title: str = "") -> list[Path
         f"{m}," + ",".join(repr(p[k]) if k in p else "" for k in keys) + "\n"
         for m, p in params.items()))
     atomic_write_text(out / "svr_parameters.json", json.dumps(params, indent=2) + "\n")
-    cold = int(np.argmin([s.conditions.start_temperature_c for s in study.test.simulations]))
-    atomic_write_bytes(out / "drift_vs_compensated.png",
-                       _png(plot_drift_vs_compensated(study, cold)))
+    atomic_write_bytes(out / "drift_vs_compensated.png", _png(plot_drift_vs_compensated(study,
+                                                                  best=table.best)))
     report = "\n".join([
         f"# {title or 'Start-up heading RMSE with drift compensation'}", "",
         f"Features mode: **{mode}**: {FEATURE_MODE_NOTES[mode]}.", "",

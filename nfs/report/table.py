@@ -58,6 +58,9 @@ class TableRow:
     seed_means_deg: tuple[float, ...] = ()
     """Mean of the row trained with each tuner seed [deg] (a tuned row shows the median
     seed's; empty for a row trained once)."""
+    group: str = ""
+    """Panel of the figure a compensated row is drawn in (methods of one paper, or of the
+    other papers); empty for the reference rows ``before``, ``stable`` and ``floor``."""
 
     @property
     def mean_deg(self) -> float:
@@ -303,6 +306,7 @@ class HeadingTable:
                       "cell_ci_deg": None if r.cell_ci_deg is None else
                       [[_json(a), _json(b)] for a, b in r.cell_ci_deg],
                       "seed_means_deg": [_json(v) for v in r.seed_means_deg],
+                      "group": r.group or None,
                       "vs_best": self.versus_best(r.method) or None} for r in self.rows],
             "comparisons": [c.to_dict() for c in self.comparisons],
             "notes": list(self.notes),
@@ -322,51 +326,71 @@ def _json(v: float):
 
 
 def plot_heading_table(table: HeadingTable, title: str = ""):
-    """A grouped bar chart of heading RMSE by start temperature; ``floor`` as a dashed line.
+    """Heading RMSE by start temperature as grouped bars, one panel per group of rows.
 
+    Each panel holds the uncompensated ``before`` and the ``stable`` rows (greys) beside at
+    most seven compensated rows of one group (:attr:`TableRow.group`), in colours far apart
+    (a 14-row table in one panel needs near-identical colours); the white-noise ``floor`` is
+    a dashed line. Bars start from zero and carry their 95 % intervals when computed.
     Returns a matplotlib Figure (made without pyplot, so no display is needed).
     """
+    from matplotlib import colormaps
     from matplotlib.figure import Figure
 
-    fig = Figure(figsize=(8.0, 4.5), dpi=110)
-    ax = fig.add_subplot(111)
-    bars = [r for r in table.rows if r.method != "floor"]
+    refs = [r for r in table.rows if r.method in ("before", "stable")]   # in every panel
+    methods = [r for r in table.rows if r.method not in REFERENCE_ROWS]
+    groups: dict[str, list[TableRow]] = {}
+    for r in methods:
+        groups.setdefault(r.group or "compensated", []).append(r)
+    panels = list(groups.items()) or [("", [])]
+    floor = next((r for r in table.rows if r.method == "floor"), None)
+    # tab10 without its grey: seven hues that stay apart in print and for most colour vision
+    hues = [c for j, c in enumerate(colormaps["tab10"].colors) if j != 7]
+    fig = Figure(figsize=(9.0, 1.0 + 3.4 * len(panels)), dpi=110)
+    axes = fig.subplots(len(panels), 1, squeeze=False, sharey=True)[:, 0]
     x = np.arange(len(table.temperatures_c))
-    width = 0.8 / max(1, len(bars))
-    # Enough distinct colours for every method (the default cycle repeats after 10);
-    # the reference rows in greys.
-    import matplotlib
-    tab20 = matplotlib.colormaps["tab20"].colors
-    palette = [c for j, c in enumerate(tab20[0::2] + tab20[1::2]) if j not in (7, 17)]  # no greys
-    fixed = {"before": "0.25", "stable": "0.7"}
-    k = 0
-    for i, r in enumerate(bars):
-        color = fixed.get(r.method)
-        if color is None:
-            color, k = palette[k % len(palette)], k + 1
-        yerr = None
-        if r.cell_ci_deg is not None:
-            v = np.asarray(r.rmse_deg, dtype=float)
-            lo_hi = np.asarray(r.cell_ci_deg, dtype=float)
-            yerr = np.nan_to_num(np.vstack([v - lo_hi[:, 0], lo_hi[:, 1] - v]).clip(0.0))
-        ax.bar(x - 0.4 + width * (i + 0.5), r.rmse_deg, width, label=r.method, color=color,
-               yerr=yerr, error_kw={"elinewidth": 0.6, "capsize": 0.0, "ecolor": "0.2"})
-    for r in table.rows:
-        if r.method == "floor":
-            ax.axhline(r.mean_deg, color="k", ls="--", lw=1.0, label="white-noise floor")
-    ax.set_xticks(x, [f"{t:g}" for t in table.temperatures_c])
-    ax.set_xlabel("start temperature T0 [degC]")
-    ax.set_ylabel("heading RMSE [deg]")
+    with_ci = False
+    for ax, (name, rows) in zip(axes, panels):
+        drawn = refs + rows
+        width = 0.84 / max(1, len(drawn))
+        k = 0
+        for i, r in enumerate(drawn):
+            if r.method == "before":
+                color, hatch = "0.3", None
+            elif r.method == "stable":
+                color, hatch = "0.75", None
+            else:
+                color, hatch, k = hues[k % len(hues)], ("//" if k >= len(hues) else None), k + 1
+            yerr = None
+            if r.cell_ci_deg is not None:
+                with_ci = True
+                v = np.asarray(r.rmse_deg, dtype=float)
+                lo_hi = np.asarray(r.cell_ci_deg, dtype=float)
+                yerr = np.nan_to_num(np.vstack([v - lo_hi[:, 0], lo_hi[:, 1] - v]).clip(0.0))
+            label = {"before": "before (uncompensated start-up)",
+                     "stable": "stable stage (uncompensated)"}.get(r.method, r.method)
+            ax.bar(x - 0.42 + width * (i + 0.5), r.rmse_deg, width, label=label, color=color,
+                   hatch=hatch, yerr=yerr,
+                   error_kw={"elinewidth": 0.6, "capsize": 0.0, "ecolor": "0.15"})
+        if floor is not None:
+            ax.axhline(floor.mean_deg, color="k", ls="--", lw=1.0,
+                       label=f"white-noise floor ({floor.mean_deg:.4f} deg)")
+        ax.set_xticks(x, [f"{t:g}" for t in table.temperatures_c])
+        ax.set_ylabel("start-up heading RMSE [deg]")
+        ax.set_ylim(bottom=0.0)
+        if name:
+            ax.set_title(name, fontsize=9, loc="left")
+        ax.grid(axis="y", alpha=0.3)
+        ax.legend(fontsize=7, ncol=3, loc="upper right")
+    axes[-1].set_xlabel("start temperature T0 [degC]")
     title = title or "North-finding heading RMSE by start temperature"
     if table.features_mode:
         title += f" (features: {table.features_mode})"
-    ax.set_title(title)
-    if any(r.cell_ci_deg is not None for r in bars):
-        ax.text(0.99, 0.98, "bars: 95 % intervals (two-level bootstrap)", ha="right",
-                va="top", transform=ax.transAxes, fontsize=7, color="0.3")
-    ax.grid(axis="y", alpha=0.3)
-    ax.legend(fontsize=8, ncol=2)
-    fig.tight_layout()
+    fig.suptitle(title, fontsize=10)
+    if with_ci:
+        fig.text(0.99, 0.005, "error bars: 95 % intervals of each cell (two-level bootstrap)",
+                 ha="right", va="bottom", fontsize=7, color="0.3")
+    fig.tight_layout(rect=(0.0, 0.02, 1.0, 1.0))
     return fig
 
 
