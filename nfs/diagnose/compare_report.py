@@ -80,18 +80,18 @@ def plot_residuals(comparison: Comparison, i_run: int):
         t_min = cr.time_s / 60.0
         fl = k * cr.stages["all"].floor_rms   # the run's floor RMS (the gyro's is a draw)
         ax.axhspan(-fl, fl, color="0.85", lw=0,
-                   label=f"+-1 sigma noise floor of this run ({format_sig(fl)} {unit}): a "
-                         "right model's residual stays mostly inside")
+                   label=f"+-1 sigma noise floor ({format_sig(fl)} {unit})")
         style = {"accelerometer": (".-", 3.0), "gyro": ("-", 0.0)}.get(spec.kind, (".", 0.5))
         ax.plot(t_min, k * cr.residual, style[0], lw=0.8, ms=style[1], color="tab:blue",
                 label="residual, measured - model")
         ax.axhline(0.0, color="k", lw=0.5)
         ax.set_ylabel(f"{spec.label}\n[{unit}]", fontsize=8)
         ax.grid(alpha=0.3)
-        if j == 0:
-            ax.legend(fontsize=7, loc="upper right")
+        ax.legend(fontsize=7, loc="upper right")
     ax.set_xlabel("time after power-on [min]")
-    fig.suptitle(f"{comparison.run_names[i_run]}: residual measured - model")
+    fig.suptitle(f"{comparison.run_names[i_run]}: residual measured - model\n(grey band: the "
+                 "run's +-1 sigma noise floor; a right model's residual stays mostly inside)",
+                 fontsize=10)
     fig.tight_layout()
     return fig
 
