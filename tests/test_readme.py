@@ -1,0 +1,46 @@
+"""The README's numbers are rebuilt by docs/readme_numbers.py and must agree with it."""
+
+import importlib.util
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+_spec = importlib.util.spec_from_file_location("readme_numbers", ROOT / "docs" / "readme_numbers.py")
+readme_numbers = importlib.util.module_from_spec(_spec)
+_spec.loader.exec_module(readme_numbers)
+
+
+def _check(name):
+    text = (ROOT / "README.md").read_text(encoding="utf-8")
+    table, _ = readme_numbers.compute(name)
+    assert readme_numbers.differences(name, text, table) == []
+
+
+def test_default_table_in_readme_is_what_the_package_prints():
+    _check("default-table")
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", ["fleet-table", "precise-table"])
+def test_other_tables_in_readme(name):
+    _check(name)
+
+
+def test_the_check_fails_on_a_changed_number():
+    # Oracle: a README whose before row is off by one in the last digit, or whose compensated
+    # mean lies outside its own stated interval, is reported.
+    text = (ROOT / "README.md").read_text(encoding="utf-8")
+    rows = readme_numbers.parse("default-table", text)
+    assert {"before", "stable", "floor", "SSA-SVR"} <= set(rows)
+    from nfs.report.table import HeadingTable, TableRow
+    n_t = len(rows["before"]) - 4
+    temps = tuple(float(t) for t in range(n_t))
+
+    def row(name, bump=0.0):
+        vals = [float(v) for v in rows[name][:n_t]]
+        return TableRow(name, tuple(v + bump for v in vals))
+    ok = [row(n) for n in rows if n in readme_numbers.EXACT_ROWS]
+    bad = HeadingTable(temps, tuple([row("before", 1e-4)] + ok[1:]))
+    problems = readme_numbers.differences("default-table", text, bad)
+    assert any(p.startswith("default-table: before: README") for p in problems)
