@@ -61,11 +61,16 @@ def block(name: str, table) -> str:
     if "SSA-SVR" in rows and table.best is not None:
         before, ssa = rows["before"].mean_deg, rows["SSA-SVR"].mean_deg
         best = rows[table.best]
+        key = table.key_comparisons()
+        vs_before = [c for c in key if c.method_b == "before"]
+        below = [c for c in vs_before if c.distinguishable and c.difference_deg < 0]
         lines += ["", f"SSA-SVR brings {before:.4f} to {ssa:.4f} deg ({ssa / before:.2f}x); the "
                   f"best row is {table.best} at {best.mean_deg:.4f} deg [{best.ci_low_deg:.4f}, "
-                  f"{best.ci_high_deg:.4f}]. Paired comparisons (difference of the means, its "
-                  f"95 % interval, Holm over the {len(table.comparisons)} comparisons):", ""]
-        lines += [f"- {c.sentence(4)}" for c in table.key_comparisons()]
+                  f"{best.ci_high_deg:.4f}]; {len(below)} of {len(vs_before)} compensated rows "
+                  "are below `before` beyond the noise. Paired comparisons (difference of the "
+                  f"means, its 95 % interval, Holm over the {len(table.comparisons)} "
+                  "comparisons made):", ""]
+        lines += [f"- {c.sentence(4)}" for c in key if c.method_b != "before"]
     return "\n".join(lines + [end])
 
 
