@@ -314,6 +314,8 @@ def _cmd_northfind(args) -> int:
               "that line; give --heading-hint DEG (a coarse heading, e.g. from a magnetic "
               "compass) to pick the branch (the JSON holds one branch, marked ambiguous)")
     if args.json:
+        from .io.provenance import output_provenance
+        out["provenance"] = output_provenance(runs=runs)
         atomic_write_text(args.json, json.dumps(out, indent=1) + "\n")
     return 0
 
@@ -374,7 +376,9 @@ def _cmd_compare(args) -> int:
                 stable_start_s=args.stable_start_s)
     paths = write_report(c, args.output)
     if args.json:
-        atomic_write_text(args.json, json.dumps(c.to_dict(), indent=1) + "\n")
+        from .io.provenance import output_provenance
+        atomic_write_text(args.json, json.dumps({**c.to_dict(), "provenance": output_provenance(
+            instrument=inst, runs=runs, seeds={"model_noise": args.seed})}, indent=1) + "\n")
     _finish(folder, args, {"runs": runs_provenance(runs), "model": instrument_provenance(inst)})
     for line in c.sentences():
         print(f"- {line}")
@@ -460,7 +464,10 @@ def _cmd_diagnose(args) -> int:
     if d.not_tried:
         print(f"{len(d.not_tried)} candidate(s) not scored (reasons in --json 'not_tried')")
     if args.json:
-        atomic_write_text(args.json, json.dumps(d.to_dict(), indent=1, default=_j) + "\n")
+        from .io.provenance import output_provenance
+        doc = {**d.to_dict(), "provenance": output_provenance(
+            instrument=inst, runs=runs, seeds={"bootstrap": args.seed})}
+        atomic_write_text(args.json, json.dumps(doc, indent=1, default=_j) + "\n")
     return 0
 
 
