@@ -118,9 +118,7 @@ def _cmd_table(args) -> int:
         paths += write_baseline_comparison(comparison, args.output)
     inputs = {"scenario": scenario_provenance(scenario), "compensation": not args.no_compensation}
     if baseline is not None:
-        from .io.provenance import sha256_of_text
-        inputs["baseline"] = {"file": str(args.baseline), "sha256": sha256_of_text(
-            Path(args.baseline).read_text(encoding="utf-8"))}
+        inputs["baseline"] = {"file": str(args.baseline), "sha256": args.baseline_sha256}
     _finish(folder, args, inputs)
     print(table.to_markdown(), end="")
     if comparison is not None:
@@ -138,6 +136,7 @@ def _baseline(args, scenario):
         if args.tolerance is not None:
             raise NfsError("--tolerance needs --baseline OLD.json")
         return None
+    import hashlib
     from .compensate import get_method
     from .compensate.study import CompensationSettings
     from .report.baseline import TOLERANCE, check_common, read_table
@@ -147,6 +146,8 @@ def _baseline(args, scenario):
         raise NfsError(f"--tolerance must be a finite number >= 0 (0.05: 5 %), got "
                        f"{args.tolerance}")
     baseline = read_table(args.baseline, "--baseline")
+    # hashed now: the file may be the --json this run replaces
+    args.baseline_sha256 = hashlib.sha256(Path(args.baseline).read_bytes()).hexdigest()
     methods = ["before", "stable", "floor"]
     if not args.no_compensation:
         settings = scenario.compensation or CompensationSettings()
