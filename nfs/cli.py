@@ -1,6 +1,7 @@
 """The ``nfs`` command: thin; parse, call the library, turn NfsError into one line + exit 2.
 
     nfs table [SCENARIO] [-o DIR] [--json FILE]      heading-RMSE table by start temperature
+              [--baseline OLD.json]              ... set beside an earlier table (exit 1: worse)
     nfs simulate SCENARIO -o DIR                     measurement files, one run per T0
     nfs northfind DATA... [--json FILE]              north-find measured or simulated runs
     nfs train DATA... --method M -o MODEL            train a drift compensator
@@ -67,8 +68,10 @@ def _cmd_table(args) -> int:
     if args.features_mode is not None:
         check_features_mode(args.features_mode, "--features-mode")
     from .io.provenance import scenario_provenance
+    from .compensate.study import table_provenance
     scenario = _with_overrides(load_scenario(args.scenario), args)
     _file(args.json, "--json")
+    baseline = _baseline(args, scenario)
     folder = _folder(args, "table")
     title = f"{scenario.name}: heading RMSE by start temperature"
     progress = Progress("", args.quiet)
@@ -83,6 +86,8 @@ def _cmd_table(args) -> int:
         table = uncompensated_table(res).with_intervals(
             {"before": errors_by_temperature(res), "stable": errors_by_temperature(res, stage=1)},
             random_state=scenario.seed)
+        table = dataclasses.replace(table, provenance=table_provenance(
+            scenario, settings, compensated=False))
         paths = write_table(table, args.output, json_path=args.json, title=title)
     else:
         from .compensate.study import CompensationSettings, run_study
@@ -103,14 +108,52 @@ def _cmd_table(args) -> int:
         if args.features_mode is not None:
             settings = dataclasses.replace(settings, features_mode=args.features_mode)
         study = run_study(scenario, settings, progress=progress)
-        table = study.heading_table()
-        paths = write_study(study, args.output, json_path=args.json, title=title)
-    _finish(folder, args, {"scenario": scenario_provenance(scenario),
-                           "compensation": not args.no_compensation})
+        table = dataclasses.replace(study.heading_table(),
+                                    provenance=table_provenance(scenario, settings))
+        paths = write_study(study, args.output, json_path=args.json, title=title, table=table)
+    comparison = None
+    if baseline is not None:
+        from .report.baseline import compare_tables, write_baseline_comparison
+        comparison = compare_tables(table, baseline, tolerance=args.tolerance)
+        paths += write_baseline_comparison(comparison, args.output)
+    inputs = {"scenario": scenario_provenance(scenario), "compensation": not args.no_compensation}
+    if baseline is not None:
+        inputs["baseline"] = {"file": str(args.baseline), "sha256": args.baseline_sha256}
+    _finish(folder, args, inputs)
     print(table.to_markdown(), end="")
+    if comparison is not None:
+        print(f"\n## Against the baseline {args.baseline}\n\n" + comparison.to_markdown(),
+              end="")
     if not args.quiet:
         print("\nwrote " + ", ".join(str(p) for p in paths), file=sys.stderr)
-    return 0
+    return 0 if comparison is None else comparison.exit_code
+
+
+def _baseline(args, scenario):
+    """The --baseline table, read and checked against the table to come before any work
+    (None without --baseline)."""
+    if args.baseline is None:
+        if args.tolerance is not None:
+            raise NfsError("--tolerance needs --baseline OLD.json")
+        return None
+    import hashlib
+    from .compensate import get_method
+    from .compensate.study import CompensationSettings
+    from .report.baseline import TOLERANCE, check_common, read_table
+    if args.tolerance is None:
+        args.tolerance = TOLERANCE
+    if not (math.isfinite(args.tolerance) and args.tolerance >= 0):
+        raise NfsError(f"--tolerance must be a finite number >= 0 (0.05: 5 %), got "
+                       f"{args.tolerance}")
+    baseline = read_table(args.baseline, "--baseline")
+    # hashed now: the file may be the --json this run replaces
+    args.baseline_sha256 = hashlib.sha256(Path(args.baseline).read_bytes()).hexdigest()
+    methods = ["before", "stable", "floor"]
+    if not args.no_compensation:
+        settings = scenario.compensation or CompensationSettings()
+        methods += [get_method(m).name for m in settings.methods]
+    check_common(baseline, scenario.start_temperatures_c, methods)
+    return baseline
 
 
 def _cmd_train(args) -> int:
@@ -272,6 +315,8 @@ def _cmd_northfind(args) -> int:
               "that line; give --heading-hint DEG (a coarse heading, e.g. from a magnetic "
               "compass) to pick the branch (the JSON holds one branch, marked ambiguous)")
     if args.json:
+        from .io.provenance import output_provenance
+        out["provenance"] = output_provenance(runs=runs)
         atomic_write_text(args.json, json.dumps(out, indent=1) + "\n")
     return 0
 
@@ -332,7 +377,9 @@ def _cmd_compare(args) -> int:
                 stable_start_s=args.stable_start_s)
     paths = write_report(c, args.output)
     if args.json:
-        atomic_write_text(args.json, json.dumps(c.to_dict(), indent=1) + "\n")
+        from .io.provenance import output_provenance
+        atomic_write_text(args.json, json.dumps({**c.to_dict(), "provenance": output_provenance(
+            instrument=inst, runs=runs, seeds={"model_noise": args.seed})}, indent=1) + "\n")
     _finish(folder, args, {"runs": runs_provenance(runs), "model": instrument_provenance(inst)})
     for line in c.sentences():
         print(f"- {line}")
@@ -418,7 +465,10 @@ def _cmd_diagnose(args) -> int:
     if d.not_tried:
         print(f"{len(d.not_tried)} candidate(s) not scored (reasons in --json 'not_tried')")
     if args.json:
-        atomic_write_text(args.json, json.dumps(d.to_dict(), indent=1, default=_j) + "\n")
+        from .io.provenance import output_provenance
+        doc = {**d.to_dict(), "provenance": output_provenance(
+            instrument=inst, runs=runs, seeds={"bootstrap": args.seed})}
+        atomic_write_text(args.json, json.dumps(doc, indent=1, default=_j) + "\n")
     return 0
 
 
@@ -525,6 +575,13 @@ def build_parser() -> argparse.ArgumentParser:
                    help=FEATURES_MODE_HELP + " (default: the scenario's, cycle)")
     t.add_argument("--no-compensation", action="store_true",
                    help="only the uncompensated rows (before, stable, floor)")
+    t.add_argument("--baseline", default=None, metavar="OLD.json",
+                   help="compare every cell with a table an earlier nfs table --json wrote: "
+                        "the change with its 95 %% interval, a verdict per cell, "
+                        "baseline_comparison.{md,json} in the output folder; exit 1 when a "
+                        "cell is worse beyond both the noise and --tolerance")
+    t.add_argument("--tolerance", type=float, default=None,
+                   help="relative change a worse cell must also exceed (default 0.05: 5 %%)")
     t.add_argument("-q", "--quiet", action="store_true", help="no progress on stderr")
     t.add_argument("--overwrite", action="store_true",
                    help="write into a folder that holds another command's output or files "

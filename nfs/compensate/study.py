@@ -36,6 +36,7 @@ from sklearn.exceptions import ConvergenceWarning
 from ..docfields import document_fields
 from ..denoise import separate_drift
 from ..errors import NfsError
+from ..io.provenance import output_provenance
 from ..experiment import (northfind_runs, run_scenario, simulate_run, stage_errors,
                           uncompensated_table)
 from ..report.table import TableRow, pooled_rmse
@@ -45,7 +46,8 @@ from .methods import TABLE_METHODS, MethodSpec, get_method
 from .modes import DEFAULT_FEATURE_MODE, FEATURE_MODE_NOTES, check_features_mode
 
 __all__ = ["CompensationSettings", "MethodResult", "SeedResult", "CompensationStudy",
-           "run_study", "test_scenario", "DriftRow", "errors_by_temperature"]
+           "run_study", "test_scenario", "DriftRow", "errors_by_temperature",
+           "table_provenance"]
 
 
 @document_fields
@@ -320,6 +322,25 @@ def test_scenario(scenario, settings: CompensationSettings | None = None):
     s = settings or scenario.compensation or CompensationSettings()
     _, test_units = scenario.unit_split(s.train_units, s.test_units)
     return scenario.made_by(test_units, s.test_repeats or scenario.repeats)
+
+
+def table_provenance(scenario, settings: CompensationSettings | None = None, *,
+                     compensated: bool = True) -> dict:
+    """The ``provenance`` of a heading table of ``scenario`` (as loaded, before the test
+    start-ups are picked): versions, platform, scenario and instrument hashes, and every seed
+    behind its numbers (:func:`~nfs.io.provenance.output_provenance`).
+
+    ``test_start_ups`` is the seed of the test start-ups (two tables with the same one, and
+    as many start-ups, are compared start-up by start-up: :mod:`nfs.report.baseline`).
+    """
+    s = settings or scenario.compensation or CompensationSettings()
+    seeds = {"test_start_ups": scenario.seed}
+    if compensated:
+        seeds.update(training_start_ups=s.train_seed, models=s.random_state,
+                     tuner_seeds=s.tuner_seeds, bootstrap=s.random_state)
+    else:
+        seeds["bootstrap"] = scenario.seed
+    return output_provenance(scenario=scenario, seeds=seeds)
 
 
 def run_study(scenario, settings: CompensationSettings | None = None, *,

@@ -17,7 +17,7 @@ from importlib.metadata import PackageNotFoundError, version
 from .. import __version__
 
 __all__ = ["library_versions", "sha256_of_text", "runs_provenance", "scenario_provenance",
-           "instrument_provenance"]
+           "instrument_provenance", "platform_tag", "output_provenance"]
 
 #: Distributions whose versions change the numbers (name in the metadata -> key written).
 _LIBRARIES = (("numpy", "numpy"), ("scipy", "scipy"), ("scikit-learn", "scikit-learn"),
@@ -76,3 +76,43 @@ def scenario_provenance(scenario) -> dict:
             "seed": scenario.seed,
             "sha256": sha256_of_text(repr(rest)),
             "instrument": instrument_provenance(scenario.instrument)}
+
+
+def platform_tag() -> str:
+    """Operating system and machine, e.g. ``Linux-x86_64`` (no host name, no kernel build:
+    what can change floating-point results, not what identifies a computer)."""
+    return f"{platform.system()}-{platform.machine()}"
+
+
+def output_provenance(*, scenario=None, instrument=None, runs=None,
+                      seeds: dict | None = None) -> dict:
+    """The ``"provenance"`` entry of a JSON output: what produced it.
+
+    Parameters
+    ----------
+    scenario : Scenario, optional
+        Recorded with :func:`scenario_provenance` (its hash, its instrument's hash, its seed).
+    instrument : Instrument, optional
+        A model used without a scenario (``nfs compare``, ``nfs diagnose``).
+    runs : iterable of Run, optional
+        Measurement files read (:func:`runs_provenance`).
+    seeds : dict, optional
+        Every seed behind the numbers, by what it seeds.
+
+    Returns
+    -------
+    dict
+        ``{"versions": {nfs, numpy, scipy, scikit-learn, pywavelets, joblib, python},
+        "platform": ..., "scenario": ..., "instrument": ..., "runs": ..., "seeds": ...}``
+        (the keys given only); no time stamp, so the same inputs give the same bytes.
+    """
+    out: dict = {"versions": library_versions(), "platform": platform_tag()}
+    if scenario is not None:
+        out["scenario"] = scenario_provenance(scenario)
+    if instrument is not None:
+        out["instrument"] = instrument_provenance(instrument)
+    if runs is not None:
+        out["runs"] = runs_provenance(runs)
+    if seeds is not None:
+        out["seeds"] = dict(seeds)
+    return out

@@ -209,16 +209,20 @@ def _png(fig) -> bytes:
     return buf.getvalue()
 
 
-def write_study(study, out_dir, *, json_path=None, title: str = "") -> list[Path]:
+def write_study(study, out_dir, *, json_path=None, title: str = "",
+                table: HeadingTable | None = None) -> list[Path]:
     """Write every output of a compensation study into ``out_dir``.
 
     heading_rmse.{md,csv,json,png} (all rows), drift_residual.{md,csv,json},
     svr_parameters.{md,csv,json}, drift_vs_compensated.png (the coldest test run) and
-    report.md (tables, figures, the comparison with seed 004).
+    report.md (tables, figures, the comparison with seed 004).  ``table``: the study's
+    heading table if already made (e.g. with its provenance; default
+    ``study.heading_table()``).
     """
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    table = study.heading_table()
+    if table is None:
+        table = study.heading_table()
     paths = write_table(table, out, json_path=json_path, title=title)
     mode = study.dataset.features_mode
     drift = study.drift_rows()

@@ -95,6 +95,13 @@ class HeadingTable:
     (:mod:`nfs.compensate.modes`); None when the table has no compensated row."""
     comparisons: tuple[Comparison, ...] = ()
     """Paired comparisons of row means, Holm-adjusted together."""
+    errors_deg: dict | None = field(default=None, compare=False)
+    """Row name -> ``errors[column][start-up]``: the heading errors [deg] of the cycles
+    behind each cell (set by :meth:`with_intervals`; kept in the JSON so that a later table
+    can be compared with this one start-up by start-up, :mod:`nfs.report.baseline`)."""
+    provenance: dict | None = field(default=None, compare=False)
+    """What produced the table: versions, platform, scenario and instrument hashes, seeds
+    (:func:`nfs.io.provenance.output_provenance`); None when not recorded."""
 
     @property
     def best(self) -> str | None:
@@ -184,7 +191,9 @@ class HeadingTable:
                                          mean_ci_deg=ci[r.method][1])
                      if r.method in ci else r for r in self.rows)
         comps = tuple(compare_rows(boot, names, list(pairs)))
-        return dataclasses.replace(self, rows=rows, comparisons=comps)
+        kept = {n: [[np.asarray(c, dtype=float).ravel() for c in col] for col in errors_deg[n]]
+                for n in names}
+        return dataclasses.replace(self, rows=rows, comparisons=comps, errors_deg=kept)
 
     def row(self, method: str) -> TableRow:
         """The row of ``method`` (KeyError listing the rows if absent)."""
@@ -293,9 +302,11 @@ class HeadingTable:
         "rows": [{"method", "rmse_deg", "mean_deg", "ci_low_deg", "ci_high_deg",
         "cell_ci_deg": [[low, high], ...], "seed_means_deg": [...], "vs_best"}, ...],
         "comparisons": [{"method_a", "method_b", "difference_deg", "ci_low_deg",
-        "ci_high_deg", "p_value", "p_adjusted", "distinguishable"}, ...], "notes": [...]}``
-        (NaN as null; ``features_mode`` null without compensated rows; intervals null where
-        not computed)."""
+        "ci_high_deg", "p_value", "p_adjusted", "distinguishable"}, ...], "notes": [...],
+        "errors_deg": {row: [[[cycle errors of start-up k] for k] for column]},
+        "provenance": {...}}`` (NaN as null; ``features_mode`` null without compensated rows;
+        intervals null where not computed; ``errors_deg`` rounded to 1e-9 deg, empty without
+        intervals; ``provenance`` null when not recorded)."""
         return {
             "temperatures_c": [float(t) for t in self.temperatures_c],
             "features_mode": self.features_mode,
@@ -310,19 +321,30 @@ class HeadingTable:
                       "vs_best": self.versus_best(r.method) or None} for r in self.rows],
             "comparisons": [c.to_dict() for c in self.comparisons],
             "notes": list(self.notes),
+            "errors_deg": {n: [[[_json(v, 9) for v in c] for c in col] for col in errs]
+                           for n, errs in (self.errors_deg or {}).items()},
+            "provenance": self.provenance,
         }
 
     def to_json(self) -> str:
-        """:meth:`to_dict` as indented JSON text."""
-        return json.dumps(self.to_dict(), indent=2) + "\n"
+        """:meth:`to_dict` as indented JSON text, each row's cycle errors on one line (the
+        file stays small and readable)."""
+        d = self.to_dict()
+        errs = d["errors_deg"]
+        d["errors_deg"] = {n: f"\0{n}\0" for n in errs}
+        text = json.dumps(d, indent=2)
+        for n, e in errs.items():
+            text = text.replace(json.dumps(f"\0{n}\0"), json.dumps(e, separators=(",", ":")),
+                                1)
+        return text + "\n"
 
 
 def _fmt(v: float, digits: int) -> str:
     return "nan" if not math.isfinite(v) else f"{v:.{digits}f}"
 
 
-def _json(v: float):
-    return None if not math.isfinite(v) else round(float(v), 8)
+def _json(v: float, digits: int = 8):
+    return None if not math.isfinite(v) else round(float(v), digits)
 
 
 def plot_heading_table(table: HeadingTable, title: str = ""):
