@@ -1,4 +1,4 @@
-"""Speed of north finding: 7 start-up runs (one per start temperature of seed 004).
+"""Speed of north finding: 7 start-up runs (one per start temperature of the FOG start-up paper).
 
 Each run: 9000 s at 1 Hz, 4 positions, dwell 150 s, move 10 s (14 complete cycles), the
 section 5 rate model with tilt, bias, a linear drift and white noise (synthetic_run). Times

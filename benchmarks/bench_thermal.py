@@ -1,7 +1,7 @@
 """Speed and accuracy of thermal.simulate against scipy.integrate.solve_ivp.
 
 Run as ``python benchmarks/bench_thermal.py``.  The case: a representative 7-node north
-finder (physics.md section 2 defaults, written out below), 7 start-up runs of 9000 s sampled
+finder (docs/physics.md section 2 defaults, written out below), 7 start-up runs of 9000 s sampled
 at 1 Hz from T0 in (-32, -16, -5, 17, 28, 43, 54) C, chamber held at T0, with the TEC law of
 the light source P_tec(T_e) = 0.03 max(0, 25 - T_e) + 0.07 max(0, T_e - 25) [W].
 

@@ -16,13 +16,13 @@ __all__ = [
     "earth_rate_components_dph",
 ]
 
-#: Omega_ie, the Earth's sidereal rotation rate [deg/h] (physics.md section 5).
+#: Omega_ie, the Earth's sidereal rotation rate [deg/h] (docs/physics.md section 5).
 OMEGA_IE_DPH: float = 15.041067
 
 #: Standard gravity g_n [m/s^2] (CGPM 1901), to convert m/s^2 to g.
 STANDARD_GRAVITY_M_S2: float = 9.80665
 
-#: Reference temperature of the effect library [degC] (effects.md).
+#: Reference temperature of the effect library [degC] (docs/effects.md).
 T_REF_C: float = 25.0
 
 #: Absolute zero [degC]; a temperature below it is physically impossible.

@@ -37,7 +37,7 @@ def test_table_with_compensation_writes_every_output(tmp_path, cli, scen_text):
     params = json.loads((out_dir / "svr_parameters.json").read_text())
     assert set(params["SSA-SVR"]) == {"C", "sigma", "epsilon"}
     report = (out_dir / "report.md").read_text()
-    assert "Beside seed 004" in report and "6 evaluations" in report
+    assert "Beside the FOG start-up paper" in report and "6 evaluations" in report
     # the features mode (default: cycle) in every output that uses the features
     assert "Features mode: cycle (" in out and "Features mode: **cycle**" in report
     assert json.loads((out_dir / "heading_rmse.json").read_text())["features_mode"] == "cycle"

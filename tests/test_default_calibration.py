@@ -1,6 +1,8 @@
-"""The default instrument reproduces seed 004's uncompensated start-up figures (by regime).
+"""The default instrument reproduces the FOG start-up paper's uncompensated start-up figures (by
+regime).
 
-Oracle: seed 004 Table 3 (../shared/reference/seed004_table3_heading_rmse_deg.csv), start-up
+Oracle: the FOG start-up paper Table 3 (../shared/reference/seed004_table3_heading_rmse_deg.csv),
+start-up
 heading RMSE before compensation, mean over the 7 start temperatures 0.0209 deg; Table 2,
 standard deviation of the denoised start-up drift 0.0134 deg/h.  Our instrument is not the
 paper's, so the test checks the regime the simulator issue asks for, not the digits:
@@ -74,7 +76,8 @@ def test_cold_starts_worse(table):
     assert v[t0 < 0].mean() > v[t0 >= 0].mean()
 
 
-#: The Shupe-type drift effects of the library (effects.md): thermal non-reciprocity of the coil.
+#: The Shupe-type drift effects of the library (docs/effects.md): thermal non-reciprocity of the
+# coil.
 SHUPE_TYPE = ("shupe_gradient", "shupe_rate", "shupe_stress", "shupe_product")
 
 

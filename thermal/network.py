@@ -1,4 +1,5 @@
-"""Lumped thermal network: nodes, links to each other and to the chamber (physics.md section 2).
+"""Lumped thermal network: nodes, links to each other and to the chamber (docs/physics.md section
+2).
 
 Node j has a heat capacity C_j [J/K], a constant heat input P_j [W] and conductances G_jk
 [W/K] to other nodes and G_j,amb [W/K] to the chamber, the boundary at temperature

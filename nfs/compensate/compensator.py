@@ -1,7 +1,8 @@
 """A trained drift compensator: features + estimator, applied to runs, saved to a file.
 
 Apply = predict the drift from the run's own thermometers (and aux channels) and subtract it
-from the gyro output, then north-find (physics.md section 6; seed 004).  A compensator is
+from the gyro output, then north-find (docs/physics.md section 6; the FOG start-up paper).  A
+compensator is
 saved with its feature list, settings and the versions of the libraries that trained it, and
 refuses runs that lack one of its input channels.
 """

@@ -1,8 +1,8 @@
 """Training data for drift compensators: features X, separated drift y, run groups.
 
 For each run with a known heading: the drift target is the wavelet-separated gyro drift
-(gyro output minus the Earth-rate projection at the known heading, denoised; seed 004,
-physics.md section 6), the inputs are named thermometer features
+(gyro output minus the Earth-rate projection at the known heading, denoised; the FOG start-up paper,
+docs/physics.md section 6), the inputs are named thermometer features
 (:mod:`nfs.compensate.features`).  Samples while the turntable moves are left out, and the
 rest is decimated (the separated drift is smooth: the wavelet cutoff is 8.5 min, so 0.1 Hz
 or less loses nothing, and kernel methods cost O(n^2)-O(n^3)).  ``groups`` numbers the runs,

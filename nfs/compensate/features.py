@@ -1,9 +1,11 @@
 """Named features from the three thermometers (and any aux channel) for drift compensation.
 
 The compensators learn the FOG drift from what the instrument measures: its three built-in
-thermometers (physics.md section 6; seed 004 uses their temperatures, temperature rates and
-gradients), the T x dT/dt product of seed 001, and auxiliary electrical channels such as seed
-000's oscillator voltage.  Features are picked by name, so a user composes inputs::
+thermometers (docs/physics.md section 6; the FOG start-up paper uses their temperatures,
+temperature rates and
+gradients), the T x dT/dt product of Cheng et al. (2015), and auxiliary electrical channels such as
+Tao et al.'s (2019)
+oscillator voltage.  Features are picked by name, so a user composes inputs::
 
     compute_features(run, ["T_fog", "dT_fog", "G_fog_acc_x", "aux_tec_power_w"])
     compute_features(run, "seed004")          # a named set
@@ -17,7 +19,7 @@ Names
                       Kalman filter of the readings so far (causal;
                       :mod:`nfs.compensate.kalman_rate`)
 ``G_<a>_<b>``         gradient T_a - T_b [K] between two thermometers
-``TdT_<th>``          (T_th - T_ref) dT_th/dt [K K/min] (seed 001's product term)
+``TdT_<th>``          (T_th - T_ref) dT_th/dt [K K/min] (Cheng et al.'s (2015) product term)
 ``aux_*``             any auxiliary column of the run, as recorded
 ``time_min``          time since power-on [min] (not a thermometer: not in the seed sets)
 
@@ -64,19 +66,19 @@ __all__ = [
     "resolve_features",
 ]
 
-#: Thermometer short names -> measurement columns (measurement-format.md).
+#: Thermometer short names -> measurement columns (docs/measurement-format.md).
 THERMOMETER_COLUMNS = {"fog": "temp_fog_c", "acc_x": "temp_acc_x_c", "acc_y": "temp_acc_y_c"}
 _TH = tuple(THERMOMETER_COLUMNS)
 _PAIRS = (("fog", "acc_x"), ("fog", "acc_y"), ("acc_x", "acc_y"))
 
 #: Named feature sets, after the papers.
 FEATURE_SETS: dict[str, tuple[str, ...]] = {
-    # seed 004: temperature, temperature rate and gradient of the three thermometers
+    # the FOG start-up paper: temperature, temperature rate and gradient of the three thermometers
     "seed004": tuple([f"T_{t}" for t in _TH] + [f"dT_{t}" for t in _TH]
                      + [f"G_{a}_{b}" for a, b in _PAIRS]),
-    # seed 001: T, dT and T x dT of the coil (here: the FOG thermometer)
+    # Cheng et al. (2015): T, dT and T x dT of the coil (here: the FOG thermometer)
     "seed001": ("T_fog", "dT_fog", "TdT_fog"),
-    # seed 000: T, dT/dt and the auxiliary electrical signal(s)
+    # Tao et al. (2019): T, dT/dt and the auxiliary electrical signal(s)
     "seed000": ("T_fog", "dT_fog", "aux_*"),
     # every thermometer feature
     "thermometers": tuple([f"T_{t}" for t in _TH] + [f"dT_{t}" for t in _TH]
@@ -94,7 +96,7 @@ class RateFilter:
     """Order of the polynomial fitted over the window."""
 
 
-#: The rate filter of the offline and cycle modes: seed 004's 121 s quadratic, centred
+#: The rate filter of the offline and cycle modes: the FOG start-up paper's 121 s quadratic, centred
 #: wherever the horizon allows (:mod:`nfs.compensate.rates`).  The causal mode's rate is
 #: :data:`nfs.compensate.kalman_rate.CAUSAL_RATE`.
 RATE_WINDOW = RateFilter(121.0, 2)

@@ -12,7 +12,7 @@ dt [s]:
 with q [K^2/s^3] the power spectral density of the rate's random acceleration, and R [K^2]
 the reading noise: the uniform quantisation noise of a quantum of 0.0625 K (quantum^2 / 12,
 the pseudo-quantisation-noise model of Widrow & Kollar 2008, *Quantization Noise*) plus
-sigma = 0.01 K of white noise (the default thermometer; physics.md section 2 gives quantum
+sigma = 0.01 K of white noise (the default thermometer; docs/physics.md section 2 gives quantum
 0.01-0.0625 K, sigma 0.005-0.02 K).  Only q / R sets the gain.
 The steady-state gain K solves the discrete algebraic Riccati equation
 (``scipy.linalg.solve_discrete_are``); the filter x_k = (I - K H) F x_{k-1} + K y_k is then a
@@ -21,7 +21,8 @@ fixed second-order IIR filter from the readings to the rate (``scipy.signal.ss2t
 sat unpowered at the chamber temperature until power-on), and uses no sample after k.
 
 Why this filter and this q (measured with the default scenario, 7 training start-ups per
-training seed (seeds 1-5), 5 test start-ups per temperature, mean start-up heading RMSE over six methods
+training seed (seeds 1-5), 5 test start-ups per temperature, mean start-up heading RMSE over six
+methods
 (LS, stepwise, RBF, BP, PSO-SVR, SSA-SVR) and five training seeds; the offline centred
 Savitzky-Golay rate scores 0.0093 deg there, no compensation 0.0226 deg):
 

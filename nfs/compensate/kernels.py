@@ -2,7 +2,7 @@
 
 Each maps thermometer features X (n_samples, n_features) to the drift y [deg/h] and is a
 scikit-learn regressor (style.md practice 7).  All use the Gaussian RBF kernel written in the
-papers' width convention (seed 000 eq. (11); seed 004 Table 1 gives sigma)::
+papers' width convention (Tao et al. (2019) eq. (11); the FOG start-up paper Table 1 gives sigma)::
 
     k(x, x') = exp(-||x - x'||^2 / (2 sigma^2))        (gamma_libsvm = 1 / (2 sigma^2))
 
@@ -18,14 +18,15 @@ is done to the target differs by model and is stated in each class.
 Models
 ------
 :class:`SVRRegressor`      epsilon-SVR (LIBSVM, Chang & Lin 2011), the model SSA/PSO/GWO tune
-                           in seed 004 (Table 1: C 1.0520, sigma 0.9506).
-:class:`LSSVMRegressor`    least-squares SVM (Suykens et al. 2002), seed 000 eq. (8), (10).
+                           in the FOG start-up paper (Table 1: C 1.0520, sigma 0.9506).
+:class:`LSSVMRegressor`    least-squares SVM (Suykens et al. 2002), Tao et al. (2019) eq. (8), (10).
 :class:`IRLSSVMRegressor`  iteratively reweighted LS-SVM with the Huber, Hampel, logistic and
                            myriad weights (Suykens, De Brabanter, Lukas & Vandewalle 2002;
-                           De Brabanter et al. 2009), seed 000 eq. (14)-(18), Table 5.
-:class:`RVRRegressor`      relevance vector regression (Tipping 2001), seed 003's model.
+                           De Brabanter et al. 2009), Tao et al. (2019) eq. (14)-(18), Table 5.
+:class:`RVRRegressor`      relevance vector regression (Tipping 2001), Liang et al.'s (2021) model.
 
-Equation numbers "seed 000 eq. (n)" count the displayed equations of the stored text of Tao,
+Equation numbers "Tao et al. (2019) eq. (n)" count the displayed equations of the stored text of
+Tao,
 Li, Zheng, Wu & Fu 2019 (Sensors 19, 2986), which carries no numbers of its own.
 """
 
@@ -78,7 +79,8 @@ __all__ = [
 _PREDICT_BATCH = 2048
 
 #: Floor of the Hampel weight beyond c2 (Suykens et al. 2002, Neurocomputing 48, the
-#: weighted LS-SVM weights).  Seed 000 writes 0 there, which makes 1/(gamma v_k) infinite in
+#: weighted LS-SVM weights).  Tao et al. (2019) writes 0 there, which makes 1/(gamma v_k) infinite
+# in
 #: the KKT system; LS-SVMlab's weightingscheme.m uses 1e-7.
 HAMPEL_FLOOR = 1e-4
 
@@ -110,8 +112,9 @@ def gaussian_kernel(XA: np.ndarray, XB: np.ndarray | None = None, sigma: float =
     XB : array (n_b, n_features), optional
         Defaults to ``XA`` (the training Gram matrix).
     sigma : float
-        Kernel width [unit of the (standardised) inputs], > 0.  Seed 000 eq. (11) and seed
-        004 use this convention; seed 000 reports sigma^2.
+        Kernel width [unit of the (standardised) inputs], > 0.  Tao et al. (2019) eq. (11) and the
+        FOG
+        start-up paper use this convention; Tao et al. (2019) reports sigma^2.
 
     Returns
     -------
@@ -173,7 +176,7 @@ def lssvm_solve(K: np.ndarray, y: np.ndarray, gamma: float,
                 weights: np.ndarray | None = None) -> tuple[np.ndarray, float]:
     """Solve the (weighted) LS-SVM KKT system for the support values alpha and bias b.
 
-    Seed 000 eq. (8) (unweighted) and eq. (14) (weighted; Suykens et al. 2002,
+    Tao et al. (2019) eq. (8) (unweighted) and eq. (14) (weighted; Suykens et al. 2002,
     Neurocomputing 48)::
 
         [ 0        1^T               ] [ b     ]   [ 0 ]
@@ -237,13 +240,13 @@ def _kernel_expansion(Xs: np.ndarray, centers: np.ndarray, coef: np.ndarray,
 
 
 # --------------------------------------------------------------------------------------
-# robust weights (seed 000 eq. (15)-(18); De Brabanter et al. 2009)
+# robust weights (Tao et al. (2019) eq. (15)-(18); De Brabanter et al. 2009)
 # --------------------------------------------------------------------------------------
 
 def robust_scale(e: np.ndarray) -> float:
     """Robust standard deviation s = 1.483 MAD(e), MAD(e) = median |e_k - median(e)|.
 
-    Seed 000 eq. (20); Suykens et al. 2002 (Neurocomputing 48).  1.483 ~ 1/Phi^-1(3/4)
+    Tao et al. (2019) eq. (20); Suykens et al. 2002 (Neurocomputing 48).  1.483 ~ 1/Phi^-1(3/4)
     makes s consistent with the standard deviation for Gaussian errors.  [unit of e]
     """
     e = np.asarray(e, dtype=float)
@@ -251,19 +254,19 @@ def robust_scale(e: np.ndarray) -> float:
 
 
 def unit_weight(r: np.ndarray) -> np.ndarray:
-    """The null weight v = 1 for every standardised residual r (plain LS-SVM; seed 000's
+    """The null weight v = 1 for every standardised residual r (plain LS-SVM; Tao et al.'s (2019)
     "Unweighted" row of Table 5)."""
     return np.ones_like(np.asarray(r, dtype=float))
 
 
 def huber_weight(r: np.ndarray, beta: float = 1.345) -> np.ndarray:
-    """Huber weight (seed 000 eq. (15); De Brabanter et al. 2009)::
+    """Huber weight (Tao et al. (2019) eq. (15); De Brabanter et al. 2009)::
 
         v(r) = 1           if |r| < beta
                beta / |r|  if |r| >= beta
 
     r = e_k / s [-] is the standardised residual; beta [-] the corner.  Default 1.345, the
-    usual constant for 95 % efficiency at Gaussian errors (Holland & Welsch 1977); seed 000
+    usual constant for 95 % efficiency at Gaussian errors (Holland & Welsch 1977); Tao et al. (2019)
     tunes it by robust cross-validation and does not give its value.
     """
     a = np.abs(np.asarray(r, dtype=float))
@@ -272,13 +275,14 @@ def huber_weight(r: np.ndarray, beta: float = 1.345) -> np.ndarray:
 
 
 def hampel_weight(r: np.ndarray, c1: float = 2.5, c2: float = 3.0) -> np.ndarray:
-    """Hampel weight (seed 000 eq. (16), with c1 = b1 = 2.5, c2 = b2 = 3 as there)::
+    """Hampel weight (Tao et al. (2019) eq. (16), with c1 = b1 = 2.5, c2 = b2 = 3 as there)::
 
         v(r) = 1                       if |r| <= c1
                (c2 - |r|) / (c2 - c1)  if c1 < |r| <= c2
                1e-4                    otherwise
 
-    The floor 1e-4 (:data:`HAMPEL_FLOOR`) is that of Suykens et al. 2002; seed 000 writes 0,
+    The floor 1e-4 (:data:`HAMPEL_FLOOR`) is that of Suykens et al. 2002; Tao et al. (2019) writes
+    0,
     which would make the weighted KKT system infinite.  The ramp is floored at it too, so v
     is continuous at |r| = c2.  r [-], c1 < c2 [-].
     """
@@ -289,7 +293,7 @@ def hampel_weight(r: np.ndarray, c1: float = 2.5, c2: float = 3.0) -> np.ndarray
 
 
 def logistic_weight(r: np.ndarray) -> np.ndarray:
-    """Logistic weight v(r) = tanh(r) / r, with v(0) = 1 (its limit) (seed 000 eq. (17);
+    """Logistic weight v(r) = tanh(r) / r, with v(0) = 1 (its limit) (Tao et al. (2019) eq. (17);
     De Brabanter et al. 2009).  r [-]."""
     r = np.asarray(r, dtype=float)
     small = np.abs(r) < 1e-8
@@ -299,10 +303,10 @@ def logistic_weight(r: np.ndarray) -> np.ndarray:
 
 
 def myriad_weight(r: np.ndarray, delta: float = 2.385) -> np.ndarray:
-    """Myriad weight v(r) = delta^2 / (delta^2 + r^2) (seed 000 eq. (18); De Brabanter et
+    """Myriad weight v(r) = delta^2 / (delta^2 + r^2) (Tao et al. (2019) eq. (18); De Brabanter et
     al. 2009).  r [-]; delta [-] the linearity parameter (small: robust, large: least
     squares).  Default 2.385, the Cauchy-weight constant for 95 % Gaussian efficiency
-    (Holland & Welsch 1977); seed 000 tunes delta by robust cross-validation."""
+    (Holland & Welsch 1977); Tao et al. (2019) tunes delta by robust cross-validation."""
     r = np.asarray(r, dtype=float)
     d2 = float(delta) ** 2
     return d2 / (d2 + r * r)
@@ -380,8 +384,9 @@ class _KernelRegressor(RegressorMixin, BaseEstimator):
 class SVRRegressor(_KernelRegressor):
     """Epsilon-support vector regression with the Gaussian kernel in the sigma convention.
 
-    The model (seed 000 eq. (2)-(4); Vapnik; LIBSVM, Chang & Lin 2011, ACM TIST 2(3) 27, the
-    solver seed 004 cites) on the scaled problem (x~, y~)::
+    The model (Tao et al. (2019) eq. (2)-(4); Vapnik; LIBSVM, Chang & Lin 2011, ACM TIST 2(3) 27,
+    the
+    solver the FOG start-up paper cites) on the scaled problem (x~, y~)::
 
         f~(x~) = sum_k (a_k - a_k*) k(x~, x~_k) + b,   0 <= a_k, a_k* <= C
         min 1/2 ||w||^2 + C sum_k (xi_k + xi_k*),  |y~_k - f~(x~_k)| <= epsilon + xi_k(*)
@@ -392,9 +397,11 @@ class SVRRegressor(_KernelRegressor):
     Parameters
     ----------
     C : float, default 1.0
-        Penalty on errors outside the tube [-], > 0.  Seed 004 Table 1: 1.0520 (SSA-tuned).
+        Penalty on errors outside the tube [-], > 0.  The FOG start-up paper Table 1: 1.0520
+        (SSA-tuned).
     sigma : float, default 1.0
-        Kernel width [standard deviations of the inputs when ``standardize``], > 0.  Seed 004
+        Kernel width [standard deviations of the inputs when ``standardize``], > 0.  The FOG
+        start-up paper
         Table 1: 0.9506.
     epsilon : float, default 0.01
         Half-width of the insensitive tube, in units of the training target's standard
@@ -444,27 +451,28 @@ class SVRRegressor(_KernelRegressor):
 
 class LSSVMRegressor(_KernelRegressor):
     """Least-squares support vector machine regression (Suykens et al. 2002, "Least Squares
-    Support Vector Machines", World Scientific, ch. 3; seed 000 eq. (5)-(10)).
+    Support Vector Machines", World Scientific, ch. 3; Tao et al. (2019) eq. (5)-(10)).
 
-    Primal (seed 000 eq. (5))::
+    Primal (Tao et al. (2019) eq. (5))::
 
         min 1/2 w^T w + gamma/2 sum_k e_k^2,   y_k = w^T phi(x~_k) + b + e_k
 
-    whose dual is the KKT system of :func:`lssvm_solve` (seed 000 eq. (8)) and the model
-    (seed 000 eq. (10))::
+    whose dual is the KKT system of :func:`lssvm_solve` (Tao et al. (2019) eq. (8)) and the model
+    (Tao et al. (2019) eq. (10))::
 
         y(x) = sum_k alpha_k k(x~, x~_k) + b
 
-    with k the Gaussian kernel of width ``sigma`` (seed 000 eq. (11)).  The solution is
+    with k the Gaussian kernel of width ``sigma`` (Tao et al. (2019) eq. (11)).  The solution is
     linear in y, so the target is not rescaled: alpha_ and b_ are in units of y.
 
     Parameters
     ----------
     gamma : float, default 1.0
         Regularisation constant (the papers' c) [-], > 0: large fits the data closely, small
-        smooths.  Not LIBSVM's kernel gamma.  Seed 000 Table 5 ("Unweighted"): c = 1362.4.
+        smooths.  Not LIBSVM's kernel gamma.  Tao et al. (2019) Table 5 ("Unweighted"): c = 1362.4.
     sigma : float, default 1.0
-        Kernel width [standard deviations of the inputs when ``standardize``], > 0.  Seed 000
+        Kernel width [standard deviations of the inputs when ``standardize``], > 0.  Tao et al.
+        (2019)
         reports sigma^2 (Table 5: 0.9771, in its own input units): pass sigma = sqrt(sigma2).
     standardize : bool, default True
         Standardise each input column with its training mean and standard deviation.
@@ -514,32 +522,33 @@ class LSSVMRegressor(_KernelRegressor):
 class IRLSSVMRegressor(LSSVMRegressor):
     """Iteratively reweighted LS-SVM: robust LS-SVM regression (Suykens, De Brabanter, Lukas
     & Vandewalle 2002, Neurocomputing 48, 85-105; De Brabanter et al. 2009 for the logistic
-    and myriad weights; seed 000 section 2.3, eq. (12)-(20)).
+    and myriad weights; Tao et al. (2019) section 2.3, eq. (12)-(20)).
 
-    Primal (seed 000 eq. (12))::
+    Primal (Tao et al. (2019) eq. (12))::
 
         min 1/2 w^T w + gamma/2 sum_k v_k e_k^2,   y_k = w^T phi(x~_k) + b + e_k
 
-    Algorithm (seed 000 section 2.3; iterated as De Brabanter et al. 2009):
+    Algorithm (Tao et al. (2019) section 2.3; iterated as De Brabanter et al. 2009):
 
-    1. plain LS-SVM (seed 000 eq. (8)): alpha, b; residuals e_k = alpha_k / gamma;
-    2. robust scale s = 1.483 MAD(e) (:func:`robust_scale`, seed 000 eq. (20));
+    1. plain LS-SVM (Tao et al. (2019) eq. (8)): alpha, b; residuals e_k = alpha_k / gamma;
+    2. robust scale s = 1.483 MAD(e) (:func:`robust_scale`, Tao et al. (2019) eq. (20));
     3. weights v_k = W(e_k / s) with W one of :data:`WEIGHT_FUNCTIONS`;
-    4. solve the weighted system (seed 000 eq. (14)): diagonal K + diag(1 / (gamma v_k));
+    4. solve the weighted system (Tao et al. (2019) eq. (14)): diagonal K + diag(1 / (gamma v_k));
        new residuals e_k = alpha_k / (gamma v_k) (= y_k - f(x_k));
     5. repeat 2-4 until the weights change by less than ``tol`` (max |v_new - v_old|) or
        ``max_iter`` weighted solves.  ``max_iter=1`` is the single reweighting of Suykens et
-       al. 2002 and of seed 000's algorithm.
+       al. 2002 and of Tao et al.'s (2019) algorithm.
 
     The model is y(x) = sum_k alpha_k k(x~, x~_k) + b, as LS-SVM.
 
     Parameters
     ----------
     gamma : float, default 1.0
-        Regularisation constant (the papers' c) [-], > 0.  Seed 000 Table 5 (T, dT/dt, U
+        Regularisation constant (the papers' c) [-], > 0.  Tao et al. (2019) Table 5 (T, dT/dt, U
         inputs): 4.058e5 Huber, 26.32 Hampel, 3.478e4 logistic, 76.08 myriad.
     sigma : float, default 1.0
-        Kernel width [standard deviations of the inputs when ``standardize``], > 0.  Seed 000
+        Kernel width [standard deviations of the inputs when ``standardize``], > 0.  Tao et al.
+        (2019)
         gives sigma^2 (Table 5: 2.2799, 0.1263, 1.0623, 0.1458): pass sqrt.
     weight : str or callable, default "huber"
         "huber", "hampel", "logistic", "myriad" or "unweighted" (:data:`WEIGHT_FUNCTIONS`),
@@ -551,7 +560,7 @@ class IRLSSVMRegressor(LSSVMRegressor):
     beta : float, default 1.345
         Huber corner [-] (:func:`huber_weight`).
     c1, c2 : float, default 2.5, 3.0
-        Hampel knots [-] (:func:`hampel_weight`; seed 000's b1, b2).
+        Hampel knots [-] (:func:`hampel_weight`; Tao et al.'s (2019) b1, b2).
     delta : float, default 2.385
         Myriad parameter [-] (:func:`myriad_weight`).
     standardize : bool, default True
@@ -630,7 +639,7 @@ class IRLSSVMRegressor(LSSVMRegressor):
 
 class RVRRegressor(_KernelRegressor):
     """Relevance vector regression: sparse Bayesian kernel regression (Tipping 2001, JMLR 1,
-    211-244, section 2; seed 003's model, there tuned by Harris hawks optimisation).
+    211-244, section 2; Liang et al.'s (2021) model, there tuned by Harris hawks optimisation).
 
     Written here by hand: no maintained scikit-learn-compatible RVR package exists.
 
@@ -661,11 +670,11 @@ class RVRRegressor(_KernelRegressor):
     Parameters
     ----------
     kernel : str, default "rbf"
-        Basis kernel; only "rbf" (the Gaussian kernel, :func:`gaussian_kernel`), the one seed
-        003 uses.
+        Basis kernel; only "rbf" (the Gaussian kernel, :func:`gaussian_kernel`), the one Liang et
+        al. (2021) use.
     sigma : float, default 1.0
         Kernel width [standard deviations of the inputs when ``standardize``], > 0; the one
-        hyperparameter seed 003 tunes.
+        hyperparameter Liang et al. (2021) tunes.
     max_iter : int, default 300
         Maximum number of re-estimation sweeps (>= 1).
     tol : float, default 1e-3

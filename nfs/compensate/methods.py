@@ -8,17 +8,18 @@ equal terms.
 
 | row | model | tuner | source |
 | --- | --- | --- | --- |
-| LS | cubic least squares | - | seed 000 |
-| stepwise | stepwise regression (F-test) | - | seed 000 |
-| BP | back-propagation network | - | seed 004 |
-| RBF | radial-basis-function network | - | seed 001 |
-| LSSVM | least-squares SVM | - | seed 000 |
-| IR-LSSVM | iteratively reweighted LSSVM (myriad weights, seed 000's best) | - | seed 000 |
-| SVR (grid) | epsilon-SVR, Gaussian kernel | grid search | seed 004 |
-| PSO-SVR | epsilon-SVR | particle swarm | seed 004 |
-| GWO-SVR | epsilon-SVR | grey wolf | seed 004 |
-| SSA-SVR | epsilon-SVR | sparrow search | seed 004 (the method reproduced) |
-| HHO-RVR | relevance vector regression | Harris hawks | seed 003 |
+| LS | cubic least squares | - | Tao et al. (2019) |
+| stepwise | stepwise regression (F-test) | - | Tao et al. (2019) |
+| BP | back-propagation network | - | the FOG start-up paper |
+| RBF | radial-basis-function network | - | Cheng et al. (2015) |
+| LSSVM | least-squares SVM | - | Tao et al. (2019) |
+| IR-LSSVM | iteratively reweighted LSSVM (myriad weights, Tao et al.'s (2019) best) | - | Tao et
+al. (2019) |
+| SVR (grid) | epsilon-SVR, Gaussian kernel | grid search | the FOG start-up paper |
+| PSO-SVR | epsilon-SVR | particle swarm | the FOG start-up paper |
+| GWO-SVR | epsilon-SVR | grey wolf | the FOG start-up paper |
+| SSA-SVR | epsilon-SVR | sparrow search | the FOG start-up paper (the method reproduced) |
+| HHO-RVR | relevance vector regression | Harris hawks | Liang et al. (2021) |
 | TPE-SVR | epsilon-SVR | Optuna TPE (optional extra) | baseline |
 
 Scaling: every model standardises its inputs with the training means and standard deviations
@@ -29,7 +30,8 @@ in standardised units serves every data set, and ``predict`` maps back to deg/h.
 Training samples: every model sees the whole training set except those whose fit grows
 faster than the budget allows, which keep every k-th sample (``max_samples``, stated in the
 table's notes): LS-SVM and IR-LS-SVM above 4000 samples (an O(n^3) solve per fit, 0.8 s and
-5 s at the default scenario's 3934, which they see whole), the tuned SVR rows (LIBSVM's SMO costs ~n^2 per fit and a search makes 210
+5 s at the default scenario's 3934, which they see whole), the tuned SVR rows (LIBSVM's SMO costs
+~n^2 per fit and a search makes 210
 fits per seed) and HHO-RVR (each evidence sweep factorises an n x n matrix).  What the caps
 cost on the default scenario (leave-one-start-temperature-out residual STD, each held-out
 run scored on all its samples): SVR (C = 30, sigma = 6) 0.0039 deg/h trained on every
@@ -91,7 +93,8 @@ class MethodSpec:
 def svr_space():
     """The search box of the tuned SVR rows (C, sigma, epsilon), in standardised units.
 
-    Seed 004 Table 1 found C 1.05, sigma 0.95 on its data.  On the default scenario (984
+    The FOG start-up paper Table 1 found C 1.05, sigma 0.95 on its data.  On the default scenario
+    (984
     training samples, leave-one-start-temperature-out residual STD) the validation error is
     a valley along C ~ sigma^2 that flattens inside the box: 0.0041 deg/h at C = 10, sigma =
     4; 0.0040 at C = 100, sigma = 8; 0.0041 at C = 1e4, sigma = 16 (outside), and the tuners
@@ -168,7 +171,7 @@ def _rbf(rs):
 #: (Jaakkola's heuristic), 3.5 on the default training start-ups with the seed004 features.
 LSSVM_SIGMA = 3.5
 #: Fixed LSSVM regularisation: light, the wavelet-denoised target is nearly noise-free
-#: (seed 000 Table 5 reports c from 26 to 4e5).
+#: (Tao et al. (2019) Table 5 reports c from 26 to 4e5).
 LSSVM_GAMMA = 1000.0
 
 
@@ -184,25 +187,31 @@ def _irlssvm(rs):
 STARTUP_GROUP = "start-up paper: BP and tuned SVRs"
 
 _ALL = (
-    MethodSpec("LS", "ls", False, _plain(_ls), "seed 000: cubic least squares", cost=0.2),
-    MethodSpec("stepwise", "stepwise", False, _plain(_stepwise), "seed 000: stepwise regression",
+    MethodSpec("LS", "ls", False, _plain(_ls), "Tao et al. (2019): cubic least squares", cost=0.2),
+    MethodSpec("stepwise", "stepwise", False, _plain(_stepwise),
+               "Tao et al. (2019): stepwise regression",
                cost=0.2),
-    MethodSpec("BP", "bp", False, _plain(_bp), "seed 004: BP network", cost=0.7,
+    MethodSpec("BP", "bp", False, _plain(_bp), "the FOG start-up paper: BP network", cost=0.7,
                group=STARTUP_GROUP),
-    MethodSpec("RBF", "rbf", False, _plain(_rbf), "seed 001: RBF network", cost=1.1),
-    MethodSpec("LSSVM", "lssvm", False, _plain(_lssvm), "seed 000: LSSVM", max_samples=4000,
+    MethodSpec("RBF", "rbf", False, _plain(_rbf), "Cheng et al. (2015): RBF network", cost=1.1),
+    MethodSpec("LSSVM", "lssvm", False, _plain(_lssvm),
+               "Tao et al. (2019): LSSVM", max_samples=4000,
                cost=1.2),
     MethodSpec("IR-LSSVM", "ir-lssvm", False, _plain(_irlssvm),
-               "seed 000: IR-LSSVM, myriad weights", max_samples=4000, cost=5.5),
-    MethodSpec("SVR (grid)", "svr-grid", True, _tuned_svr("grid"), "seed 004: SVR, grid search",
+               "Tao et al. (2019): IR-LSSVM, myriad weights", max_samples=4000, cost=5.5),
+    MethodSpec("SVR (grid)", "svr-grid", True, _tuned_svr("grid"),
+               "the FOG start-up paper: SVR, grid search",
                max_samples=1000, tuner="grid", cost=3.6, group=STARTUP_GROUP),
-    MethodSpec("PSO-SVR", "pso-svr", True, _tuned_svr("pso"), "seed 004: PSO-tuned SVR",
+    MethodSpec("PSO-SVR", "pso-svr", True, _tuned_svr("pso"),
+               "the FOG start-up paper: PSO-tuned SVR",
                max_samples=1000, tuner="pso", cost=8.7, group=STARTUP_GROUP),
-    MethodSpec("GWO-SVR", "gwo-svr", True, _tuned_svr("gwo"), "seed 004: GWO-tuned SVR",
+    MethodSpec("GWO-SVR", "gwo-svr", True, _tuned_svr("gwo"),
+               "the FOG start-up paper: GWO-tuned SVR",
                max_samples=1000, tuner="gwo", cost=7.4, group=STARTUP_GROUP),
-    MethodSpec("SSA-SVR", "ssa-svr", True, _tuned_svr("ssa"), "seed 004: SSA-tuned SVR",
+    MethodSpec("SSA-SVR", "ssa-svr", True, _tuned_svr("ssa"),
+               "the FOG start-up paper: SSA-tuned SVR",
                max_samples=1000, tuner="ssa", cost=4.7, group=STARTUP_GROUP),
-    MethodSpec("HHO-RVR", "hho-rvr", True, _hho_rvr, "seed 003: HHO-tuned RVR",
+    MethodSpec("HHO-RVR", "hho-rvr", True, _hho_rvr, "Liang et al. (2021): HHO-tuned RVR",
                max_samples=400, tuner="hho", cost=10.0),
     MethodSpec("TPE-SVR", "tpe-svr", True, _tuned_svr("tpe"),
                "Optuna TPE-tuned SVR (optional 'tune' extra)", max_samples=1000, tuner="tpe",

@@ -5,7 +5,7 @@ past t_i a feature may look decides whether an instrument could compute it:
 
 ``cycle`` (the default)
     data up to the end of the north-finding cycle that holds t_i.  A cycle's heading is
-    computed from its dwell means and output at the cycle's end (physics.md section 5), so
+    computed from its dwell means and output at the cycle's end (docs/physics.md section 5), so
     a compensator may wait for the cycle's last sample before it subtracts the drift from
     that cycle's samples: no latency is added to any heading.  Samples outside every
     complete cycle (the moves between cycles, a partial cycle at the end, a run with no

@@ -1,5 +1,6 @@
-"""Neural-network drift compensators: the BP network of seed 004 and the RBF network of
-seed 001.
+"""Neural-network drift compensators: the BP network of the FOG start-up paper and the RBF network
+of
+Cheng et al. (2015).
 
 Both map thermometer features X (n_samples, n_features) -- temperatures [degC], their
 rates [degC/s], gradients [degC], T * dT/dt, ... -- to the FOG thermal drift y [deg/h] and
@@ -32,7 +33,8 @@ _SEED_HIGH = np.iinfo(np.int32).max
 
 
 class BPNetwork(RegressorMixin, BaseEstimator):
-    """Back-propagation (multilayer perceptron) drift model, the "BP" comparator of seed 004.
+    """Back-propagation (multilayer perceptron) drift model, the "BP" comparator of the FOG
+    start-up paper.
 
     A feed-forward network with ``len(hidden_layer_sizes)`` hidden layers, trained by
     back-propagation of the squared error (scikit-learn's ``MLPRegressor``)::
@@ -96,7 +98,7 @@ class BPNetwork(RegressorMixin, BaseEstimator):
 
     References
     ----------
-    Seed 004 (FOG start-up drift compensation of a north finder with SSA-tuned SVR),
+    The FOG start-up paper (FOG start-up drift compensation of a north finder with SSA-tuned SVR),
     Table 2 and Table 3: the BP network is the comparison baseline (its architecture is
     not given there; one hidden layer of 10 tanh neurons is this package's choice).
     Rumelhart, Hinton & Williams (1986), Nature 323, 533-536 (back-propagation).
@@ -157,15 +159,15 @@ _KMEANS_N_INIT = 4
 
 
 class RBFNetwork(RegressorMixin, BaseEstimator):
-    """Gaussian radial-basis-function network, the drift model of seed 001 (section 3).
+    """Gaussian radial-basis-function network, the drift model of Cheng et al. (2015) (section 3).
 
-    One hidden layer of K Gaussian units and a linear output (seed 001 eqs. (15)-(16),
+    One hidden layer of K Gaussian units and a linear output (Cheng et al. (2015) eqs. (15)-(16),
     plus a bias)::
 
         phi_j(z) = exp(-||z - c_j||^2 / (2 sigma^2)),   j = 1 .. K
         y_hat    = intercept_ + sum_j w_j phi_j(z)
 
-    on the standardised inputs z.  Seed 001 adapts c_j, sigma_j and w_j by gradient
+    on the standardised inputs z.  Cheng et al. (2015) adapts c_j, sigma_j and w_j by gradient
     descent (its eqs. (17)-(19)); this class uses the two-stage "hybrid" training of
     Moody & Darken (1989) instead, which has no local minima and is deterministic:
 
@@ -210,7 +212,7 @@ class RBFNetwork(RegressorMixin, BaseEstimator):
 
     References
     ----------
-    Seed 001: Cheng, Qi, Chen & Landry (2015), "Modification of an RBF ANN-based
+    Cheng et al. (2015): Cheng, Qi, Chen & Landry (2015), "Modification of an RBF ANN-based
     temperature compensation model of interferometric fiber optical gyroscopes", Sensors
     15, 11189-11207, section 3, eqs. (15)-(16) (inputs T, dT, T x dT, eq. (21)).
     Moody, J. & Darken, C. J. (1989), "Fast learning in networks of locally-tuned
@@ -248,7 +250,7 @@ class RBFNetwork(RegressorMixin, BaseEstimator):
         return self
 
     def _hidden(self, Z: np.ndarray) -> np.ndarray:
-        """Gaussian activations phi_j(z) (n_samples, K), seed 001 eq. (15)."""
+        """Gaussian activations phi_j(z) (n_samples, K), Cheng et al. (2015) eq. (15)."""
         sq = cdist(Z, self.centers_, "sqeuclidean")
         return np.exp(-sq / (2.0 * self.width_ ** 2))
 

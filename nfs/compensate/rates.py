@@ -20,7 +20,7 @@ for a quadratic signal, at 4x the noise (the root sum of squares of the coeffici
 The window of sample i is chosen by one rule: W samples, as nearly centred on i as the
 samples 0 .. h_i allow, h_i being the horizon of :mod:`nfs.compensate.modes` (fewer than W
 when only h_i + 1 < W samples exist, with the polynomial order lowered to fit: a single
-sample gives the rate 0 of a constant).  With W = 121 s and order 2 (seed 004's rates,
+sample gives the rate 0 of a constant).  With W = 121 s and order 2 (the FOG start-up paper's rates,
 averaging 2 min of quantisation steps; the centred quadratic's derivative is the centred
 linear fit's slope, sigma_r):
 

@@ -1,4 +1,5 @@
-"""Polynomial regression compensators of seed 000: cubic least squares and stepwise regression.
+"""Polynomial regression compensators of Tao et al. (2019): cubic least squares and stepwise
+regression.
 
 Both map thermometer features X (n_samples, n_features) -- temperatures T [degC],
 temperature rates dT/dt [degC/s], gradients [degC], ... -- to the FOG thermal drift
@@ -16,10 +17,10 @@ Standardisation
     :class:`StepwiseRegression` only scales (``mean_ = 0``, ``scale_`` the root mean
     square): its candidates are single monomials, and shifting the origin would turn the
     raw monomial T dT/dt into a mix of z_T z_dT, z_T and z_dT, so that the selection would
-    no longer be among the raw monomials of seed 000.  ``coef_`` holds
+    no longer be among the raw monomials of Tao et al. (2019).  ``coef_`` holds
     the coefficients of the monomials *of z*; :meth:`raw_polynomial` and :meth:`equation`
     expand them back to monomials of the features in their own units, the form in which
-    seed 000 prints its models.
+    Tao et al. (2019) prints its models.
 
 Least squares
     The coefficients solve the (ridge-) least-squares problem with an unpenalised intercept::
@@ -241,7 +242,7 @@ class _PolynomialModel(RegressorMixin, BaseEstimator):
 
     def equation(self, precision: int = 6, target: str = "y") -> str:
         """The fitted polynomial in raw feature units as text, e.g.
-        ``y = 1.4e-03 + 4.9e-04 T - 4.6e-06 T^2`` (seed 000 section 4.2 prints its models
+        ``y = 1.4e-03 + 4.9e-04 T - 4.6e-06 T^2`` (Tao et al. (2019) section 4.2 prints its models
         this way)."""
         powers, coef, intercept = self.raw_polynomial()
         names = _feature_names(self, self.n_features_in_)
@@ -257,9 +258,9 @@ class _PolynomialModel(RegressorMixin, BaseEstimator):
 # --------------------------------------------------------------------------------------
 
 class CubicLeastSquares(_PolynomialModel):
-    """Polynomial least-squares drift model, the "LS model" of seed 000 (section 4.1).
+    """Polynomial least-squares drift model, the "LS model" of Tao et al. (2019) (section 4.1).
 
-    Seed 000 fits, for one parameter X (temperature, its slope or the oscillator voltage),
+    Tao et al. (2019) fits, for one parameter X (temperature, its slope or the oscillator voltage),
     ``B = k0 + k1 X + k2 X^2 + k3 X^3`` by least squares.  Here every feature may enter,
     with its cross terms when ``include_interactions``::
 
@@ -268,12 +269,12 @@ class CubicLeastSquares(_PolynomialModel):
 
     over every monomial of degree 1 .. ``degree`` (see the module docstring for the
     standardisation and the least-squares problem).  With one feature and the defaults
-    it is exactly seed 000's cubic.
+    it is exactly Tao et al.'s (2019) cubic.
 
     Parameters
     ----------
     degree : int, default=3
-        Highest total degree of a monomial [-]; 3 is seed 000's cubic.
+        Highest total degree of a monomial [-]; 3 is Tao et al.'s (2019) cubic.
     include_interactions : bool, default=True
         Keep the cross terms (e.g. T dT/dt, T^2 U); False keeps only the pure powers
         x_j^k, i.e. one cubic per feature added together.
@@ -300,7 +301,7 @@ class CubicLeastSquares(_PolynomialModel):
 
     References
     ----------
-    Seed 000 (TRPLG bias compensation with IR-LSSVM, compared with LS and stepwise
+    Tao et al. (2019) (TRPLG bias compensation with IR-LSSVM, compared with LS and stepwise
     regression), section 4.1, the cubic LS model ``B = k0 + k1 X + k2 X^2 + k3 X^3``.
     """
 
@@ -366,7 +367,7 @@ _CANDIDATE_LIBRARIES = ("poly", "pure")
 
 
 class StepwiseRegression(_PolynomialModel):
-    """Forward-backward stepwise polynomial regression by partial F tests, seed 000's
+    """Forward-backward stepwise polynomial regression by partial F tests, Tao et al.'s (2019)
     "second-order multivariate stepwise regression" (section 4.2).
 
     The candidate library holds monomials of the scaled features z_j = x_j / scale_j
@@ -393,16 +394,16 @@ class StepwiseRegression(_PolynomialModel):
     Parameters
     ----------
     degree : int, default=2
-        Highest total degree of a candidate monomial [-]; seed 000's Model 1 is the full
+        Highest total degree of a candidate monomial [-]; Tao et al.'s (2019) Model 1 is the full
         second-order library of (T, dT/dt): T, dT/dt, T^2, T dT/dt, (dT/dt)^2.
     candidates : {"poly", "pure"} or array-like of int, default="poly"
         The candidate library: ``"poly"`` every monomial of degree 1 .. ``degree`` with
         cross terms; ``"pure"`` only the pure powers x_j^k; or an explicit array of
         exponents (n_candidates, n_features) (then ``degree`` is not used).
     p_enter : float, default=0.05
-        Significance level [-] below which a candidate enters (seed 000: 0.05).
+        Significance level [-] below which a candidate enters (Tao et al. (2019): 0.05).
     p_remove : float, default=0.10
-        Significance level [-] above which a term leaves (seed 000: 0.1).
+        Significance level [-] above which a term leaves (Tao et al. (2019): 0.1).
     max_terms : int or None, default=None
         Largest number of terms (intercept not counted); None is no limit beyond
         n_samples - 2.
@@ -441,8 +442,8 @@ class StepwiseRegression(_PolynomialModel):
     ----------
     Efroymson, M. A. (1960), "Multiple regression analysis", in Ralston & Wilf (eds.),
     Mathematical Methods for Digital Computers, Wiley, pp. 191-203 (the entry/removal
-    F tests).  Seed 000 section 4.2 (entry at p < 0.05, removal at p > 0.1, Model 1 in
-    T, dT/dt and their cross term).  Seed 000 starts from T, T^2, dT/dt; here the search
+    F tests).  Tao et al. (2019) section 4.2 (entry at p < 0.05, removal at p > 0.1, Model 1 in
+    T, dT/dt and their cross term).  Tao et al. (2019) starts from T, T^2, dT/dt; here the search
     starts from the intercept.  Not yet checked against Efroymson's text step by step.
     """
 

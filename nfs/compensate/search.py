@@ -4,7 +4,7 @@
 optimisers of :mod:`nfs.compensate.tuners`: it maps a parameter space (:class:`Real`,
 :class:`Integer`) to the tuners' box [-1, 1]^d, scores each candidate by cross-validation
 and refits the best one on all the data.  It works with any scikit-learn estimator, e.g.
-seed 004's SSA-SVR::
+the FOG start-up paper's SSA-SVR::
 
     search = MetaheuristicSearchCV(
         SVRRegressor(),

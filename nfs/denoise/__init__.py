@@ -1,4 +1,4 @@
-"""Wavelet denoising of the FOG output: the drift that compensators learn (physics.md 6).
+"""Wavelet denoising of the FOG output: the drift that compensators learn (docs/physics.md 6).
 
 ``wavelet``: the DWT shrinkage denoiser, its threshold rules and level choice;
 ``drift``: the drift of a run (output minus Earth-rate projection), denoised.

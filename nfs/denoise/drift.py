@@ -1,10 +1,11 @@
-"""The FOG drift of a run: output minus Earth-rate projection, wavelet-denoised (physics.md 6).
+"""The FOG drift of a run: output minus Earth-rate projection, wavelet-denoised (docs/physics.md 6).
 
     raw_drift = gyro - Omega_ie [cos L cos A cos e + sin L sin e]       [deg/h]
     A = true_heading + theta (turntable angle),   sin e = f_x (x accelerometer)
     drift = wavelet_denoise(raw_drift with the turntable moves bridged)
 
-This drift is the training target of the compensators (seed 004: "the wavelet transformation
+This drift is the training target of the compensators (the FOG start-up paper: "the wavelet
+transformation
 is used to eliminate the non-temperature noise and extract the temperature drift signal").
 
 What the drift holds besides the gyro's thermal drift: the constant bias b, the low-frequency
@@ -48,10 +49,10 @@ TIME_STEP_RTOL = 0.01
 def earth_rate_projection_dph(run: Run, *, scale_factor: float = 1.0) -> np.ndarray:
     """The Earth rate along the FOG axis at every sample of a run [deg/h].
 
-        K Omega_ie (cos L cos A cos e + sin L sin e)     (physics.md section 5)
+        K Omega_ie (cos L cos A cos e + sin L sin e)     (docs/physics.md section 5)
 
     with A = true_heading_deg + position_deg (the axis azimuth, clockwise from north),
-    e = arcsin(acc_x_g) (the axis elevation sensed by the x accelerometer, physics.md
+    e = arcsin(acc_x_g) (the axis elevation sensed by the x accelerometer, docs/physics.md
     section 4), L = latitude_deg, K the scale factor. The projection itself is
     :func:`nfs.sensors.fog.earth_rate_along_axis_dph`.
 
@@ -164,7 +165,8 @@ def separate_drift(run: Run, *, cutoff_period_s: float | None = DEFAULT_CUTOFF_P
         filled = raw, with moving == 1 and missing samples bridged linearly in time
         drift = wavelet_denoise(filled, level from cutoff_period_s, ...).signal
 
-    (physics.md section 6; seed 004 section on WT preprocessing). Samples taken while the
+    (docs/physics.md section 6; the FOG start-up paper section on WT preprocessing). Samples taken
+    while the
     turntable moves are not trusted (a real gyro senses the table's own rotation then), nor
     are missing ones; both are replaced by the line between their trusted neighbours before
     the transform, and ``interpolated`` says where.

@@ -1,4 +1,5 @@
-"""Wavelet denoising: separate a slow drift from white noise (physics.md section 6, seed 004).
+"""Wavelet denoising: separate a slow drift from white noise (docs/physics.md section 6, the FOG
+start-up paper).
 
 The record is decomposed with the discrete wavelet transform (DWT, PyWavelets ``wavedec``) to
 a level J, the detail coefficients of every level 1..J are shrunk toward zero with a threshold

@@ -7,7 +7,7 @@ while the accelerometer itself reads it directly against a white-noise floor of 
 10 s window.  So an accelerometer candidate is scored on its axis's readings at rest.
 
 At rest, the axis of azimuth A on a turntable tilted by alpha_N (north edge up) and alpha_E
-reads (physics.md section 4; :mod:`nfs.diagnose.sensor_fit`)
+reads (docs/physics.md section 4; :mod:`nfs.diagnose.sensor_fit`)
 
     f = sin(e) + b + sum_j c_j g_j(T) + n,    e = alpha_N cos A + alpha_E sin A     [g]
 

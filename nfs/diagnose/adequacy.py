@@ -85,7 +85,7 @@ __all__ = ["AlternativeScore", "ChannelFit", "ThermalAdequacy", "OneSided", "the
 ADEQUACY_FACTOR = 1.5
 #: Relative drop of the CV RMS an alternative must exceed to beat the model.
 CV_DROP = 0.05
-#: End of the start-up stage [s] after power-on (physics.md section 1: 30-90 min).
+#: End of the start-up stage [s] after power-on (docs/physics.md section 1: 30-90 min).
 STARTUP_S = 3600.0
 #: Default spacing of the residual grid [s].
 DEFAULT_DECIMATE_S = 30.0

@@ -55,18 +55,18 @@ class PriorWidth:
 
 
 #: Prior widths by parameter path pattern (first match wins).  Positive physical quantities
-#: get relative widths: physics.md gives each node's capacity, each conductance and each power
+#: get relative widths: docs/physics.md gives each node's capacity, each conductance and each power
 #: as a range spanning a factor 2-3 (est.), so 50 % of the preset is one sigma of that range.
 PRIOR_WIDTHS: dict[str, PriorWidth] = {
     "thermal.nodes.*.capacity_j_per_k": PriorWidth(
-        0.5, True, 100.0, "physics.md ranges span x2-2.5 (e.g. coil outer 40-100 J/K)"),
+        0.5, True, 100.0, "docs/physics.md ranges span x2-2.5 (e.g. coil outer 40-100 J/K)"),
     "thermal.nodes.*.power_w": PriorWidth(
-        0.5, True, 1.0, "physics.md ranges span x2-2.5 (board 3-8 W, QFA 0.3-0.6 W)"),
+        0.5, True, 1.0, "docs/physics.md ranges span x2-2.5 (board 3-8 W, QFA 0.3-0.6 W)"),
     "thermal.links.*.conductance_w_per_k": PriorWidth(
-        0.5, True, 0.1, "physics.md ranges span x4-6 (components to housing 0.3-2 W/K); "
+        0.5, True, 0.1, "docs/physics.md ranges span x4-6 (components to housing 0.3-2 W/K); "
                         "50 % keeps the preset's network shape"),
     "thermometers.*.lag_s": PriorWidth(
-        0.5, True, 30.0, "physics.md: tau 10-60 s"),
+        0.5, True, 30.0, "docs/physics.md: tau 10-60 s"),
     "thermometers.*.offset_c": PriorWidth(
         1.0, False, 1.0, "wide: a thermometer's offset is anchored by the soak (every node at "
                          "T0 at power-on), not by the preset"),
@@ -83,13 +83,14 @@ PRIOR_WIDTHS: dict[str, PriorWidth] = {
 }
 
 #: Prior widths of effect parameters by the parameter's unit: the coefficients of the drift
-#: effects weakly, several times the range physics.md gives them (effects.md lists the units).
+#: effects weakly, several times the range docs/physics.md gives them (docs/effects.md lists the
+# units).
 EFFECT_PRIOR_WIDTHS: dict[str, PriorWidth] = {
     "W/K": PriorWidth(0.5, True, 0.05, "TEC slopes 0.02-0.04 / 0.05-0.1 W/K: x2 ranges"),
     "W": PriorWidth(2.0, False, 2.0, "an extra heat source or motor heat of a few W"),
     "deg/h": PriorWidth(0.2, False, 0.2, "amplitudes (turn-on 0.005-0.05 deg/h): 4x the range"),
     "deg/h/K": PriorWidth(0.01, False, 0.01, "b1 0.0005-0.003 deg/h/K: 3x the range"),
-    "deg/h/K^2": PriorWidth(1e-3, False, 1e-3, "b2 (no physics.md range): 7x the preset"),
+    "deg/h/K^2": PriorWidth(1e-3, False, 1e-3, "b2 (no docs/physics.md range): 7x the preset"),
     "deg/h per K/min": PriorWidth(3.0, False, 3.0, "k_r 0.1-1 deg/h per K/min: 3x the range"),
     "deg/h per K*K/min": PriorWidth(0.1, False, 0.1, "k_p (no range): 15x the preset"),
     "g/K": PriorWidth(2e-4, False, 2e-4, "QFA bias 10-50 ug/K: 4x the range"),

@@ -1,7 +1,7 @@
 """Accelerometer biases and turntable tilt by linear least squares from the means at rest.
 
 On a turntable tilted by alpha_N toward north and alpha_E toward east, the x and y
-accelerometers at axis azimuth A read (physics.md section 4)
+accelerometers at axis azimuth A read (docs/physics.md section 4)
 
     f_x = sin(alpha_N cos A + alpha_E sin A) + b_x + e_x(T)                         [g]
     f_y = sin(-alpha_N sin A + alpha_E cos A) + b_y + e_y(T)                        [g]

@@ -1,7 +1,7 @@
 """Is the model's thermal structure adequate?  Generic structural alternatives and a verdict.
 
 A thermal candidate of the diagnosis (a heat source, a motor heat pulse, a TEC law on a node,
-an extra thermometer lag) is a *named* change of a lumped network (physics.md section 2,
+an extra thermometer lag) is a *named* change of a lumped network (docs/physics.md section 2,
 equation C_j dT_j/dt = sum_k G_jk (T_k - T_j) + G_j,amb (T_amb - T_j) + P_j).  When the
 network itself is wrong (a coil of several radial layers lumped into two nodes, a
 thermometer that does not sit where the model puts it, another TEC law) some named
@@ -63,7 +63,7 @@ def set_thermometer_fraction(inst: Instrument, thermometer: str, node: str,
     """``inst`` with ``node`` making up ``fraction`` of the sensed temperature of a thermometer.
 
     T_sensed = (1 - f) sum_j w_j T_j / sum_j w_j + f T_node over the thermometer's other
-    nodes j (physics.md section 2: a thermometer between nodes reads a weighted mean);
+    nodes j (docs/physics.md section 2: a thermometer between nodes reads a weighted mean);
     f = 0 removes ``node`` from the thermometer.
     """
     if thermometer not in inst.thermometers:
@@ -248,7 +248,7 @@ def physical_lower(effect: str, parameter: str) -> float | None:
     """The physical lower bound of a thermal candidate's coefficient, or None.
 
     A heat source or a motor heat pulse dissipates power >= 0 W (a resistor does not cool);
-    the TEC slopes c_h, c_c >= 0 W/K (effects.md: the TEC draws *more* power away from its
+    the TEC slopes c_h, c_c >= 0 W/K (docs/effects.md: the TEC draws *more* power away from its
     set point); a thermometer lag tau >= 0 s (causality).
     """
     return _PHYSICAL_LOWER.get((effect, parameter))

@@ -1,4 +1,4 @@
-"""Accelerometer effects [g] (effects.md, "Accelerometer effects"; physics.md section 4)."""
+"""Accelerometer effects [g] (docs/effects.md, "Accelerometer effects"; docs/physics.md section 4)."""
 
 from __future__ import annotations
 
@@ -27,7 +27,7 @@ def acc_node(ctx: EffectContext, axis: str) -> str:
 def acc_bias_temperature(ctx: EffectContext, *, axis: str, b_q1: float) -> np.ndarray:
     """QFA bias vs temperature: b_q1 (T_acc - T_ref) [g] on one axis.
 
-    b_q1 [g/K], 10-50 ug/K for quartz flexure accelerometers (physics.md section 4, est.;
+    b_q1 [g/K], 10-50 ug/K for quartz flexure accelerometers (docs/physics.md section 4, est.;
     IEEE Std 1293-2018 bias temperature sensitivity).  T_acc is the QFA's node.
     """
     return b_q1 * (ctx.node(acc_node(ctx, axis)) - ctx.t_ref_c)

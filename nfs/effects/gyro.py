@@ -1,4 +1,4 @@
-"""FOG rate effects [deg/h] (effects.md, "Gyro rate effects"; physics.md section 3).
+"""FOG rate effects [deg/h] (docs/effects.md, "Gyro rate effects"; docs/physics.md section 3).
 
 Each function returns the equivalent rate error it adds to the FOG output, one value per
 sample, from an :class:`~nfs.effects.context.EffectContext`.  Temperature rates enter the
@@ -35,7 +35,7 @@ def bias_temperature(ctx: EffectContext, *, b1: float, b2: float = 0.0,
     """Static bias vs temperature: b1 (T_coil - T_ref) + b2 (T_coil - T_ref)^2 [deg/h].
 
     Parameters: b1 [deg/h/K], b2 [deg/h/K^2], node (default the coil mean).
-    Reference: physics.md section 3 (static bias, b1 0.0005-0.003 deg/h/K); the polynomial
+    Reference: docs/physics.md section 3 (static bias, b1 0.0005-0.003 deg/h/K); the polynomial
     temperature model of IEEE Std 952-2020 Annex B (temperature sensitivity of bias).
     """
     dT = ctx.temperature(node) - ctx.t_ref_c
@@ -50,7 +50,7 @@ def shupe_gradient(ctx: EffectContext, *, k_r: float) -> np.ndarray:
     The Shupe phase is proportional to the integral over the fibre of dT/dt(z, t) (2z - L)
     (Shupe 1980, Appl. Opt. 19(5) 654, eq. (5)); a quadrupole coil cancels a uniform heating
     rate, and the lumped remainder is the rate of the radial gradient between the outer and
-    inner layers.  k_r [deg/h per K/min], 0.1-1 (physics.md section 3, est.).
+    inner layers.  k_r [deg/h per K/min], 0.1-1 (docs/physics.md section 3, est.).
     """
     d_grad = ctx.rate(ctx.coil_outer) - ctx.rate(ctx.coil_inner)
     return k_r * _S_PER_MIN * d_grad
@@ -76,8 +76,8 @@ def shupe_product(ctx: EffectContext, *, k_p: float, node: str | None = None) ->
     """Shupe-Mohr thermal stress: k_p (T_coil - T_ref) dT_coil/dt [deg/h], rate in K/min.
 
     The thermal-stress (elasto-optic) Shupe term scales with the potting modulus, which
-    changes with temperature; to first order this gives the T x dT/dt interaction that seed
-    001 (Sensors 2015, 15, 11189, eq. (6)-(8), "temperature product term") uses as an input.
+    changes with temperature; to first order this gives the T x dT/dt interaction that Cheng
+    et al. (Sensors 2015, 15, 11189, eq. (6)-(8), "temperature product term") uses as an input.
     Mohr 1996 (J. Lightwave Technol. 14(1) 27) for the stress-induced term.
     k_p [deg/h per K*K/min]; node defaults to the coil mean.
     """
@@ -85,7 +85,7 @@ def shupe_product(ctx: EffectContext, *, k_p: float, node: str | None = None) ->
 
 
 #: Coil temperatures over which the stress factor 1 + c_m (T_coil - T_ref) of
-#: :func:`shupe_stress` must keep its sign [degC] (effects.md: -40..60 C, the operating range).
+#: :func:`shupe_stress` must keep its sign [degC] (docs/effects.md: -40..60 C, the operating range).
 STRESS_RANGE_C = (-40.0, 60.0)
 
 
@@ -122,12 +122,12 @@ def shupe_stress(ctx: EffectContext, *, k_m: float, c_m: float) -> np.ndarray:
     Its coefficient follows the elastic modulus of the potting compound, which changes with
     temperature (stiffer when cold, c_m < 0); to first order
     k_m(T) = k_m (1 + c_m (T_coil - T_ref)), which gives the T x dT/dt interaction that
-    seed 001 feeds its network.
+    Cheng et al. (2015) feeds its network.
 
     Parameters: k_m [deg/h per K/min] at T_ref; c_m [1/K], bounded so that the factor keeps
     its sign over -40..60 C (:func:`stress_factor_bounds`: c_m in [-1/35, 1/65] at
     T_ref = 25 C; checked on construction, and against the instrument's own T_ref here).
-    T_coil = (T_outer + T_inner)/2.  Magnitudes are engineering estimates (physics.md
+    T_coil = (T_outer + T_inner)/2.  Magnitudes are engineering estimates (docs/physics.md
     section 3); not checked against a measured potting modulus.
     """
     lo, hi = stress_factor_bounds(ctx.t_ref_c)
@@ -147,7 +147,7 @@ def shupe_stress(ctx: EffectContext, *, k_m: float, c_m: float) -> np.ndarray:
 def turn_on_transient(ctx: EffectContext, *, a: float, tau: float) -> np.ndarray:
     """Electronics turn-on transient: a exp(-t / tau) [deg/h] from power-on.
 
-    a [deg/h] 0.005-0.05, tau [s] 60-300 (physics.md section 3, est.); IEEE Std 952-2020
+    a [deg/h] 0.005-0.05, tau [s] 60-300 (docs/physics.md section 3, est.); IEEE Std 952-2020
     defines turn-on behaviour as warm-up time (clause 9 in its test procedure list).
     """
     if tau <= 0:
@@ -162,7 +162,7 @@ def turn_on_transient(ctx: EffectContext, *, a: float, tau: float) -> np.ndarray
 def aux_linear(ctx: EffectContext, *, channel: str, k: float, aux_ref: float = 0.0) -> np.ndarray:
     """Auxiliary electrical driver of the bias: k (aux - aux_ref) [deg/h].
 
-    Seed 000 (Sensors 2019, 19, 2986, section 2 and Table 5) shows the high-frequency
+    Tao et al. (2019) (Sensors 2019, 19, 2986, section 2 and Table 5) shows the high-frequency
     oscillator voltage U_HFO tracks a laser gyro's bias better than temperature.
     channel: an ``aux_*`` column; k [deg/h per channel unit]; aux_ref [channel unit].
     """
@@ -183,7 +183,7 @@ def scale_factor_temperature(ctx: EffectContext, *, s1: float,
     """Scale factor vs source temperature: Omega_true s1 (T_source - T_ref) [deg/h].
 
     K(T) = K0 (1 + s1 (T - 25)): the source's mean wavelength moves with temperature and the
-    Sagnac scale factor with it.  s1 [1/K], 17-800 ppm/K (physics.md section 3, est.;
+    Sagnac scale factor with it.  s1 [1/K], 17-800 ppm/K (docs/physics.md section 3, est.;
     IEEE Std 952-2020 scale-factor temperature sensitivity).
     """
     t_src = ctx.node(ctx.source if node is None else node)

@@ -1,4 +1,5 @@
-"""Thermal effects: extra heat at a node [W] (effects.md, "Thermal effects"; physics.md 2).
+"""Thermal effects: extra heat at a node [W] (docs/effects.md, "Thermal effects"; docs/physics.md
+2).
 
 Signature ``f(time_s, temperature_c, moving, **params) -> power [W]`` at the effect's node;
 ``temperature_c`` is that node's temperature.  Effects registered ``state_dependent`` are
@@ -28,7 +29,7 @@ def tec_power(time_s, temperature_c, moving, *, T_set: float = 25.0, c_h: float,
     The thermo-electric cooler that holds the source at its set point draws more power the
     further the source's surroundings sit from it; the extra power heats the electronics
     node, which is what makes start-up depend on T0.  c_h 0.02-0.04 W/K, c_c 0.05-0.1 W/K
-    (physics.md section 2, est.).  Evaluated per sample from the node temperature.
+    (docs/physics.md section 2, est.).  Evaluated per sample from the node temperature.
     """
     dT = temperature_c - T_set
     if isinstance(dT, float):
@@ -42,7 +43,7 @@ def tec_power(time_s, temperature_c, moving, *, T_set: float = 25.0, c_h: float,
     Parameter("node", "", "node that receives the power", type=str),
     Parameter("power", "W", "constant extra power")])
 def heat_source(time_s, temperature_c, moving, *, node: str, power: float):
-    """A constant extra power P at a named node [W] (physics.md section 2)."""
+    """A constant extra power P at a named node [W] (docs/physics.md section 2)."""
     return power * np.ones_like(np.asarray(time_s, dtype=float))
 
 
@@ -52,6 +53,6 @@ def heat_source(time_s, temperature_c, moving, *, node: str, power: float):
 def motor_heat(time_s, temperature_c, moving, *, node: str, power: float):
     """Heat pulse from the turntable motor: P while moving, 0 at rest [W].
 
-    physics.md section 7 ("heat pulses from the turntable motor at each move").
+    docs/physics.md section 7 ("heat pulses from the turntable motor at each move").
     """
     return power * np.asarray(moving, dtype=float)

@@ -1,4 +1,4 @@
-"""Thermometer effects (effects.md, "Thermal effects": ``thermometer_lag``)."""
+"""Thermometer effects (docs/effects.md, "Thermal effects": ``thermometer_lag``)."""
 
 from __future__ import annotations
 
@@ -21,6 +21,6 @@ def thermometer_lag(reading_c: np.ndarray, time_s: np.ndarray, *, thermometer: s
     """An extra first-order lag on one thermometer: tau dy/dt = T_read - y [degC].
 
     A thermometer bonded through a thermal resistance reads its node late; tau [s]
-    10-60 (physics.md section 2, est.).  Applied before offset, noise and quantisation.
+    10-60 (docs/physics.md section 2, est.).  Applied before offset, noise and quantisation.
     """
     return first_order_lag(reading_c, time_s, tau)

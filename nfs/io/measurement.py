@@ -1,4 +1,4 @@
-"""The measurement format ``nfs-measurement/1`` (../shared/spec/measurement-format.md).
+"""The measurement format ``nfs-measurement/1`` (docs/measurement-format.md).
 
 A run is two files with one stem: ``NAME.csv`` (samples) and ``NAME.toml`` (metadata).
 

@@ -19,7 +19,7 @@ number of samples, so Cov(mean_v, mean_w) = (1/(M_v M_w)) sum_{A in v} sum_{B in
 Cov(S_A, S_B).
 
 * Angle random walk N [deg/sqrt(h)]: white, per-sample variance s_N^2 = (60 N)^2 fs
-  [(deg/h)^2] (IEEE Std 952-2020 Annex C; physics.md section 3), so
+  [(deg/h)^2] (IEEE Std 952-2020 Annex C; docs/physics.md section 3), so
   Cov(S_A, S_B) = s_N^2 |A cap B|, and a lone m-sample mean has the variance (60 N)^2 fs / m.
 
 * Each Gauss-Markov component of the bias instability B [deg/h]: a stationary AR(1) sequence

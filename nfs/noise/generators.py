@@ -53,7 +53,7 @@ BI_POLES_PER_DECADE: int = 1
 
 #: Default longest correlation time T_c [s] of the bias-instability construction: the Allan
 #: floor holds (within 5 %) up to T_c / 3 = 20 min, which covers a north-finding cycle and the
-#: start-up stage's minute scales (physics.md sections 1 and 5). (est.)
+#: start-up stage's minute scales (docs/physics.md sections 1 and 5). (est.)
 DEFAULT_CORRELATION_TIME_S: float = 3600.0
 
 # The band where the floor of the sampled construction is within 5 % of 0.6643 B runs from
@@ -118,7 +118,7 @@ def white_noise(n_samples: int, sample_rate_hz: float, density_per_rth_hz: float
 
     ``"one"`` (default) reads the density as a one-sided amplitude spectral density, the
     data-sheet convention where the rms noise in a band 0..B is density * sqrt(B) (e.g. a QFA's
-    20 ug/sqrt(Hz), physics.md section 4): the rms over the Nyquist band fs/2 is the
+    20 ug/sqrt(Hz), docs/physics.md section 4): the rms over the Nyquist band fs/2 is the
     per-sample standard deviation.  ``"two"`` reads it as the square root of the two-sided
     PSD S over -fs/2..fs/2 (variance S fs), the IEEE Std 952 convention in which the angle
     random walk coefficient N is sqrt(S) and sigma_Allan(tau) = N / sqrt(tau)
@@ -163,7 +163,7 @@ def angle_random_walk_noise_dph(n_samples: int, sample_rate_hz: float,
                                 rng: np.random.Generator) -> np.ndarray:
     """Angle random walk: white rate noise of coefficient N (IEEE Std 952-2020 Annex C).
 
-    Per-sample standard deviation (N * 60) * sqrt(fs) [deg/h] (physics.md section 3), so that
+    Per-sample standard deviation (N * 60) * sqrt(fs) [deg/h] (docs/physics.md section 3), so that
     sigma_Allan(tau) = 60 N / sqrt(tau) [deg/h] with tau in [s], i.e. N / sqrt(tau_h).  N is the
     square root of the two-sided rate PSD, (60 N)^2 [(deg/h)^2/Hz]: this is
     :func:`white_noise` with ``sided="two"`` and density 60 N [deg/h/sqrt(Hz)].
@@ -175,7 +175,7 @@ def angle_random_walk_noise_dph(n_samples: int, sample_rate_hz: float,
     sample_rate_hz : float
         Sample rate fs [Hz].
     arw_deg_per_rth_h : float
-        Angle random walk N [deg/sqrt(h)], >= 0 (physics.md: 0.0003-0.001).
+        Angle random walk N [deg/sqrt(h)], >= 0 (docs/physics.md: 0.0003-0.001).
     rng : numpy.random.Generator
         Source of every random draw.
 
@@ -249,7 +249,7 @@ def bias_instability_noise_dph(n_samples: int, sample_rate_hz: float,
     sample_rate_hz : float
         Sample rate fs [Hz].
     bias_instability_dph : float
-        Bias instability B [deg/h], >= 0 (physics.md: 0.002-0.005).
+        Bias instability B [deg/h], >= 0 (docs/physics.md: 0.002-0.005).
     correlation_time_s : float
         Longest correlation time T_c [s], >= 100 sample intervals; sets the upper end of the
         floor's band.
@@ -378,7 +378,7 @@ def gyro_noise_dph(n_samples: int, sample_rate_hz: float, *, arw_deg_per_rth_h: 
                    correlation_time_s: float = DEFAULT_CORRELATION_TIME_S,
                    rng: np.random.Generator) -> np.ndarray:
     """Gyro rate noise [deg/h]: angle random walk + bias instability + rate random walk
-    (IEEE Std 952-2020 Annex C; physics.md section 3).
+    (IEEE Std 952-2020 Annex C; docs/physics.md section 3).
 
     The sum of :func:`angle_random_walk_noise_dph` (N), :func:`bias_instability_noise_dph`
     (B, T_c) and :func:`rate_random_walk_noise_dph` (K); the three are independent, so their
@@ -434,9 +434,9 @@ class GyroNoise:
     description to hold; :meth:`generate` draws a record with :func:`gyro_noise_dph`."""
 
     arw_deg_per_rth_h: float = 0.0
-    """Angle random walk N [deg/sqrt(h)] (physics.md: 0.0003-0.001)."""
+    """Angle random walk N [deg/sqrt(h)] (docs/physics.md: 0.0003-0.001)."""
     bias_instability_dph: float = 0.0
-    """Bias instability B [deg/h]: the Allan floor is 0.6643 B (physics.md: 0.002-0.005)."""
+    """Bias instability B [deg/h]: the Allan floor is 0.6643 B (docs/physics.md: 0.002-0.005)."""
     rrw_deg_per_h_per_rth_h: float = 0.0
     """Rate random walk K [deg/h/sqrt(h)]: sigma_Allan(tau_h) = K sqrt(tau_h / 3)."""
     correlation_time_s: float = DEFAULT_CORRELATION_TIME_S

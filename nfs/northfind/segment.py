@@ -2,7 +2,7 @@
 
 A *dwell* is a stretch of samples at one turntable angle theta_k with ``moving == 0``; a
 *cycle* is one pass through the position schedule (e.g. 0, 90, 180, 270, or the
-forward-then-reverse 0, 90, 180, 270, 270, 180, 90, 0 of physics.md section 5).
+forward-then-reverse 0, 90, 180, 270, 270, 180, 90, 0 of docs/physics.md section 5).
 
 How dwells are found
 --------------------

@@ -1,6 +1,6 @@
-"""Multiposition heading solvers (physics.md section 5).
+"""Multiposition heading solvers (docs/physics.md section 5).
 
-Symbols (physics.md section 5):
+Symbols (docs/physics.md section 5):
 
 - ``psi``: azimuth of the gyro's sensitive axis x at turntable angle theta = 0 [deg],
   clockwise from north;
@@ -78,7 +78,7 @@ def _vertical_rate_removed(rate_dph, acc_x_g, latitude_deg: float):
 
 
 def tilt_correct(rate_dph, acc_x_g, latitude_deg: float):
-    """Tilt-correct the mean rate of each position (physics.md sections 4 and 5).
+    """Tilt-correct the mean rate of each position (docs/physics.md sections 4 and 5).
 
         w_k' = (w_k - Omega_ie sin L sin e_k) / cos e_k,   sin e_k = f_x,k
 
@@ -205,7 +205,7 @@ def _solve_two_position(theta_a, theta_rad, rate, cos_e, weights, latitude_deg,
 def solve_heading(theta_deg, rate_dph, *, weights=None, cos_elevation=None,
                   latitude_deg: float | None = None, heading_hint_deg: float | None = None,
                   angle_tol_deg: float = ANGLE_TOL_DEG) -> HeadingSolution:
-    """Heading psi from the mean rates of one multiposition cycle (physics.md section 5).
+    """Heading psi from the mean rates of one multiposition cycle (docs/physics.md section 5).
 
     Least squares of ``w_k = c_k (X cos theta_k - Y sin theta_k) + b`` with c_k = cos e_k
     (1 when ``cos_elevation`` is None, i.e. rates already tilt-corrected or a level axis);

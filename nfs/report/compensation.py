@@ -1,4 +1,4 @@
-"""Outputs of the compensation study: tables, figures, and the comparison with seed 004."""
+"""Outputs of the compensation study: tables, figures, and the comparison with the FOG start-up paper."""
 
 from __future__ import annotations
 
@@ -20,7 +20,7 @@ from .table import HeadingTable, write_table
 __all__ = ["ShapeCheck", "shape_checks", "paper_comparison_markdown", "drift_table_markdown",
            "write_study", "plot_drift_vs_compensated"]
 
-#: The SVR family of the table (the rows seed 004 says beat BP).
+#: The SVR family of the table (the rows the FOG start-up paper says beat BP).
 SVR_FAMILY = ("SVR (grid)", "PSO-SVR", "GWO-SVR", "SSA-SVR")
 
 
@@ -37,9 +37,10 @@ class ShapeCheck:
 
 
 def shape_checks(table: HeadingTable) -> list[ShapeCheck]:
-    """The shape seed 004's Table 3 leads us to expect, checked on our table.
+    """The shape the FOG start-up paper's Table 3 leads us to expect, checked on our table.
 
-    - SSA-SVR's mean at most 0.6x the uncompensated mean (seed 004: 0.0101 / 0.0209 = 0.48),
+    - SSA-SVR's mean at most 0.6x the uncompensated mean (the FOG start-up paper: 0.0101 / 0.0209 =
+    0.48),
       and, when the table has its paired comparisons, below it beyond the uncertainty;
     - the SVR family ahead of BP (each SVR row's mean below BP's);
     - every compensated mean above the white-noise floor;
@@ -93,23 +94,23 @@ def shape_checks(table: HeadingTable) -> list[ShapeCheck]:
 
 
 def paper_comparison_markdown(table: HeadingTable) -> str:
-    """Our table beside seed 004's Table 3, and the shape checks."""
-    lines = ["## Beside seed 004 (Table 3)", "",
-             "Seed 004's instrument is not ours: compare the shape (which methods win, by about "
+    """Our table beside the FOG start-up paper's Table 3, and the shape checks."""
+    lines = ["## Beside the FOG start-up paper (Table 3)", "",
+             "The FOG start-up paper's instrument is not ours: compare the shape (which methods win, by about "
              "how much, how the error spreads over start temperatures), not the digits.", "",
              "| method | source | " + " | ".join(f"{t:g}" for t in SEED004_TEMPERATURES_C)
              + " | mean |", "|---|---|" + "---:|" * (len(SEED004_TEMPERATURES_C) + 1)]
     ours = {r.method: r for r in table.rows}
     same_t = tuple(table.temperatures_c) == SEED004_TEMPERATURES_C
     for method, ref in SEED004_TABLE3_HEADING_RMSE_DEG.items():
-        lines.append(f"| {method} | seed 004 | " + " | ".join(f"{v:.4f}" for v in ref) + " |")
+        lines.append(f"| {method} | the FOG start-up paper | " + " | ".join(f"{v:.4f}" for v in ref) + " |")
         if method in ours and same_t:
             r = ours[method]
             lines.append(f"| {method} | ours | " + " | ".join(
                 _f(v) for v in (*r.rmse_deg, r.mean_deg)) + " |")
     ref_ratio = SEED004_TABLE3_HEADING_RMSE_DEG["SSA-SVR"][-1] / \
         SEED004_TABLE3_HEADING_RMSE_DEG["before"][-1]
-    lines += ["", f"Seed 004: SSA-SVR / before = {ref_ratio:.2f}; SSA-SVR C = "
+    lines += ["", f"The FOG start-up paper: SSA-SVR / before = {ref_ratio:.2f}; SSA-SVR C = "
               f"{SEED004_TABLE1_SVR['C']}, sigma = {SEED004_TABLE1_SVR['sigma']} (Table 1).", "",
               "### Expected shape", ""]
     for c in shape_checks(table):
@@ -122,7 +123,7 @@ def _f(v: float) -> str:
 
 
 def drift_table_markdown(rows, features_mode: str | None = None) -> str:
-    """Drift residual MAE and STD by method, beside seed 004's Table 2.
+    """Drift residual MAE and STD by method, beside the FOG start-up paper's Table 2.
 
     Parameters
     ----------
@@ -141,7 +142,7 @@ def drift_table_markdown(rows, features_mode: str | None = None) -> str:
         lines.append(f"| {r.method} | {_f(r.mae_dph)} | {_f(r.std_dph)} |")
     if features_mode:
         lines += ["", f"Features mode: {features_mode}."]
-    lines += ["", "Seed 004, Table 2: " + "; ".join(
+    lines += ["", "The FOG start-up paper, Table 2: " + "; ".join(
         f"{k} MAE {'-' if v[0] is None else v[0]} STD {v[1]}"
         for k, v in SEED004_TABLE2_DRIFT_DPH.items()) + " [deg/h]."]
     return "\n".join(lines) + "\n"
@@ -215,7 +216,7 @@ def write_study(study, out_dir, *, json_path=None, title: str = "",
 
     heading_rmse.{md,csv,json,png} (all rows), drift_residual.{md,csv,json},
     svr_parameters.{md,csv,json}, drift_vs_compensated.png (the coldest test run) and
-    report.md (tables, figures, the comparison with seed 004).  ``table``: the study's
+    report.md (tables, figures, the comparison with the FOG start-up paper).  ``table``: the study's
     heading table if already made (e.g. with its provenance; default
     ``study.heading_table()``).
     """
@@ -256,8 +257,8 @@ def write_study(study, out_dir, *, json_path=None, title: str = "",
         f"Features mode: **{mode}**: {FEATURE_MODE_NOTES[mode]}.", "",
         "## Heading RMSE by start temperature [deg]", "", table.to_markdown(),
         "![heading RMSE by start temperature](heading_rmse.png)", "",
-        "## Drift residual over the start-up stage (seed 004, Table 2)", "", drift_md,
-        "## Tuned hyperparameters (seed 004, Table 1)", "", p_md_text,
+        "## Drift residual over the start-up stage (the FOG start-up paper, Table 2)", "", drift_md,
+        "## Tuned hyperparameters (the FOG start-up paper, Table 1)", "", p_md_text,
         "![drift and its compensation](drift_vs_compensated.png)", "",
         paper_comparison_markdown(table)])
     atomic_write_text(out / "report.md", report)

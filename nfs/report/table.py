@@ -1,4 +1,4 @@
-"""The heading-RMSE table by start temperature (seed 004, Table 3) and its outputs.
+"""The heading-RMSE table by start temperature (the FOG start-up paper, Table 3) and its outputs.
 
 Rows are methods (``before``: start-up, uncompensated; ``stable``: the stable stage;
 ``floor``: the white-noise limit of the schedule; the compensation study adds a row per

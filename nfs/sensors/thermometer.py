@@ -1,4 +1,4 @@
-"""Built-in thermometers of the FOG and the two QFAs (physics.md section 2)."""
+"""Built-in thermometers of the FOG and the two QFAs (docs/physics.md section 2)."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""The indexing turntable: position schedule and the tilt of its axis (physics.md 4, 5)."""
+"""The indexing turntable: position schedule and the tilt of its axis (docs/physics.md 4, 5)."""
 
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ from ..errors import NfsError
 __all__ = ["ORDERS", "Schedule", "turntable_motion", "axis_elevation_deg"]
 
 #: Position orders: ``sequential`` repeats theta_1..theta_N; ``forward-reverse`` runs
-#: theta_1..theta_N then theta_N..theta_1 (cancels a linear drift exactly, physics.md 5).
+#: theta_1..theta_N then theta_N..theta_1 (cancels a linear drift exactly, docs/physics.md 5).
 ORDERS = ("sequential", "forward-reverse")
 
 
@@ -82,7 +82,7 @@ def axis_elevation_deg(azimuth_deg: np.ndarray, tilt_north_deg: float,
                        tilt_east_deg: float) -> np.ndarray:
     """Elevation of a horizontal-on-table axis of azimuth A on a tilted turntable [deg].
 
-    e = alpha_N cos A + alpha_E sin A (small-angle, physics.md section 4): alpha_N and
+    e = alpha_N cos A + alpha_E sin A (small-angle, docs/physics.md section 4): alpha_N and
     alpha_E are the tilts of the table toward north and east (the north / east edge up).
     """
     a = np.radians(azimuth_deg)

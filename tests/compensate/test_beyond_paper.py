@@ -27,7 +27,8 @@ def _ratios(table, method):
 
 
 def test_least_squares_within_1_3x_of_stable_at_every_temperature():
-    # The cheapest of the compensators (cubic least squares, seed 000) on the precise scenario.
+    # The cheapest of the compensators (cubic least squares, Tao et al. (2019)) on the precise
+    # scenario.
     sc = load_scenario(PRECISE)
     st = run_study(sc, dataclasses.replace(sc.compensation, methods=("ls",)))
     table = st.heading_table()

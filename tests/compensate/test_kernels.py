@@ -40,13 +40,13 @@ from nfs.errors import NfsError
 
 SHARED = Path(__file__).resolve().parents[2].parent / "shared"
 
-#: Seed 004 Table 1: SSA-tuned SVR kernel parameters (../shared/reference/
+#: The FOG start-up paper Table 1: SSA-tuned SVR kernel parameters (../shared/reference/
 #: seed004_table1_svr_params.csv).
 SEED004_C, SEED004_SIGMA = 1.0520, 0.9506
 
 
 def _kkt_matrix(K, gamma, v=None):
-    """The (n+1) x (n+1) LS-SVM KKT matrix of seed 000 eq. (8) / (14), built independently."""
+    """The (n+1) x (n+1) LS-SVM KKT matrix of Tao et al. (2019) eq. (8) / (14), built independently."""
     n = K.shape[0]
     v = np.ones(n) if v is None else v
     A = np.zeros((n + 1, n + 1))
@@ -119,7 +119,7 @@ def test_gaussian_kernel_formula():
 # ------------------------------------------------------------------ SVR
 def test_svr_equals_libsvm_on_standardised_problem():
     # Oracle: sklearn.svm.SVR (LIBSVM) with gamma = 1/(2 sigma^2), C and epsilon on the
-    # problem standardised by hand, mapped back; seed 004 Table 1's C and sigma.
+    # problem standardised by hand, mapped back; the FOG start-up paper Table 1's C and sigma.
     X, y = _smooth_problem()
     Xt, _ = _smooth_problem(n=50, seed=1)
     model = SVRRegressor(C=SEED004_C, sigma=SEED004_SIGMA, epsilon=0.05).fit(X, y)
@@ -145,7 +145,7 @@ def test_svr_epsilon_and_C_are_unit_free():
 
 # ------------------------------------------------------------------ LS-SVM
 def test_lssvm_kkt_residual_and_constraint():
-    # Oracle: the solution satisfies seed 000 eq. (8) (built independently here) to 1e-8
+    # Oracle: the solution satisfies Tao et al. (2019) eq. (8) (built independently here) to 1e-8
     # relative, and its first row, sum(alpha) = 0.
     X, y = _smooth_problem()
     model = LSSVMRegressor(gamma=50.0, sigma=0.8).fit(X, y)
@@ -155,7 +155,7 @@ def test_lssvm_kkt_residual_and_constraint():
     rhs = np.concatenate([[0.0], y])
     assert np.linalg.norm(A @ sol - rhs) / np.linalg.norm(rhs) < 1e-8
     assert abs(model.alpha_.sum()) < 1e-10 * np.abs(model.alpha_).sum()
-    # e_k = alpha_k / gamma is the training residual (seed 000 eq. (7))
+    # e_k = alpha_k / gamma is the training residual (Tao et al. (2019) eq. (7))
     np.testing.assert_allclose(y - model.predict(X), model.alpha_ / 50.0, atol=1e-10)
     assert model.X_fit_.shape == X.shape
 
@@ -181,7 +181,7 @@ def test_lssvm_input_units_do_not_matter():
 
 # ------------------------------------------------------------------ weight functions
 def test_weight_functions_at_hand_picked_points():
-    # Oracle: seed 000 eq. (15)-(18) (Hampel's tail floored at 1e-4, Suykens et al. 2002).
+    # Oracle: Tao et al. (2019) eq. (15)-(18) (Hampel's tail floored at 1e-4, Suykens et al. 2002).
     np.testing.assert_allclose(huber_weight(np.array([0.0, 1.0, 1.345, -2.69, 13.45])),
                                [1.0, 1.0, 1.0, 0.5, 0.1], rtol=1e-15)
     np.testing.assert_allclose(huber_weight(np.array([3.0]), beta=2.0), [2.0 / 3.0])
@@ -198,8 +198,8 @@ def test_weight_functions_at_hand_picked_points():
 
 
 def test_weight_registry():
-    # Oracle: the registry names seed 000's four weights and the null weight; an unknown
-    # name lists the valid ones; lookup is case-insensitive (seed 000 writes "Huber").
+    # Oracle: the registry names Tao et al.'s (2019) four weights and the null weight; an unknown
+    # name lists the valid ones; lookup is case-insensitive (Tao et al. (2019) writes "Huber").
     assert set(WEIGHT_FUNCTIONS) == {"unweighted", "huber", "hampel", "logistic", "myriad"}
     assert get_weight_function("Huber").func is huber_weight
     assert get_weight_function("hampel").params == ("c1", "c2")
@@ -213,7 +213,7 @@ def test_weight_registry():
 # ------------------------------------------------------------------ IR-LS-SVM
 def test_irlssvm_unweighted_is_lssvm_and_one_step_is_suykens():
     # Oracle: the null weight reproduces plain LS-SVM; max_iter=1 is the single reweighting
-    # of seed 000 section 2.3 (Suykens et al. 2002), computed here step by step.
+    # of Tao et al. (2019) section 2.3 (Suykens et al. 2002), computed here step by step.
     X, y = _smooth_problem()
     ls = LSSVMRegressor(gamma=30.0, sigma=0.7).fit(X, y)
     un = IRLSSVMRegressor(gamma=30.0, sigma=0.7, weight="unweighted").fit(X, y)
@@ -225,7 +225,7 @@ def test_irlssvm_unweighted_is_lssvm_and_one_step_is_suykens():
     alpha, b = lssvm_solve(K, y, 30.0, v)
     np.testing.assert_allclose(one.alpha_, alpha, atol=1e-12)
     assert one.b_ == pytest.approx(b, abs=1e-12) and one.n_iter_ == 1
-    # the weighted KKT system (seed 000 eq. (14)) holds for the final weights
+    # the weighted KKT system (Tao et al. (2019) eq. (14)) holds for the final weights
     full = IRLSSVMRegressor(gamma=30.0, sigma=0.7, weight="hampel").fit(X, y)
     A = _kkt_matrix(K, 30.0, full.weights_)
     rhs = np.concatenate([[0.0], y])
@@ -254,7 +254,7 @@ def test_irlssvm_resists_gross_outliers(weight):
 
 
 def test_irlssvm_with_seed000_table5_hyperparameters():
-    # Oracle: seed 000 Table 5 row 4 (../shared/reference/seed000_table5_irlssvm_all_inputs
+    # Oracle: Tao et al. (2019) Table 5 row 4 (../shared/reference/seed000_table5_irlssvm_all_inputs
     # .csv): its (c, sigma^2) per weight, here on a 3-input drift-like problem, give a
     # well-posed weighted KKT solve (residual < 1e-8 relative, sum(alpha) = 0) and weights
     # in (0, 1].  c spans 26 to 4e5: the conditioning regime the solver must handle.

@@ -86,7 +86,7 @@ def test_cubic_recovers_known_polynomial():
 
 
 def test_cubic_one_feature_is_seed_000_model():
-    """Oracle: seed 000 section 4.1, B = k0 + k1 X + k2 X^2 + k3 X^3 -- one feature gives
+    """Oracle: Tao et al. (2019) section 4.1, B = k0 + k1 X + k2 X^2 + k3 X^3 -- one feature gives
     exactly the three powers, and the known coefficients come back."""
     x = np.linspace(-40.0, 70.0, 111)[:, None]
     k = [1.4e-3, 4.9e-4, -4.6e-6, 2.0e-8]
@@ -162,7 +162,7 @@ def test_stepwise_picks_exactly_the_true_terms():
 
 def test_stepwise_default_levels_always_keep_the_true_terms():
     """Oracle: the true terms' partial F statistics are in the hundreds (n = 500), so at
-    seed 000's levels (0.05 / 0.10) they enter in every one of 20 seeded data sets
+    Tao et al.'s (2019) levels (0.05 / 0.10) they enter in every one of 20 seeded data sets
     (extra, spurious terms are allowed here)."""
     for seed in range(20):
         X, y = _stepwise_case(seed)
@@ -269,7 +269,7 @@ def test_bp_standardises_the_target():
 
 def test_rbf_width_rule():
     """Oracle: the documented rule sigma = width x mean distance between distinct centres
-    (in standardised inputs), and the Gaussian of seed 001 eq. (15) at a centre is 1."""
+    (in standardised inputs), and the Gaussian of Cheng et al. (2015) eq. (15) at a centre is 1."""
     x, y, _, _ = _sine()
     model = RBFNetwork(n_centers=5, width=0.7, random_state=0).fit(x, y)
     c = model.centers_

@@ -1,7 +1,8 @@
-"""The compensation study on a reduced budget has the shape seed 004's Table 3 leads us to
+"""The compensation study on a reduced budget has the shape the FOG start-up paper's Table 3 leads
+us to
 expect (by regime, not digits: the simulated instrument is not the paper's).
 
-Oracle: seed 004, Table 3 (../shared/reference/seed004_table3_heading_rmse_deg.csv):
+Oracle: the FOG start-up paper, Table 3 (../shared/reference/seed004_table3_heading_rmse_deg.csv):
 SSA-SVR 0.0101 deg vs 0.0209 before (ratio 0.48), every SVR variant ahead of BP.  Checked:
 SSA-SVR mean <= 0.6 x before, and below it beyond the table's uncertainty (paired bootstrap
 over the test start-ups, Holm); each SVR-family mean below BP's, and BP better than none of
@@ -77,7 +78,7 @@ def test_tuned_rows_show_their_median_seed(study, table):
 
 def test_drift_table_regime(study):
     rows = {r.method: r for r in study.drift_rows()}
-    # seed 004 Table 2: denoised drift STD 0.0134 deg/h; SSA-SVR residual STD 0.0031.
+    # the FOG start-up paper Table 2: denoised drift STD 0.0134 deg/h; SSA-SVR residual STD 0.0031.
     assert 0.008 <= rows["denoised (no compensation)"].std_dph <= 0.02
     assert rows["SSA-SVR"].std_dph < 0.5 * rows["denoised (no compensation)"].std_dph
 
@@ -100,7 +101,8 @@ def test_same_seed_same_model(study):
 
 @pytest.mark.slow
 def test_cycle_mode_ssa_svr_within_the_paper_ratio():
-    # Seed 004's ratio (SSA-SVR 0.48x before) with the features an instrument computes, on
+    # The FOG start-up paper's ratio (SSA-SVR 0.48x before) with the features an instrument
+    # computes, on
     # one unit: at most 0.6x, and below before beyond the uncertainty.
     settings = CompensationSettings(methods=("ssa-svr",), budget=30, test_repeats=3, n_jobs=2)
     table = run_study(load_scenario().nominal(), settings).heading_table()

@@ -208,7 +208,7 @@ def test_space_mapping():
 # -- MetaheuristicSearchCV ----------------------------------------------------------------
 
 class SigmaSVR(RegressorMixin, BaseEstimator):
-    """sklearn's SVR with seed 004's kernel width: gamma = 1 / (2 sigma^2).
+    """sklearn's SVR with the FOG start-up paper's kernel width: gamma = 1 / (2 sigma^2).
 
     Stands in for nfs.compensate.kernels.SVRRegressor when that module is missing; it also
     serves the parameter-name error test (its parameters are exactly C, epsilon, sigma).
@@ -229,7 +229,7 @@ class SigmaSVR(RegressorMixin, BaseEstimator):
         return self.svr_.predict(X)
 
 
-try:  # seed 004's SVR in the sigma convention; sklearn's SVR stands in until it exists
+try:  # the FOG start-up paper's SVR in the sigma convention; sklearn's SVR stands in until it exists
     from nfs.compensate.kernels import SVRRegressor as SVRModel
 except ImportError:
     SVRModel = SigmaSVR

@@ -90,7 +90,7 @@ def test_separated_drift_matches_the_simulated_drift(inst_no_sf, t0):
     # minus the noise leak (the method's own error: shrinkage bias on the start-up transient,
     # bridged moves, ends) below 0.002 deg/h RMS (measured 0.0008 / 0.0013); the total error,
     # leak included (measured 0.0029), below 0.005 deg/h: under half the drift's standard
-    # deviation at these T0 (0.011 / 0.015) and under 0.4 of seed 004's denoised-drift
+    # deviation at these T0 (0.011 / 0.015) and under 0.4 of the FOG start-up paper's denoised-drift
     # standard deviation (0.0134 deg/h, Table 2).
     sim = simulate(inst_no_sf, t0=t0)
     sep = separate_drift(sim.run)

@@ -4,7 +4,7 @@
 few start temperatures, 2.5 h at 1 Hz; the model is the default instrument.  Oracles:
 - the null hypothesis: runs made by the model itself (other noise) must be consistent with
   noise on every channel, since the floor is built to be the residual's null distribution;
-- a known hidden effect (the effect registry's functions, effects.md) whose signature is
+- a known hidden effect (the effect registry's functions, docs/effects.md) whose signature is
   known in closed form: a turn-on transient a exp(-t/tau) lives in the first minutes, a
   Shupe-Mohr term k_p (T - 25) dT/dt grows with |T0 - 25 C|, a magnetic bias m cos(A - D)
   follows the turntable positions.

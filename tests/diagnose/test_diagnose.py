@@ -17,7 +17,7 @@ divided by the floor, measured with seed 11:
 - turn_on_transient a = 0.1 deg/h, tau = 120 s: 1.05x over 2.5 h (all of it in the first
   10 min)
 - magnetic m = 0.01 deg/h, D_mag = 30 deg: 1.07x (constant in time, follows the position)
-- aux_linear k = 3 deg/h/V on aux_osc_v (seed 000's oscillator voltage, :data:`OSC`): 2.3x.
+- aux_linear k = 3 deg/h/V on aux_osc_v (Tao et al.'s (2019) oscillator voltage, :data:`OSC`): 2.3x.
   Raised from 1 deg/h/V (0.78x) when significance became run-level: at k = 1 the hidden
   effect is the top candidate on seeds 11 and 12 (CV RMS -40 % and -50 %) but its test,
   clustered by run, has only 3.3 and 2.9 Bell-McCaffrey degrees of freedom (the voltage's
@@ -93,7 +93,7 @@ def _without(inst, name):
     return inst.with_effects([e for e in inst.effects if e.name != name])
 
 
-#: Seed 000's oscillator voltage: an electrical channel that follows the source temperature
+#: Tao et al.'s (2019) oscillator voltage: an electrical channel that follows the source temperature
 #: (10 mV/K) and wanders by itself (a random walk no thermometer sees, 0.1 mV/sqrt(s): about
 #: 10 mV over a run); recorded by model and truth alike (a channel, not an effect).
 OSC = AuxChannel(name="aux_osc_v", source="temperature:electronics", gain=0.01, offset=5.0,

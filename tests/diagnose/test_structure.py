@@ -62,11 +62,11 @@ def hidden_link(default, link_runs):
 
 
 def test_alternatives_of_the_default(default):
-    """Oracle: the default network (physics.md section 2) - 4 splits (coil_outer,
+    """Oracle: the default network (docs/physics.md section 2) - 4 splits (coil_outer,
     coil_inner, housing, board), 2 inserts (the FOG thermometer's nodes to the housing),
     the 4 unlinked pairs of electronics, board, coil nodes and housing, 3 thermometer
     shares; each split halves the capacity, and a split or an insert at its start keeps
-    the steady state of every original node (steady_state, physics.md section 2)."""
+    the steady state of every original node (steady_state, docs/physics.md section 2)."""
     alts = structural_alternatives(default)
     names = {a.name for a in alts}
     assert {"split coil_outer", "split coil_inner", "split housing", "split board",
@@ -214,7 +214,7 @@ def test_one_sided_negative_never_significant():
 
 
 def test_effect_alternative_is_one_sided(default):
-    """Oracle: effects.md - a heat source's power and a lag are kept >= 0 by their bounds."""
+    """Oracle: docs/effects.md - a heat source's power and a lag are kept >= 0 by their bounds."""
     a = effect_alternative(default, "heat_source", "coil_outer")
     assert a.free == ("effects.heat_source:coil_outer.power",)
     assert a.bounds[0][0] == 0.0

@@ -1,4 +1,4 @@
-"""Each built-in effect against its equation in effects.md on a hand-made state."""
+"""Each built-in effect against its equation in docs/effects.md on a hand-made state."""
 
 import dataclasses
 

@@ -135,7 +135,7 @@ def test_energy_balance_of_the_whole_unit():
 
 
 def test_time_constants_and_rise_in_range():
-    """Oracle: physics.md section 2: one global time constant of 20-60 min, component
+    """Oracle: docs/physics.md section 2: one global time constant of 20-60 min, component
     constants of minutes, an internal rise of 5-15 K after 2.5 h; the TEC law makes the rise
     depend on T0 (more power away from the set point)."""
     taus = g.unit_network(g.Unit()).time_constants_s() / 60.0
@@ -197,7 +197,7 @@ _THERMO = ("temp_fog_c", "temp_acc_x_c", "temp_acc_y_c")
     ("heat_source", _GYRO + _THERMO + ("aux_source_current_ma", "aux_osc_v")),
 ])
 def test_hidden_effect_changes_its_channels_only(hidden, changed):
-    """Oracle: the effect's definition (effects.md) and the generator's independent random
+    """Oracle: the effect's definition (docs/effects.md) and the generator's independent random
     streams: with the same seed only the channels the effect acts on change (a gyro effect
     leaves the thermometers, accelerometers and aux bit-identical; a heat source warms the
     unit, so the thermometers, the TEC and through them the gyro change)."""

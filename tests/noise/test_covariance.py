@@ -63,7 +63,7 @@ def test_window_mean_covariance_equals_brute_force_sum_over_samples() -> None:
 
 
 def test_white_noise_alone_gives_60n_squared_fs_over_m_on_the_diagonal() -> None:
-    # Oracle: physics.md section 3, per-sample std (60 N) sqrt(fs), so an m-sample mean of
+    # Oracle: docs/physics.md section 3, per-sample std (60 N) sqrt(fs), so an m-sample mean of
     # white noise has the variance (60 N)^2 fs / m and disjoint windows are uncorrelated.
     fs, arw = 4.0, 0.0007
     lengths = np.array([10, 40, 7])

@@ -52,7 +52,7 @@ def test_gyro_fitted_arw_matches_setting_within_5_percent(seed: int) -> None:
 
 
 def test_arw_per_sample_std_is_60_n_sqrt_fs() -> None:
-    # Oracle: physics.md section 3, per-sample std (N 60) sqrt(fs) deg/h; the sample std of
+    # Oracle: docs/physics.md section 3, per-sample std (N 60) sqrt(fs) deg/h; the sample std of
     # 2^19 normals is within 0.5 % (its relative error is 1/sqrt(2 n) = 0.1 %).
     fs, n_set = 10.0, 0.001
     y = angle_random_walk_noise_dph(N_LONG, fs, n_set, rng=np.random.default_rng(5))

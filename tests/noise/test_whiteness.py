@@ -246,7 +246,7 @@ def test_a_twenty_minute_sinusoid_of_0p003_dph_is_flagged(factor: np.ndarray) ->
 
 def test_a_start_up_transient_of_0p03_dph_is_flagged(factor: np.ndarray) -> None:
     # Oracle: a known alternative.  0.03 deg/h exp(-t/600 s) at the start of every run (an
-    # electronics turn-on transient, physics.md section 3: 0.005-0.05 deg/h) must be flagged
+    # electronics turn-on transient, docs/physics.md section 3: 0.005-0.05 deg/h) must be flagged
     # at alpha = 0.01 in at least 19 of 20 seeds.  Measured power over 50 seeds: amplitude
     # 0.01 -> 12 %, 0.02 -> 100 %, 0.03 -> 100 %.  At 0.003 deg/h no test can see it: its
     # whitened energy sum_r s^T Sigma^-1 s is 6.8 over the 7 runs, so even the matched filter

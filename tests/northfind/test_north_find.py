@@ -1,4 +1,4 @@
-"""Tests of north-finding whole runs (nfs.northfind.heading) against physics.md section 5.
+"""Tests of north-finding whole runs (nfs.northfind.heading) against docs/physics.md section 5.
 
 Runs come from nfs.northfind.synthetic_run, which evaluates the section 5 rate model
 (Earth-rate projection with turntable tilt, bias, drift, white noise) sample by sample.
@@ -53,7 +53,7 @@ def test_noiseless_run_without_schedule_metadata():
 
 
 def test_forward_reverse_cancels_linear_drift_sequential_does_not():
-    # Oracle: physics.md section 5. A linear drift b(t) = k t:
+    # Oracle: docs/physics.md section 5. A linear drift b(t) = k t:
     # - forward-then-reverse: each angle's two dwells have the same mean time, so the drift
     #   is the same at every angle and goes into b: zero heading error (exactly);
     # - sequential, N equally spaced positions, dwell centres Delta = dwell + move apart:
@@ -90,7 +90,7 @@ def test_forward_reverse_cancels_linear_drift_sequential_does_not():
 
 
 def test_quadratic_drift_is_not_cancelled_by_forward_reverse():
-    # Oracle: physics.md section 5 ("cancels linear drift exactly, not quadratic drift");
+    # Oracle: docs/physics.md section 5 ("cancels linear drift exactly, not quadratic drift");
     # a test that the exact cancellation above is specific to linear drift.
     res = north_find(synthetic_run(heading_deg=50.0, positions_deg=FWD_REV, n_cycles=2,
                                    drift_dph=lambda t: 1e-8 * t ** 2))
@@ -98,7 +98,7 @@ def test_quadratic_drift_is_not_cancelled_by_forward_reverse():
 
 
 def test_white_noise_rmse_matches_the_floor():
-    # Oracle: physics.md section 5, sigma_psi = sqrt(2/N)(ARW/sqrt(tau))/(Omega_ie cos L).
+    # Oracle: docs/physics.md section 5, sigma_psi = sqrt(2/N)(ARW/sqrt(tau))/(Omega_ie cos L).
     # 1500 cycles: the sample RMSE has a relative standard deviation of about
     # 1/sqrt(2 * 1500) = 1.8 %, so 10 % is more than 5 sigma.
     arw, dwell, lat = 0.0005, 150.0, 30.0
@@ -116,7 +116,7 @@ def test_white_noise_rmse_matches_the_floor():
 @pytest.mark.parametrize("lat", [10.0, 30.0, 60.0])
 @pytest.mark.parametrize("psi", [20.0, 200.0])
 def test_uncorrected_east_tilt_error_is_minus_alpha_e_tan_l(lat, psi):
-    # Oracle: physics.md section 4, |error| = alpha_E tan L; sign derived in
+    # Oracle: docs/physics.md section 4, |error| = alpha_E tan L; sign derived in
     # budget.east_tilt_error_deg (estimated - true = -alpha_E tan L). First order in the
     # tilt: with alpha = 0.1 deg = 1.7 mrad the second-order remainder is ~ alpha relative,
     # so 1 % tolerance. North tilt alone only rescales Omega_h (error second order).

@@ -17,7 +17,7 @@ def _rates(psi_deg, theta_deg, lat_deg, bias):
 
 
 def test_four_position_closed_form_equals_least_squares():
-    # Oracle: physics.md section 5, psi = atan2(w_270 - w_90, w_0 - w_180), exact for
+    # Oracle: docs/physics.md section 5, psi = atan2(w_270 - w_90, w_0 - w_180), exact for
     # arbitrary rates because the 4-position design is orthogonal.
     rng = np.random.default_rng(1)
     for _ in range(200):

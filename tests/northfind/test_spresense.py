@@ -8,7 +8,7 @@ We use the x gyro alone (examples/spresense_northfind.py builds one run of the 8
 Tolerances come from the data's own noise, measured here: sigma_w, the standard error of one
 file's mean gx by batch means (about 1.1 deg/h). Ours, with N = 8 equally spaced positions:
 sigma_psi = sqrt(2/N) sigma_w / Omega_h, sigma_b = sigma_w / sqrt(N), sigma_Omega_h =
-sqrt(2/N) sigma_w (physics.md section 5 error budget). The publisher's: the mean of N per-file
+sqrt(2/N) sigma_w (docs/physics.md section 5 error budget). The publisher's: the mean of N per-file
 directions each uncertain by sigma_w / R (rad), a circle centre uncertain by
 sqrt(2/N) sigma_w per component, a radius by sigma_w / sqrt(N) (assuming gy as noisy as gx).
 Each comparison allows 3 standard deviations of the difference, taking the two estimates as

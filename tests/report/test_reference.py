@@ -1,4 +1,4 @@
-"""The package's copy of seed 004's tables equals ../shared/reference (skips without it)."""
+"""The package's copy of the FOG start-up paper's tables equals ../shared/reference (skips without it)."""
 
 import csv
 from pathlib import Path
@@ -37,7 +37,8 @@ def test_table1_and_table2_copies():
 
 
 def test_shape_checks_on_the_papers_own_table():
-    """Oracle: seed 004's Table 3 itself passes the SSA-SVR and SVR-vs-BP checks (ratio 0.48)
+    """Oracle: the FOG start-up paper's Table 3 itself passes the SSA-SVR and SVR-vs-BP checks
+    (ratio 0.48)
     (the 1.3x-of-stable check needs a stable row, which the paper's Table 3 lacks)."""
     t = HeadingTable(SEED004_TEMPERATURES_C, tuple(
         TableRow(m, v[:-1]) for m, v in SEED004_TABLE3_HEADING_RMSE_DEG.items()))

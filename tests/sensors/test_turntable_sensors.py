@@ -50,7 +50,7 @@ def test_schedule_errors(kw, msg):
 
 
 def test_earth_rate_projection():
-    # Oracle: physics.md section 5; north level axis reads Omega cos L, east reads 0.
+    # Oracle: docs/physics.md section 5; north level axis reads Omega cos L, east reads 0.
     lat = 30.0
     w = earth_rate_along_axis_dph(np.array([0.0, 90.0, 180.0]), np.zeros(3), lat)
     np.testing.assert_allclose(w, OMEGA_IE_DPH * np.cos(np.radians(lat)) * np.array([1, 0, -1]),

@@ -1,6 +1,6 @@
 """Tests of thermal.network: validation, the matrices of equation (1), steady state, time constants.
 
-Oracles: equation (1) of physics.md section 2 written out by hand for one and two nodes, and
+Oracles: equation (1) of docs/physics.md section 2 written out by hand for one and two nodes, and
 the closed-form eigenvalues of a 2x2 matrix.
 """
 
