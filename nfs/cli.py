@@ -74,6 +74,7 @@ def _cmd_table(args) -> int:
             {"before": errors_by_temperature(res), "stable": errors_by_temperature(res, stage=1)},
             random_state=scenario.seed)
         paths = write_table(table, args.output, json_path=args.json, title=title)
+        text = table.to_markdown()
     else:
         import dataclasses
         from .compensate.study import CompensationSettings, run_study
@@ -93,10 +94,18 @@ def _cmd_table(args) -> int:
             settings = dataclasses.replace(settings, tuner_seeds=args.tuner_seeds)
         if args.features_mode is not None:
             settings = dataclasses.replace(settings, features_mode=args.features_mode)
-        study = run_study(scenario, settings, progress=progress)
-        table = study.heading_table()
-        paths = write_study(study, args.output, json_path=args.json, title=title)
-    print(table.to_markdown(), end="")
+        if settings.protocol == "cycles":   # cycle 1 of the chamber program trains
+            from .compensate.cycles import run_cycle_study
+            from .report.cycles import cycle_table_markdown, write_cycle_study
+            cycles = run_cycle_study(scenario, settings, progress=progress)
+            text = cycle_table_markdown(cycles)
+            paths = write_cycle_study(cycles, args.output, json_path=args.json,
+                                      title=f"{scenario.name}: drift table of the cycles")
+        else:
+            study = run_study(scenario, settings, progress=progress)
+            text = study.heading_table().to_markdown()
+            paths = write_study(study, args.output, json_path=args.json, title=title)
+    print(text, end="")
     if not args.quiet:
         print("\nwrote " + ", ".join(str(p) for p in paths), file=sys.stderr)
     return 0

@@ -16,7 +16,9 @@ absolute [degC].  Steps, in order:
     jump to X: the air cannot jump, so the step is the steepest ramp the samples resolve,
     over one sample interval;
 ``{ repeat = N, steps = [...] }``
-    the steps N >= 1 times in a row (nested repeats allowed);
+    the steps N >= 1 times in a row (nested repeats allowed); the iterations of the first
+    repeat at the top level are the program's *cycles* (a study that trains on cycle 1 and
+    tests on the others, :mod:`nfs.compensate.cycles`);
 ``{ power_on = true }``
     the unit is powered on here (at most once, not inside a repeat).  The steps before it
     are the unpowered soak: simulated, not recorded.  The run, its time axis (t = 0 at
@@ -97,6 +99,24 @@ class ChamberProgram:
     """The steps, repeats expanded."""
     power_on_index: int = 0
     """Number of steps before power-on (0: powered from the start)."""
+    cycles: tuple[tuple[int, int], ...] = ()
+    """The iterations of the first top-level repeat: (first step, one past the last step)
+    indices into :attr:`steps`; empty without a top-level repeat."""
+
+    def step_times_s(self, start_c: float, sample_s: float) -> np.ndarray:
+        """Start time of every step and the end of the last, from power-on [s], shape
+        (n_steps + 1,)."""
+        t, now = [0.0], float(start_c)
+        for s in self.steps:
+            t.append(t[-1] + s.length_s(now, sample_s))
+            now = now if s.kind == "hold" else float(s.target_c)
+        t = np.array(t)
+        return t - t[self.power_on_index]
+
+    def cycle_spans_s(self, start_c: float, sample_s: float) -> list[tuple[float, float]]:
+        """(start, end) of every cycle from power-on [s] (:attr:`cycles`)."""
+        t = self.step_times_s(start_c, sample_s)
+        return [(float(t[a]), float(t[b])) for a, b in self.cycles]
 
     def corners(self, start_c: float, sample_s: float) -> tuple[np.ndarray, np.ndarray]:
         """(time from the program's start [s], chamber temperature [degC]) at every corner;
@@ -216,15 +236,22 @@ def _one(step: Any, where: str, file: Any, top: bool) -> list[ChamberStep] | str
     return list(inner) * n
 
 
-def _steps(value: Any, where: str, file: Any, top: bool) -> tuple[list[ChamberStep], int]:
-    """(steps, number of steps before power-on; 0 without a marker)."""
+def _steps(value: Any, where: str, file: Any, top: bool
+           ) -> tuple[list[ChamberStep], int, list[tuple[int, int]]]:
+    """(steps, number of steps before power-on (0 without a marker), the cycles of the
+    first top-level repeat)."""
     if not isinstance(value, list) or not value:
         raise ScenarioError(f"must be a non-empty list of steps, got {value!r}", file=file,
                             key=where)
     out: list[ChamberStep] = []
     power_on = None
+    cycles: list[tuple[int, int]] = []
     for i, entry in enumerate(value):
         got = _one(entry, f"{where}[{i}]", file, top)
+        if top and not cycles and isinstance(entry, dict) and "repeat" in entry and got:
+            n_rep = int(entry["repeat"])
+            size = len(got) // n_rep
+            cycles = [(len(out) + k * size, len(out) + (k + 1) * size) for k in range(n_rep)]
         if got == "power_on":
             if power_on is not None:
                 raise ScenarioError("the unit is powered on once: a second power_on",
@@ -237,11 +264,14 @@ def _steps(value: Any, where: str, file: Any, top: bool) -> tuple[list[ChamberSt
                             file=file, key=where)
     if not out:
         raise ScenarioError("holds no hold, ramp or step", file=file, key=where)
-    return out, power_on or 0
+    return out, power_on or 0, cycles
 
 
 def parse_program(value: Any, file: Any, key: str = "chamber.program") -> ChamberProgram:
     """The :class:`ChamberProgram` of a TOML ``program`` list (module docstring);
     :class:`~nfs.errors.ScenarioError` naming ``file`` and the step otherwise."""
-    steps, power_on = _steps(value, key, file, top=True)
-    return ChamberProgram(tuple(steps), power_on)
+    steps, power_on, cycles = _steps(value, key, file, top=True)
+    if cycles and power_on > cycles[0][0]:
+        raise ScenarioError("power_on comes after the start of the cycles (the first "
+                            "repeat): the unit must be on for every cycle", file=file, key=key)
+    return ChamberProgram(tuple(steps), power_on, tuple(cycles))

@@ -63,7 +63,8 @@ _TOP = ("name", "description", "base", "instrument", "seed", "start_temperatures
 _COMPENSATION = ("methods", "features", "features_mode", "budget", "decimate_s",
                  "cutoff_period_s",
                  "train_seed", "train_repeats", "train_temperatures_c", "test_repeats",
-                 "train_units", "test_units", "random_state", "tuner_seeds", "n_jobs")
+                 "train_units", "test_units", "random_state", "tuner_seeds", "n_jobs",
+                 "protocol")
 _VARIABILITY = ("preset", *VARIABILITY_KEYS, "parameters")
 _SCHEDULE = ("positions_deg", "order", "dwell_s", "move_s")
 _NORTHFIND = ("startup_end_s", "stable_start_s", "tilt_correction", "settle_s")
@@ -357,7 +358,7 @@ def _compensation(tbl: dict, file, units: int = 1) -> Any:
     from ..compensate.features import FeatureError, resolve_features
     from ..compensate.methods import get_method
     from ..compensate.modes import FeatureModeError, check_features_mode
-    from ..compensate.study import CompensationSettings
+    from ..compensate.study import PROTOCOLS, CompensationSettings
     p = "compensation"
     check_keys(tbl, _COMPENSATION, p, file)
     d = CompensationSettings()
@@ -400,7 +401,8 @@ def _compensation(tbl: dict, file, units: int = 1) -> Any:
         test_units=_unit_list(tbl, "test_units", p, file, units),
         random_state=_int(tbl, "random_state", p, file, d.random_state, minimum=0),
         tuner_seeds=_int(tbl, "tuner_seeds", p, file, d.tuner_seeds, minimum=1),
-        n_jobs=n_jobs)
+        n_jobs=n_jobs,
+        protocol=string(tbl, "protocol", p, file, d.protocol, choices=PROTOCOLS))
 
 
 #: Keys a scenario never takes from its base.
@@ -457,7 +459,8 @@ def _inherited(path: Path, d: dict, chain: tuple[Path, ...]) -> tuple[dict, dict
     default = {} if path.resolve() == default_scenario_path().resolve() else \
         {k: v for k, v in load_toml(default_scenario_path()).items()
          if k not in (*_NOT_INHERITED, "variability")}
-    if "program" in here.get("chamber", {}) and "duration_s" not in here:
+    chamber = here.get("chamber")
+    if isinstance(chamber, dict) and "program" in chamber and "duration_s" not in here:
         default.pop("duration_s", None)
     if "units" in here and isinstance(default.get("compensation"), dict):
         default["compensation"] = {k: v for k, v in default["compensation"].items()
@@ -561,6 +564,20 @@ def load_scenario(path: str | Path | None = None, *, _chain: tuple[Path, ...] = 
                                 f"cycle ({schedule.cycle_s:g} s)", file=f,
                                 key="duration_s" if duration is not None
                                 else "chamber.program")
+    comp = _compensation(table(d, "compensation", "", f, {}), f, units)
+    if comp.protocol == "cycles":
+        from ..compensate.methods import get_method
+        if chamber.program is None or len(chamber.program.cycles) < 2:
+            raise ScenarioError("\"cycles\" trains on cycle 1 of the chamber program and "
+                                "tests on the others: [chamber] needs a program with a "
+                                "{ repeat = N, steps = [...] } step, N >= 2", file=f,
+                                key="compensation.protocol")
+        tuned = [m for m in comp.methods if get_method(m).tuned]
+        if tuned:
+            raise ScenarioError(f"{tuned[0]} tunes by leaving a start temperature or a run "
+                                "out, and a cycling study trains on one cycle: use untuned "
+                                "methods with protocol = \"cycles\"", file=f,
+                                key="compensation.methods")
     return Scenario(
         name=string(d, "name", "", f, path.stem), instrument=inst,
         start_temperatures_c=temps, schedule=schedule, seed=seed, repeats=repeats,
@@ -568,6 +585,6 @@ def load_scenario(path: str | Path | None = None, *, _chain: tuple[Path, ...] = 
         latitude_deg=number(d, "latitude_deg", "", f, 30.0, minimum=-89.0, maximum=89.0),
         true_heading_deg=number(d, "true_heading_deg", "", f, 0.0),
         northfind=settings, chamber=chamber,
-        compensation=_compensation(table(d, "compensation", "", f, {}), f, units),
+        compensation=comp,
         description=string(d, "description", "", f, ""), path=path, units=units,
         variability=variability)
