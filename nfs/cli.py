@@ -89,6 +89,7 @@ def _cmd_table(args) -> int:
         table = dataclasses.replace(table, provenance=table_provenance(
             scenario, settings, compensated=False))
         paths = write_table(table, args.output, json_path=args.json, title=title)
+        text = table.to_markdown()
     else:
         from .compensate.study import CompensationSettings, run_study
         from .report.compensation import write_study
@@ -107,12 +108,26 @@ def _cmd_table(args) -> int:
             settings = dataclasses.replace(settings, tuner_seeds=args.tuner_seeds)
         if args.features_mode is not None:
             settings = dataclasses.replace(settings, features_mode=args.features_mode)
-        study = run_study(scenario, settings, progress=progress)
-        table = dataclasses.replace(study.heading_table(),
-                                    provenance=table_provenance(scenario, settings))
-        paths = write_study(study, args.output, json_path=args.json, title=title, table=table)
+        if settings.protocol == "cycles":   # cycle 1 of the chamber program trains
+            from .compensate.cycles import run_cycle_study
+            from .report.cycles import cycle_table_markdown, write_cycle_study
+            cycles = run_cycle_study(scenario, settings, progress=progress)
+            text = cycle_table_markdown(cycles)
+            paths = write_cycle_study(cycles, args.output, json_path=args.json,
+                                      title=f"{scenario.name}: drift table of the cycles")
+            table = None
+        else:
+            study = run_study(scenario, settings, progress=progress)
+            table = dataclasses.replace(study.heading_table(),
+                                        provenance=table_provenance(scenario, settings))
+            paths = write_study(study, args.output, json_path=args.json, title=title,
+                                table=table)
+            text = table.to_markdown()
     comparison = None
     if baseline is not None:
+        if table is None:
+            raise NfsError("--baseline compares heading tables; this scenario's protocol "
+                           "'cycles' writes a drift table")
         from .report.baseline import compare_tables, write_baseline_comparison
         comparison = compare_tables(table, baseline, tolerance=args.tolerance)
         paths += write_baseline_comparison(comparison, args.output)
@@ -120,7 +135,7 @@ def _cmd_table(args) -> int:
     if baseline is not None:
         inputs["baseline"] = {"file": str(args.baseline), "sha256": args.baseline_sha256}
     _finish(folder, args, inputs)
-    print(table.to_markdown(), end="")
+    print(text, end="")
     if comparison is not None:
         print(f"\n## Against the baseline {args.baseline}\n\n" + comparison.to_markdown(),
               end="")

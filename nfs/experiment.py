@@ -25,7 +25,8 @@ from .io.measurement import Run, RunMeta
 from .noise import gyro_noise_dph, white_noise
 from .sensors import (Schedule, axis_elevation_deg, earth_rate_along_axis_dph,
                       thermometer_reading, turntable_motion)
-from .variability import Variability, describe_units, start_up_state, unit_instrument
+from .variability import (Variability, describe_units, start_up_state, unit_instrument,
+                          unpowered_network)
 
 __all__ = ["RunConditions", "SimulationResult", "simulate_run", "effect_context",
            "conditions_from_run", "thermal_power",
@@ -42,7 +43,7 @@ class RunConditions:
     name: str
     """Stem of the measurement files."""
     start_temperature_c: float
-    """T0, chamber soak and hold temperature [degC]."""
+    """T0, chamber soak and hold temperature [degC] (a chamber program starts there)."""
     latitude_deg: float
     """L [deg]."""
     true_heading_deg: float
@@ -57,7 +58,7 @@ class RunConditions:
     """Entropy of the run's random streams (noise of every sensor, and the start-up's soak
     and chamber draws when ``variability`` is given)."""
     chamber_c: Callable[[np.ndarray], np.ndarray] | None = None
-    """Chamber temperature T_amb(t) [degC]; None holds T0."""
+    """Chamber temperature T_amb(t) [degC], t from power-on [s]; None holds T0."""
     unit: int = 0
     """The unit that makes the start-up (its parameters are drawn from ``variability``)."""
     variability: Variability | None = None
@@ -66,6 +67,10 @@ class RunConditions:
     motion: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
     """(time_s, position_deg, moving) of a measured run to replay instead of the schedule:
     the model is then simulated on the run's own time base and turntable motion."""
+    soak_s: float = 0.0
+    """Time the unpowered unit follows the chamber before power-on [s]: soaked at T0, it
+    sits in ``chamber_c`` over [-soak_s, 0) (a chamber program's steps before its power-on
+    marker); not recorded."""
 
     @property
     def time_s(self) -> np.ndarray:
@@ -253,10 +258,13 @@ def _check_simulated_channels(inst: Instrument) -> None:
 def simulate_run(inst: Instrument, cond: RunConditions) -> SimulationResult:
     """Simulate one start-up run of ``inst`` under ``cond``.
 
-    The unpowered instrument is soaked at T0 (every node at T0), powered on at t = 0 and held
-    in the chamber at T_amb(t) (T0 unless ``cond.chamber_c``).  With ``cond.variability``
-    the instrument is unit ``cond.unit``'s draw of ``inst``, its nodes start from the
-    start-up's soak and the chamber wanders and cycles (:mod:`nfs.variability`).
+    The unpowered instrument is soaked at T0 (every node at T0), follows the chamber
+    unpowered for ``cond.soak_s`` (a program's soak), is powered on at t = 0 and stays in the
+    chamber at T_amb(t) (T0 unless ``cond.chamber_c``).  With ``cond.variability`` the
+    instrument is unit ``cond.unit``'s draw of ``inst``, its nodes start from the start-up's
+    soak and the chamber wanders and cycles (:mod:`nfs.variability`).  The chamber is linear
+    between samples (first-order hold, exact for a program's ramps).  The run records as its
+    ``start_temperature_c`` the chamber's temperature at power-on, where it was soaked.
     """
     _check_simulated_channels(inst)
     t = cond.time_s
@@ -271,15 +279,24 @@ def simulate_run(inst: Instrument, cond: RunConditions) -> SimulationResult:
     elev_x = axis_elevation_deg(azimuth, tilt.tilt_north_deg, tilt.tilt_east_deg)
     elev_y = axis_elevation_deg(azimuth + 90.0, tilt.tilt_north_deg, tilt.tilt_east_deg)
 
-    # 1. thermal network
+    # 1. thermal network: the unpowered soak of a chamber program, then the run
     power, thermal_terms, stateful = thermal_power(inst, t, moving)
-    ambient = cond.start_temperature_c if cond.chamber_c is None else cond.chamber_c(t)
+    n_pre = int(np.ceil(cond.soak_s * fs - 1e-9)) if cond.soak_s > 0.0 else 0
+    t_all = np.concatenate([-cond.soak_s + np.arange(n_pre) / fs, t]) if n_pre else t
+    ambient = (np.full(t_all.shape, cond.start_temperature_c) if cond.chamber_c is None
+               else np.asarray(cond.chamber_c(t_all), dtype=float))
     initial = cond.start_temperature_c
     if var is not None and var.per_start_up:
-        initial, terms = start_up_state(inst, var, cond.start_temperature_c, t, cond.seed)
+        initial, terms = start_up_state(inst, var, cond.start_temperature_c, t_all,
+                                        cond.seed)
         ambient = ambient + terms
+    if n_pre:
+        soak = thermal.simulate(unpowered_network(inst.network), t_all[:n_pre + 1],
+                                ambient_c=ambient[:n_pre + 1], initial_c=initial,
+                                ambient_hold="first-order")
+        initial, ambient = soak.temperature_c[-1], ambient[n_pre:]
     th = thermal.simulate(inst.network, t, ambient_c=ambient, initial_c=initial,
-                          power_w=power)
+                          power_w=power, ambient_hold="first-order")
     for e, j, params in stateful:
         thermal_terms[e.label] = np.asarray(
             e.spec.function(t, th.temperature_c[:, j], moving, **params), dtype=float)
@@ -337,7 +354,9 @@ def simulate_run(inst: Instrument, cond: RunConditions) -> SimulationResult:
         **aux,
     }
     sched = cond.schedule
-    meta = RunMeta(latitude_deg=cond.latitude_deg, start_temperature_c=cond.start_temperature_c,
+    soaked_c = (cond.start_temperature_c if cond.soak_s == 0.0 or cond.chamber_c is None
+                else float(cond.chamber_c(0.0)))
+    meta = RunMeta(latitude_deg=cond.latitude_deg, start_temperature_c=soaked_c,
                    true_heading_deg=cond.true_heading_deg, sample_rate_hz=fs,
                    positions_deg=sched.cycle_positions_deg, dwell_s=sched.dwell_s,
                    move_s=sched.move_s, instrument=inst.name)

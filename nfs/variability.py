@@ -78,7 +78,7 @@ from .parameters import ParameterError, expand_paths, get_param, param_paths, se
 __all__ = ["Variability", "NO_VARIABILITY", "REALISTIC", "VARIABILITY_PRESETS",
            "VARIABILITY_KEYS", "CYCLING_SHAPES", "SOAK_STEP_S", "unit_scatter",
            "unit_instrument", "start_up_state", "chamber_terms", "lognormal_factor",
-           "describe_units"]
+           "describe_units", "unpowered_network"]
 
 #: Shapes of the chamber controller's cycling.
 CYCLING_SHAPES = ("sine", "triangle")
@@ -323,7 +323,8 @@ def unit_instrument(inst: Instrument, var: Variability, unit: int) -> Instrument
 # ---------------------------------------------------------------------------------------------
 # Per start-up
 
-def _unpowered(network: thermal.Network) -> thermal.Network:
+def unpowered_network(network: thermal.Network) -> thermal.Network:
+    """``network`` with every node's constant power set to zero (the unit switched off)."""
     return thermal.Network(nodes=tuple(replace(n, power_w=0.0) for n in network.nodes),
                            links=network.links)
 
@@ -398,7 +399,7 @@ def start_up_state(inst: Instrument, var: Variability, start_temperature_c: floa
         soak_t = t[0] - soak_s + SOAK_STEP_S * np.arange(n)
         both = chamber_terms(var, np.concatenate([soak_t, t]), entropy)
         terms = both[n:]
-        th = thermal.simulate(_unpowered(net), np.append(soak_t, t[0]),
+        th = thermal.simulate(unpowered_network(net), np.append(soak_t, t[0]),
                               ambient_c=t0 + both[:n + 1],
                               initial_c=var.soak_from_c if var.unfinished_soak else t0)
         out = th.temperature_c[-1].copy()

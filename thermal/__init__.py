@@ -1,10 +1,10 @@
 """Lumped thermal network of the north finder, independent of gyros (physics.md section 2).
 
 Build a :class:`Network` of :class:`Node` and :class:`Link` objects, then :func:`simulate`
-it exactly over sample intervals of held input; the :class:`ThermalResult` labels every
-node and carries the energy bookkeeping.  :func:`estimate_states` estimates the node
-temperatures from :class:`LinearSensor` readings through the network (Kalman filter and
-smoother, thermal/estimate.py).
+it exactly over sample intervals of held input (or of a chamber linear between samples);
+the :class:`ThermalResult` labels every node and carries the energy bookkeeping.
+:func:`estimate_states` estimates the node temperatures from :class:`LinearSensor` readings
+through the network (Kalman filter and smoother, thermal/estimate.py).
 """
 
 from thermal.network import CHAMBER, Link, Network, Node

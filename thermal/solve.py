@@ -1,4 +1,5 @@
-"""Exact piecewise solution of the thermal network with inputs held over each sample interval.
+"""Exact piecewise solution of the thermal network: inputs held, or the chamber linear, over
+each sample interval.
 
 Over an interval [t_k, t_k + h) with the input u_k = [T_amb, P_1, ..., P_n] held constant
 (zero-order hold), dT/dt = A T + B u_k (network.py, equation (2)) has the exact solution
@@ -22,12 +23,32 @@ theorem 1), computed once per distinct step h.  No ODE stepper is involved: the 
 approximation is the hold of the inputs, which is exact for inputs that are constant over
 each interval.
 
+First-order hold of the chamber.  A chamber program ramps T_amb linearly, which a held value
+follows only with a lag of h/2.  With ``ambient_hold="first-order"`` the chamber temperature
+is linear between samples, T_amb(t_k + s) = T_amb,k + v_k s with v_k = (T_amb,k+1 -
+T_amb,k) / h (the powers stay held), and (3)-(4) gain one exact term each:
+
+    T(t_k + h) = Phi T_k + Gamma u_k + Lambda v_k,
+    int_0^h T ds = Psi T_k + Upsilon u_k + Omega v_k,
+    Lambda(h) = int_0^h expm(A (h - s)) b_amb s ds,   Omega(h) = int_0^h Lambda(s) ds,   (7)
+
+b_amb the chamber column of B, from the same Van Loan exponential with one more block
+(the slope v integrating into T_amb):
+
+         [0  I  0  0    ]                  [I  Psi  Upsilon  Omega ]
+    F =  [0  A  B  0    ],   expm(F h)  =  [0  Phi  Gamma    Lambda]                     (8)
+         [0  0  0  e_amb]                  [0  0    I        e_amb h]
+         [0  0  0  0    ]                  [0  0    0        1     ]
+
+The solution is then exact for any chamber temperature that is piecewise linear with its
+corners on the samples (a chamber program whose steps last whole sample intervals).
+
 Energy bookkeeping.  Summing equation (1) over the nodes, the internal conductances cancel:
 
     d/dt sum_j C_j T_j = sum_j P_j - sum_j G_j,amb (T_j - T_amb),                      (6)
 
 so heat_in = stored + lost, with heat_in = sum_k h_k sum_j P_j,k, lost = sum_k sum_j G_j,amb
-(int T_j ds - h_k T_amb,k) from (4), and stored = sum_j C_j (T_j(t) - T_j(t_0)).
+(int T_j ds - h_k T_amb,k) from (4) or (7), and stored = sum_j C_j (T_j(t) - T_j(t_0)).
 """
 
 from __future__ import annotations
@@ -42,7 +63,11 @@ from scipy.signal import lfilter
 from nfs.errors import ThermalError
 from thermal.network import Network, index_of
 
-__all__ = ["ThermalResult", "simulate", "step_matrices", "StepMatrices"]
+__all__ = ["ThermalResult", "simulate", "step_matrices", "StepMatrices", "AMBIENT_HOLDS"]
+
+#: How the chamber temperature is taken between samples: held (zero-order) or linear
+#: (first-order, equations (7)-(8)).
+AMBIENT_HOLDS = ("zero-order", "first-order")
 
 #: A heat source P(t_s, temperature_c) -> extra power per node [W], shape (n_nodes,).
 PowerLaw = Callable[[float, np.ndarray], np.ndarray]
@@ -75,13 +100,18 @@ class ThermalResult:
     """Total node power P_j,k [W] held over [t_k, t_k+1) (constants plus extra sources)."""
 
     ambient_c: np.ndarray
-    """Chamber temperature T_amb,k [degC] held over [t_k, t_k+1), shape (n_t,)."""
+    """Chamber temperature T_amb,k [degC] at t_k, shape (n_t,): held over [t_k, t_k+1), or
+    linear to T_amb,k+1 (:attr:`ambient_hold`)."""
 
     heat_in_j: np.ndarray
     """Cumulative energy injected by all node powers from t_0 to t_k [J], shape (n_t,)."""
 
     heat_lost_j: np.ndarray
-    """Cumulative energy lost to the chamber from t_0 to t_k [J], shape (n_t,), exact (4)."""
+    """Cumulative energy lost to the chamber from t_0 to t_k [J], shape (n_t,), exact (4)
+    or (7)."""
+
+    ambient_hold: str = "zero-order"
+    """How T_amb went between samples: "zero-order" (held) or "first-order" (linear)."""
 
     @property
     def stored_j(self) -> np.ndarray:
@@ -116,22 +146,39 @@ class StepMatrices:
     phi_minus_i: np.ndarray
     """Phi(h) - I = A Psi(h) [1], shape (n, n), free of the cancellation of Phi - I."""
 
+    lam: np.ndarray | None = None
+    """Lambda(h) of (7), the response to a unit chamber slope [K per K/s], shape (n,); None
+    unless asked for (``slope=True``)."""
 
-def step_matrices(a: np.ndarray, b: np.ndarray, h_s: float) -> StepMatrices:
-    """Phi, Gamma, Psi and Upsilon of equations (3)-(4) for the step ``h_s`` [s], by (5).
+    omega: np.ndarray | None = None
+    """Omega(h) = int_0^h Lambda(s) ds of (7) [K s per K/s], shape (n,); None unless asked
+    for."""
+
+
+def step_matrices(a: np.ndarray, b: np.ndarray, h_s: float, *,
+                  slope: bool = False) -> StepMatrices:
+    """Phi, Gamma, Psi and Upsilon of equations (3)-(4) for the step ``h_s`` [s], by (5);
+    with ``slope``, also Lambda and Omega of the chamber's slope (7), by (8).
 
     ``a`` (n, n) and ``b`` (n, m) are the matrices of dT/dt = A T + B u
-    (:meth:`thermal.Network.matrices`).
+    (:meth:`thermal.Network.matrices`); column 0 of ``b`` is the chamber's.
     """
     n, m = b.shape
-    f = np.zeros((2 * n + m, 2 * n + m))
+    size = 2 * n + m + (1 if slope else 0)
+    f = np.zeros((size, size))
     f[:n, n:2 * n] = np.eye(n)
     f[n:2 * n, n:2 * n] = a
-    f[n:2 * n, 2 * n:] = b
+    f[n:2 * n, 2 * n:2 * n + m] = b
+    if slope:
+        f[2 * n, 2 * n + m] = 1.0        # d T_amb / dt = v
     e = expm(f * h_s)
     psi = e[:n, n:2 * n]
-    return StepMatrices(phi=e[n:2 * n, n:2 * n], gamma=e[n:2 * n, 2 * n:], psi=psi,
-                         upsilon=e[:n, 2 * n:], phi_minus_i=a @ psi)
+    lam = omega = None
+    if slope:
+        lam, omega = e[n:2 * n, 2 * n + m].copy(), e[:n, 2 * n + m].copy()
+    return StepMatrices(phi=e[n:2 * n, n:2 * n], gamma=e[n:2 * n, 2 * n:2 * n + m], psi=psi,
+                         upsilon=e[:n, 2 * n:2 * n + m], phi_minus_i=a @ psi, lam=lam,
+                         omega=omega)
 
 
 def _step_classes(time_s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -210,6 +257,9 @@ def _march(steps: list[StepMatrices], cls: list[int], x: np.ndarray, time_s: np.
 
         T_{k+1} = T_k + [Phi - I | Gamma_P | Gamma_amb | Gamma_P P_const] x_k,
 
+    and with a first-order hold of the chamber (steps carrying Lambda) one more column, the
+    chamber slope v_k, multiplied by Lambda (7).
+
     with Phi - I = A Psi computed without cancellation.  (Stepping with a rounded Phi
     instead biases the slow modes: an error eps in Phi near 1 shifts their fixed point by
     eps / (1 - lambda), a few 1e-12 K after 9000 steps of 1 s.)
@@ -219,7 +269,8 @@ def _march(steps: list[StepMatrices], cls: list[int], x: np.ndarray, time_s: np.
     """
     n = node_power_w.size
     maps = [np.column_stack([m.phi_minus_i, m.gamma[:, 1:], m.gamma[:, 0],
-                             m.gamma[:, 1:] @ node_power_w]) for m in steps]
+                             m.gamma[:, 1:] @ node_power_w]
+                            + ([] if m.lam is None else [m.lam])) for m in steps]
     frozen = x.view()
     frozen.flags.writeable = False
     times = time_s.tolist()
@@ -287,7 +338,8 @@ def _check_power_array(power: np.ndarray, time_s: np.ndarray, names: tuple[str, 
 def simulate(network: Network, time_s: np.ndarray, *,
              ambient_c: float | np.ndarray | Callable[[float], float],
              initial_c: float | np.ndarray,
-             power_w: PowerLaw | np.ndarray | None = None) -> ThermalResult:
+             power_w: PowerLaw | np.ndarray | None = None,
+             ambient_hold: str = "zero-order") -> ThermalResult:
     """Node temperatures of ``network`` at the sample times, exact for held inputs (3)-(5).
 
     Parameters
@@ -299,8 +351,13 @@ def simulate(network: Network, time_s: np.ndarray, *,
         distinct step (a fraction of a millisecond each), so a uniform grid costs one;
         steps equal to within the float resolution of the time stamps count as one.
     ambient_c : float, array_like (n_t,) or callable(t_s) -> float
-        Chamber temperature T_amb [degC].  Zero-order hold: the value at t_k is held over
-        [t_k, t_k+1); sample finely enough to resolve a chamber ramp.
+        Chamber temperature T_amb [degC] at the samples, taken between them as
+        ``ambient_hold`` says.
+    ambient_hold : {"zero-order", "first-order"}
+        "zero-order": the value at t_k is held over [t_k, t_k+1), exact for a chamber that
+        steps on the samples; "first-order": linear from T_amb,k to T_amb,k+1, exact for a
+        piecewise-linear chamber (ramps) with its corners on the samples, equations (7)-(8).
+        Both cost the same per sample.
     initial_c : float or array_like (n_nodes,)
         Node temperatures at time_s[0] [degC].
     power_w : callable(t_s, temperature_c) -> array (n_nodes,), array (n_t, n_nodes), optional
@@ -333,15 +390,24 @@ def simulate(network: Network, time_s: np.ndarray, *,
     if not np.all(np.isfinite(t0)):
         raise ThermalError(f"initial_c is not finite for node {names[int(np.argmin(np.isfinite(t0)))]!r}")
 
+    if ambient_hold not in AMBIENT_HOLDS:
+        raise ThermalError(f"ambient_hold must be one of {', '.join(AMBIENT_HOLDS)}, got "
+                           f"{ambient_hold!r}")
+    linear = ambient_hold == "first-order"
     a, b = network.matrices()
     steps, cls = _step_classes(t)
-    mats = [step_matrices(a, b, h) for h in steps]
+    mats = [step_matrices(a, b, h, slope=linear) for h in steps]
+    slope = np.zeros(n_t)               # v_k of (7), the chamber's slope over [t_k, t_k+1)
+    if linear and n_t > 1:
+        slope[:-1] = np.diff(amb) / np.diff(t)
 
     law = power_w if callable(power_w) else None
-    x = np.zeros((n_t, 2 * n + 2))      # rows [T_k, p_k, T_amb,k, 1], see _march
+    x = np.zeros((n_t, 2 * n + 2 + linear))   # rows [T_k, p_k, T_amb,k, 1(, v_k)], _march
     x[0, :n] = t0
     x[:, 2 * n] = amb
     x[:, 2 * n + 1] = 1.0
+    if linear:
+        x[:, 2 * n + 2] = slope
     if law is None and power_w is not None:
         extra = np.asarray(power_w, dtype=float)
         if extra.shape != (n_t, n):
@@ -355,6 +421,8 @@ def simulate(network: Network, time_s: np.ndarray, *,
     if law is None and len(mats) == 1:
         inputs[:, 1:] = network.node_power_w + x[:, n:2 * n]
         drive = _per_interval([mats[0].gamma], cls, inputs[:-1], n)
+        if linear:
+            drive += slope[:-1, None] * mats[0].lam
         temp = _modal_recursion(mats[0].phi_minus_i, network.capacity_j_per_k, t0, drive)
     else:
         _march(mats, cls.tolist(), x, t, network.node_power_w, law)
@@ -368,7 +436,12 @@ def simulate(network: Network, time_s: np.ndarray, *,
     integral = (_per_interval([m.psi for m in mats], cls, temp[:-1], n)
                 + _per_interval([m.upsilon for m in mats], cls, inputs[:-1], n))
     h = steps[cls]
-    lost = (integral - h[:, None] * amb[:-1, None]) @ to_chamber
+    amb_integral = h * amb[:-1]
+    if linear:
+        integral += _per_interval([m.omega[:, None] for m in mats], cls,
+                                  slope[:-1, None], n)
+        amb_integral = h * 0.5 * (amb[:-1] + amb[1:])
+    lost = (integral - amb_integral[:, None]) @ to_chamber
     gained = h * inputs[:-1, 1:].sum(axis=1)
     heat_in = np.concatenate([[0.0], np.cumsum(gained)])
     heat_lost = np.concatenate([[0.0], np.cumsum(lost)])
@@ -379,4 +452,4 @@ def simulate(network: Network, time_s: np.ndarray, *,
                   heat_lost_j=heat_lost)
     for value in arrays.values():
         value.flags.writeable = False
-    return ThermalResult(node_names=names, **arrays)
+    return ThermalResult(node_names=names, ambient_hold=ambient_hold, **arrays)

@@ -13,6 +13,7 @@
 """
 
 from .compensator import DriftCompensator, load_compensator, train_compensator
+from .cycles import CycleStudy, run_cycle_study
 from .dataset import DriftDataset, drift_dataset
 from .features import (FEATURE_SETS, FeatureError, available_features, compute_features,
                        feature_columns, rate_k_per_min, resolve_features)
@@ -33,5 +34,5 @@ __all__ = [
     "get_method", "BPNetwork", "RBFNetwork", "CubicLeastSquares", "StepwiseRegression",
     "Integer", "MetaheuristicSearchCV", "Real", "CompensationSettings", "CompensationStudy",
     "run_study", "TUNERS", "TuneResult", "minimize", "DEFAULT_FEATURE_MODE", "FEATURE_MODES",
-    "FeatureModeError", "check_features_mode",
+    "FeatureModeError", "check_features_mode", "CycleStudy", "run_cycle_study",
 ]

@@ -45,9 +45,13 @@ from .dataset import DriftDataset, drift_dataset
 from .methods import TABLE_METHODS, MethodSpec, get_method
 from .modes import DEFAULT_FEATURE_MODE, FEATURE_MODE_NOTES, check_features_mode
 
-__all__ = ["CompensationSettings", "MethodResult", "SeedResult", "CompensationStudy",
-           "run_study", "test_scenario", "DriftRow", "errors_by_temperature",
+__all__ = ["PROTOCOLS", "CompensationSettings", "MethodResult", "SeedResult",
+           "CompensationStudy", "run_study", "test_scenario", "DriftRow", "errors_by_temperature",
            "table_provenance"]
+
+
+#: What ``nfs table`` trains and tests on (:attr:`CompensationSettings.protocol`).
+PROTOCOLS = ("start-ups", "cycles")
 
 
 @document_fields
@@ -91,6 +95,10 @@ class CompensationSettings:
     test_units: tuple[int, ...] | None = None
     """Units that make the test start-ups, ``test_repeats`` per temperature each (None: the
     last unit)."""
+    protocol: str = "start-ups"
+    """What ``nfs table`` trains and tests on: ``start-ups`` (training start-ups, then the
+    test start-ups: the heading table) or ``cycles`` (cycle 1 of the chamber program, then
+    the other cycles: the drift table of :mod:`nfs.compensate.cycles`)."""
 
 
 @document_fields

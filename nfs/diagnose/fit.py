@@ -535,7 +535,8 @@ def _drift_context(inst: Instrument, rd: _DriftRun):
     power, _, _ = thermal_power(inst, t, moving)
     ambient = cond.start_temperature_c if cond.chamber_c is None else cond.chamber_c(t)
     th = thermal.simulate(inst.network, t, ambient_c=ambient,
-                          initial_c=cond.start_temperature_c, power_w=power)
+                          initial_c=cond.start_temperature_c, power_w=power,
+                          ambient_hold="first-order")   # the recorded chamber, interpolated
     return effect_context(inst, th, rd.azimuth, rd.projection, moving, rd.aux)
 
 

@@ -78,7 +78,8 @@ def _model_readings(inst: Instrument, run: Run, n: int) -> dict[str, np.ndarray]
     power, _, _ = thermal_power(inst, t, moving)
     ambient = cond.start_temperature_c if cond.chamber_c is None else cond.chamber_c(t)
     th = thermal.simulate(inst.network, t, ambient_c=ambient,
-                          initial_c=cond.start_temperature_c, power_w=power)
+                          initial_c=cond.start_temperature_c, power_w=power,
+                          ambient_hold="first-order")
     out = {}
     for name in THERMOMETERS:
         model = replace(inst.thermometers[name], noise_c=0.0, quantum_c=0.0, offset_c=0.0)

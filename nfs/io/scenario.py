@@ -2,11 +2,34 @@
 
 A scenario names an instrument (a built-in preset or an instrument TOML file), the start
 temperatures, the schedule and the north-finding settings; ``[[effects]]`` in the scenario,
-when present, replace the instrument's effect list.  ``units`` simulated units make the
+when present, replace the instrument's effect list, ``[[added_effects]]`` are added to it and
+``[[aux]]`` channels (the instrument file's format) are added to the instrument's.  ``units`` simulated units make the
 start-ups, and ``[variability]`` says how start-ups and units differ
 (:mod:`nfs.variability`; no table: every start-up soaked exactly at T0, every unit the
 nominal instrument).  Every key is checked: an unknown key is an error that names it and
 lists the allowed ones.  See ``scenarios/startup_7temps.toml``.
+
+Inheritance.  A scenario file gives only what differs from the built-in default scenario
+(:func:`default_scenario_path`), or from another scenario file it names as
+``base = "path.toml"`` (relative to the file; the base may name its own base, and a chain
+that loops back is an error).  Every key it leaves out comes from there, table by table
+(a key under ``[compensation]`` replaces that key only); lists (``program``, ``[[effects]]``,
+``start_temperatures_c``) are replaced whole.  Not inherited: ``name`` (the file's stem
+unless written) and ``description``; and from the built-in default, its ``[variability]``
+table (a scenario without the table is the world without scatter, as always: write
+``[variability]`` to get the default's realistic scatter), when the scenario has a chamber
+program its ``duration_s``, and when it sets ``units`` the default's split of its one unit
+(``compensation.train_units``, ``test_units``).  Paths in a base (``instrument``, ``effects_files``) stay
+relative to the base.  The base is checked on its own first, so an error names the file that
+holds the bad value.
+
+Chamber.  ``[chamber]`` holds the chamber at T0 with an optional ripple, or runs a
+``program`` of holds, ramps, steps and repeated cycles from each start temperature T0, with
+the unit powered on at the program's start or at a ``{ power_on = true }`` marker after an
+unpowered soak (:mod:`nfs.io.chamber`).  A run lasts as long as its program after power-on
+unless ``duration_s`` is written (in the file or a base): then it is cut there, or the chamber
+holds the program's last temperature until then.  Start and chamber temperatures outside
+-70 .. +150 C are refused (a value such as 293.15 is kelvin).
 """
 
 from __future__ import annotations
@@ -21,28 +44,31 @@ import numpy as np
 
 from ..effects import load_effects_file
 from ..errors import EffectError, NfsError, ScenarioError
-from ..instrument import Instrument, _check_effect_targets, load_instrument, parse_effects
+from ..instrument import (Instrument, _aux, _check_effect_targets, load_instrument,
+                          parse_effects)
 from ..parameters import ParameterError, expand_paths
 from ..sensors import ORDERS, Schedule
 from ..variability import (CYCLING_SHAPES, NO_VARIABILITY, VARIABILITY_KEYS,
                            VARIABILITY_PRESETS, Variability)
+from .chamber import ChamberProgram, check_temperature, parse_program
 from .tomlio import check_keys, load_toml, number, number_list, string, table
 
 __all__ = ["NorthFindSettings", "ChamberProfile", "Scenario", "load_scenario",
            "default_scenario_path", "scenario_preset_names", "scenario_preset_path"]
 
-_TOP = ("name", "description", "instrument", "seed", "start_temperatures_c", "repeats",
+_TOP = ("name", "description", "base", "instrument", "seed", "start_temperatures_c", "repeats",
         "duration_s", "sample_rate_hz", "latitude_deg", "true_heading_deg", "effects_files",
-        "effects", "schedule", "northfind", "chamber", "compensation", "units",
+        "effects", "added_effects", "aux", "schedule", "northfind", "chamber", "compensation", "units",
         "variability")
 _COMPENSATION = ("methods", "features", "features_mode", "budget", "decimate_s",
                  "cutoff_period_s",
                  "train_seed", "train_repeats", "train_temperatures_c", "test_repeats",
-                 "train_units", "test_units", "random_state", "tuner_seeds", "n_jobs")
+                 "train_units", "test_units", "random_state", "tuner_seeds", "n_jobs",
+                 "protocol")
 _VARIABILITY = ("preset", *VARIABILITY_KEYS, "parameters")
 _SCHEDULE = ("positions_deg", "order", "dwell_s", "move_s")
 _NORTHFIND = ("startup_end_s", "stable_start_s", "tilt_correction", "settle_s")
-_CHAMBER = ("ripple_c", "ripple_period_s")
+_CHAMBER = ("ripple_c", "ripple_period_s", "program")
 
 
 @dataclass(frozen=True)
@@ -61,19 +87,41 @@ class NorthFindSettings:
 
 @dataclass(frozen=True)
 class ChamberProfile:
-    """Chamber air temperature T_amb(t) = T0 + ripple_c sin(2 pi t / ripple_period_s)."""
+    """Chamber air temperature T_amb(t) = P(t) + ripple_c sin(2 pi t / ripple_period_s),
+    t from power-on, P the program (:mod:`nfs.io.chamber`) or T0 without one."""
 
     ripple_c: float = 0.0
     """Amplitude of the chamber control ripple [K]."""
     ripple_period_s: float = 600.0
     """Period of the ripple [s]."""
+    program: ChamberProgram | None = None
+    """The chamber program from each T0; None holds T0."""
 
-    def ambient(self, start_temperature_c: float):
-        """T_amb(t) as a function of time [degC], or None when the chamber holds T0."""
-        if self.ripple_c == 0.0:
+    def ambient(self, start_temperature_c: float, sample_s: float = 1.0):
+        """T_amb(t) as a function of time from power-on [s] (negative during a program's
+        unpowered soak) [degC], or None when the chamber holds T0.  ``sample_s``: the
+        sample interval, over which a program's steps are taken."""
+        if self.ripple_c == 0.0 and self.program is None:
             return None
+        t0 = start_temperature_c
+        base = (self.program.ambient(t0, sample_s) if self.program is not None
+                else lambda t: np.full(np.shape(t), float(t0)))
+        if self.ripple_c == 0.0:
+            return base
         a, p = self.ripple_c, self.ripple_period_s
-        return lambda t: start_temperature_c + a * np.sin(2.0 * np.pi * np.asarray(t) / p)
+        return lambda t: base(t) + a * np.sin(2.0 * np.pi * np.asarray(t) / p)
+
+    def soak_s(self, start_temperature_c: float, sample_s: float = 1.0) -> float:
+        """Time the program runs before power-on, the unit unpowered [s] (0 without)."""
+        if self.program is None:
+            return 0.0
+        return self.program.power_on_s(start_temperature_c, sample_s)
+
+    def powered_s(self, start_temperature_c: float, sample_s: float = 1.0) -> float | None:
+        """Length of the program from power-on [s]; None without a program."""
+        if self.program is None:
+            return None
+        return self.program.powered_s(start_temperature_c, sample_s)
 
 
 @dataclass(frozen=True)
@@ -94,8 +142,9 @@ class Scenario:
     repeats: int = 1
     """Start-ups per start temperature, made by the units of :attr:`unit_ids` in turn
     (start-up r by unit ``unit_ids[r % n]``, its ``r // n``-th)."""
-    duration_s: float = 9000.0
-    """Length of each run [s]."""
+    duration_s: float | None = 9000.0
+    """Length of each run from power-on [s]; None: as long as the chamber program after
+    power-on (:meth:`run_duration_s`)."""
     sample_rate_hz: float = 1.0
     """Sample rate [Hz]."""
     latitude_deg: float = 30.0
@@ -121,6 +170,12 @@ class Scenario:
     variability: Variability = NO_VARIABILITY
     """How start-ups and units differ (:mod:`nfs.variability`)."""
 
+    def run_duration_s(self, start_temperature_c: float) -> float:
+        """Length of the runs at ``start_temperature_c`` from power-on [s]."""
+        if self.duration_s is not None:
+            return self.duration_s
+        return self.chamber.powered_s(start_temperature_c, 1.0 / self.sample_rate_hz)
+
     @property
     def unit_ids(self) -> tuple[int, ...]:
         """The units that make the start-ups, in turn."""
@@ -141,16 +196,18 @@ class Scenario:
         units = self.unit_ids
         var = self.variability if self.variability.active else None
         out = []
+        sample_s = 1.0 / self.sample_rate_hz
         for i, t0 in enumerate(self.start_temperatures_c):
             for r in range(self.repeats):
                 u, k = units[r % len(units)], r // len(units)
                 out.append(RunConditions(
                     name=self.run_name(i, k, u), start_temperature_c=t0,
                     latitude_deg=self.latitude_deg, true_heading_deg=self.true_heading_deg,
-                    schedule=self.schedule, duration_s=self.duration_s,
+                    schedule=self.schedule, duration_s=self.run_duration_s(t0),
                     sample_rate_hz=self.sample_rate_hz,
                     seed=(self.seed, i, k) if u == 0 else (self.seed, i, k, u),
-                    chamber_c=self.chamber.ambient(t0), unit=u, variability=var))
+                    chamber_c=self.chamber.ambient(t0, sample_s), unit=u, variability=var,
+                    soak_s=self.chamber.soak_s(t0, sample_s)))
         return out
 
     def nominal(self) -> "Scenario":
@@ -316,7 +373,7 @@ def _compensation(tbl: dict, file, units: int = 1) -> Any:
     from ..compensate.features import FeatureError, resolve_features
     from ..compensate.methods import get_method
     from ..compensate.modes import FeatureModeError, check_features_mode
-    from ..compensate.study import CompensationSettings
+    from ..compensate.study import PROTOCOLS, CompensationSettings
     p = "compensation"
     check_keys(tbl, _COMPENSATION, p, file)
     d = CompensationSettings()
@@ -359,14 +416,85 @@ def _compensation(tbl: dict, file, units: int = 1) -> Any:
         test_units=_unit_list(tbl, "test_units", p, file, units),
         random_state=_int(tbl, "random_state", p, file, d.random_state, minimum=0),
         tuner_seeds=_int(tbl, "tuner_seeds", p, file, d.tuner_seeds, minimum=1),
-        n_jobs=n_jobs)
+        n_jobs=n_jobs,
+        protocol=string(tbl, "protocol", p, file, d.protocol, choices=PROTOCOLS))
 
 
-def load_scenario(path: str | Path | None = None) -> Scenario:
-    """Read and check a scenario file (the built-in default when ``path`` is None)."""
+#: Keys a scenario never takes from its base.
+_NOT_INHERITED = ("name", "description")
+
+
+def _merged(base: dict, over: dict) -> dict:
+    """``base`` with ``over`` written on top, table by table (lists replaced whole)."""
+    out = dict(base)
+    for k, v in over.items():
+        out[k] = _merged(out[k], v) if isinstance(v, dict) and isinstance(out.get(k),
+                                                                            dict) else v
+    return out
+
+
+def _anchored(d: dict, folder: Path) -> dict:
+    """``d`` with its relative paths (a path-like ``instrument``, ``effects_files``) made
+    absolute from ``folder``, so that they keep their meaning in a file that inherits them."""
+    d = dict(d)
+    inst = d.get("instrument")
+    if isinstance(inst, str) and (inst.endswith(".toml") or "/" in inst or "\\" in inst) \
+            and not Path(inst).is_absolute():
+        d["instrument"] = str(folder / inst)
+    files = d.get("effects_files")
+    if isinstance(files, list):
+        d["effects_files"] = [str(folder / x) if isinstance(x, str) and not
+                              Path(x).is_absolute() else x for x in files]
+    return d
+
+
+def _inherited(path: Path, d: dict, chain: tuple[Path, ...]) -> tuple[dict, dict]:
+    """(the file's keys over its base's, as written; the same over the built-in default).
+
+    The base, if any, is loaded and checked on its own first (its errors name it)."""
+    here = dict(d)
+    ref = here.pop("base", None)
+    if ref is not None:
+        if not isinstance(ref, str) or not ref:
+            raise ScenarioError(f"must be the path of a scenario file, got {ref!r}",
+                                file=path, key="base")
+        bpath = Path(ref) if Path(ref).is_absolute() else path.parent / ref
+        if not bpath.is_file():
+            raise ScenarioError(f"base scenario {bpath} not found (the path is relative to "
+                                f"{path.parent})", file=path, key="base")
+        key = bpath.resolve()
+        if key in chain:
+            loop = " -> ".join(str(p) for p in (*chain, key))
+            raise ScenarioError(f"the bases loop back: {loop}", file=path, key="base")
+        load_scenario(bpath, _chain=(*chain, key))        # checked on its own
+        written = _inherited(bpath, load_toml(bpath), (*chain, key))[0]
+        written = {k: v for k, v in _anchored(written, bpath.parent).items()
+                   if k not in _NOT_INHERITED}
+        here = _merged(written, here)
+    default = {} if path.resolve() == default_scenario_path().resolve() else \
+        {k: v for k, v in load_toml(default_scenario_path()).items()
+         if k not in (*_NOT_INHERITED, "variability")}
+    chamber = here.get("chamber")
+    if isinstance(chamber, dict) and "program" in chamber and "duration_s" not in here:
+        default.pop("duration_s", None)
+    if "units" in here and isinstance(default.get("compensation"), dict):
+        default["compensation"] = {k: v for k, v in default["compensation"].items()
+                                   if k not in ("train_units", "test_units")}
+    return here, _merged(default, here)
+
+
+def load_scenario(path: str | Path | None = None, *, _chain: tuple[Path, ...] = ()
+                  ) -> Scenario:
+    """Read and check a scenario file (the built-in default when ``path`` is None), with
+    every key it leaves out from its ``base`` or the built-in default (module docstring)."""
     path = default_scenario_path() if path is None else Path(path)
-    d = load_toml(path)
     f = path
+    d = load_toml(path)
+    if not isinstance(d.get("base", ""), str):
+        raise ScenarioError(f"must be the path of a scenario file, got {d['base']!r}",
+                            file=f, key="base")
+    check_keys(d, _TOP, "", f)
+    d = _inherited(path, d, _chain or (path.resolve(),))[1]
     check_keys(d, _TOP, "", f, required=("start_temperatures_c", "schedule"))
     base = path.parent
     files = d.get("effects_files", [])
@@ -385,8 +513,18 @@ def load_scenario(path: str | Path | None = None) -> Scenario:
         if exc.file is None:
             raise ScenarioError(exc.message, file=f, key="instrument") from None
         raise
-    if "effects" in d:
-        effects = parse_effects(d["effects"], f)
+    if "aux" in d:
+        extra = _aux(d["aux"], inst.network, f)
+        have = {a.name for a in inst.aux}
+        dup = next((a.name for a in extra if a.name in have), None)
+        if dup is not None:
+            raise ScenarioError(f"the instrument already has a channel '{dup}'", file=f,
+                                key="aux")
+        inst = Instrument(**{**inst.__dict__, "aux": inst.aux + extra})
+    if "effects" in d or "added_effects" in d:
+        effects = parse_effects(d["effects"], f) if "effects" in d else inst.effects
+        if "added_effects" in d:
+            effects = effects + parse_effects(d["added_effects"], f, "added_effects")
         inst = Instrument(**{**inst.__dict__, "effects": effects})
         _check_effect_targets(inst, f)
 
@@ -414,7 +552,9 @@ def load_scenario(path: str | Path | None = None) -> Scenario:
     check_keys(ch, _CHAMBER, "chamber", f)
     chamber = ChamberProfile(ripple_c=number(ch, "ripple_c", "chamber", f, 0.0, minimum=0.0),
                              ripple_period_s=number(ch, "ripple_period_s", "chamber", f,
-                                                    600.0, positive=True))
+                                                    600.0, positive=True),
+                             program=(parse_program(ch["program"], f) if "program" in ch
+                                      else None))
     seed = d.get("seed", 0)
     if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
         raise ScenarioError(f"must be a non-negative integer, got {seed!r}", file=f, key="seed")
@@ -424,23 +564,42 @@ def load_scenario(path: str | Path | None = None) -> Scenario:
                             key="repeats")
     temps = number_list(d, "start_temperatures_c", "", f)
     for t0 in temps:
-        if t0 < -273.15:
-            raise ScenarioError(f"{t0} is below absolute zero", file=f,
-                                key="start_temperatures_c")
+        check_temperature(t0, f, "start_temperatures_c")
     units = _int(d, "units", "", f, 1, minimum=1)
     variability = _variability(d, inst, seed, f)
-    duration = number(d, "duration_s", "", f, 9000.0, positive=True)
-    if duration < schedule.cycle_s:
-        raise ScenarioError(f"{duration} s is shorter than one cycle ({schedule.cycle_s} s)",
-                            file=f, key="duration_s")
+    fs = number(d, "sample_rate_hz", "", f, 1.0, positive=True)
+    duration = number(d, "duration_s", "", f, 9000.0 if chamber.program is None else None,
+                      positive=True)
+    for t0 in temps:
+        length = duration if duration is not None else chamber.powered_s(t0, 1.0 / fs)
+        if length < schedule.cycle_s:
+            what = ("" if duration is not None
+                    else f"the chamber program after power-on from {t0:g} C, ")
+            raise ScenarioError(f"{what}{length:g} s is shorter than one north-finding "
+                                f"cycle ({schedule.cycle_s:g} s)", file=f,
+                                key="duration_s" if duration is not None
+                                else "chamber.program")
+    comp = _compensation(table(d, "compensation", "", f, {}), f, units)
+    if comp.protocol == "cycles":
+        from ..compensate.methods import get_method
+        if chamber.program is None or len(chamber.program.cycles) < 2:
+            raise ScenarioError("\"cycles\" trains on cycle 1 of the chamber program and "
+                                "tests on the others: [chamber] needs a program with a "
+                                "{ repeat = N, steps = [...] } step, N >= 2", file=f,
+                                key="compensation.protocol")
+        tuned = [m for m in comp.methods if get_method(m).tuned]
+        if tuned:
+            raise ScenarioError(f"{tuned[0]} tunes by leaving a start temperature or a run "
+                                "out, and a cycling study trains on one cycle: use untuned "
+                                "methods with protocol = \"cycles\"", file=f,
+                                key="compensation.methods")
     return Scenario(
         name=string(d, "name", "", f, path.stem), instrument=inst,
         start_temperatures_c=temps, schedule=schedule, seed=seed, repeats=repeats,
-        duration_s=duration,
-        sample_rate_hz=number(d, "sample_rate_hz", "", f, 1.0, positive=True),
+        duration_s=duration, sample_rate_hz=fs,
         latitude_deg=number(d, "latitude_deg", "", f, 30.0, minimum=-89.0, maximum=89.0),
         true_heading_deg=number(d, "true_heading_deg", "", f, 0.0),
         northfind=settings, chamber=chamber,
-        compensation=_compensation(table(d, "compensation", "", f, {}), f, units),
+        compensation=comp,
         description=string(d, "description", "", f, ""), path=path, units=units,
         variability=variability)

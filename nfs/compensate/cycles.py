@@ -1,0 +1,313 @@
+"""Train on a chamber program's first cycle, test on the others: the drift table of a
+temperature-cycling experiment.
+
+Protocol (Tao, Li, Zheng, Wu and Fu, "High Precision Compensation for a Total Reflection
+Prism Laser Gyro Bias in Consideration of High Frequency Oscillator Voltage", Sensors 19(13),
+2986, 2019, section 4.1: "the entire cycle was performed twice, once for training and once for
+compensation"):
+
+1. The scenario's runs are simulated once; each is cut at the cycles of its chamber program
+   (the iterations of the program's first top-level ``repeat``, :mod:`nfs.io.chamber`).
+2. Every method is trained on cycle 1 of every run (drift by wavelet separation, the
+   scenario's features and mode, training samples every ``decimate_s``) and predicts the
+   drift of the later cycles from their own thermometers and channels.
+3. The uncompensated row subtracts the mean bias of cycle 1: a constant calibrated on the
+   training cycle, the least any user applies.
+4. Scores on the test cycles, trusted (not moving) samples, residual e = drift - prediction:
+
+   - MAE, STD, RMSE [deg/h] of e on the wavelet-separated drift at every sample (the drift
+     table of the start-up study; STD about the residual's mean);
+   - bias stability [deg/h]: the sample standard deviation of the 100 s means of the
+     compensated bias (gyro output - Earth rate - prediction, noise included): the paper's
+     "TRPLG bias stability", its data being given "at intervals of 100 s" (section 4.1);
+   - improvement [%] = 100 (1 - bias stability / the uncompensated row's) (Tables 2-5);
+   - up-ramp and down-ramp residuals separately (RMSE and signed mean of e where the chamber
+     rises or falls faster than :data:`RAMP_RATE_C_PER_S`): a model missing a rate term
+     leaves residuals of opposite signs on the two (thermal hysteresis);
+   - heading RMSE [deg] of every north-finding cycle of the test cycles, compensated.
+
+5. Intervals: 95 %, bias-corrected percentile (:func:`nfs.report.intervals.bc_interval`) from a
+   block bootstrap of the test cycles (Carlstein 1986, non-overlapping blocks of
+   :data:`BLOCK_S`: the residual of a thermal model is correlated over tens of minutes, so
+   blocks, not samples, are resampled), every row with the same draws (paired), so the
+   improvement's interval carries the pairing with the uncompensated row.  Ramps are a few
+   blocks long: their intervals are wide and say so.
+"""
+
+from __future__ import annotations
+
+import warnings
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+from joblib import Parallel, delayed
+from sklearn.exceptions import ConvergenceWarning
+
+from ..denoise import separate_drift
+from ..errors import NfsError
+from ..experiment import northfind_runs, run_scenario
+from ..io.measurement import Run
+from ..report.intervals import bc_interval
+from ..report.table import pooled_rmse
+from .compensator import DriftCompensator, prediction_plan, train_compensator
+from .dataset import drift_dataset
+from .methods import get_method
+from .modes import check_features_mode
+
+__all__ = ["CycleRow", "CycleStudy", "run_cycle_study", "cut_run", "CYCLE_METRICS",
+           "BIAS_WINDOW_S", "BLOCK_S", "RAMP_RATE_C_PER_S", "UNCOMPENSATED"]
+
+#: The table's metrics, in order (JSON keys).
+CYCLE_METRICS = ("mae_dph", "std_dph", "rmse_dph", "bias_stability_dph", "improvement_pct")
+#: Averaging window of the bias stability [s] (Tao et al. 2019, section 4.1).
+BIAS_WINDOW_S = 100.0
+#: Block of the bootstrap [s].
+BLOCK_S = 1800.0
+#: A chamber moving faster than this is ramping [K/s] (0.006 K/min).
+RAMP_RATE_C_PER_S = 1e-4
+#: Name of the uncompensated row.
+UNCOMPENSATED = "uncompensated"
+#: Ramp statistics of a row (JSON keys).
+RAMP_KEYS = ("up_rmse_dph", "down_rmse_dph", "up_mean_dph", "down_mean_dph")
+
+
+@dataclass(frozen=True)
+class CycleRow:
+    """One row of the drift table of a cycling study."""
+
+    method: str
+    """Row label (the method's name, or :data:`UNCOMPENSATED`)."""
+    values: dict
+    """Each of :data:`CYCLE_METRICS` and :data:`RAMP_KEYS` -> its value."""
+    intervals: dict
+    """The same keys -> (low, high) 95 % interval."""
+    heading_rmse_deg: float
+    """Heading RMSE of the test cycles' north-finding cycles [deg]."""
+
+
+@dataclass(frozen=True)
+class CycleStudy:
+    """Everything :func:`run_cycle_study` computed."""
+
+    scenario: object
+    """The scenario."""
+    settings: object
+    """Its :class:`~nfs.compensate.study.CompensationSettings`."""
+    spans_s: tuple[tuple[float, float], ...]
+    """(start, end) of every cycle from power-on [s] (of the first start temperature)."""
+    train_runs: tuple[Run, ...]
+    """Cycle 1 of every run."""
+    test_runs: tuple[Run, ...]
+    """The later cycles of every run."""
+    rows: tuple[CycleRow, ...]
+    """The uncompensated row, then each method."""
+    compensators: dict = field(default_factory=dict)
+    """Method name -> its trained :class:`~nfs.compensate.compensator.DriftCompensator`."""
+    n_boot: int = 0
+    """Bootstrap replicates behind the intervals."""
+    feature_names: tuple[str, ...] = ()
+    """The features every method was trained on."""
+
+    def row(self, method: str) -> CycleRow:
+        for r in self.rows:
+            if r.method == method:
+                return r
+        raise KeyError(method)
+
+
+def cut_run(run: Run, start_s: float, end_s: float, suffix: str) -> Run:
+    """The samples of ``run`` with start_s <= time_s < end_s, named ``{name}_{suffix}``."""
+    t = np.asarray(run.columns["time_s"], dtype=float)
+    keep = (t >= start_s) & (t < end_s)
+    if np.count_nonzero(keep) < 2:
+        raise NfsError(f"run '{run.name}' has no samples in {start_s:g} .. {end_s:g} s")
+    return Run(name=f"{run.name}_{suffix}",
+               columns={k: np.asarray(v)[keep] for k, v in run.columns.items()}, meta=run.meta)
+
+
+def _spans(scenario) -> list[list[tuple[float, float]]]:
+    """The cycle spans of every start temperature's runs; NfsError without cycles."""
+    prog = scenario.chamber.program
+    if prog is None or len(prog.cycles) < 2:
+        raise NfsError(f"scenario '{scenario.name}': compensation.protocol = \"cycles\" needs "
+                       "a chamber program whose first top-level step is repeated at least "
+                       "twice ({ repeat = 2, steps = [...] }): cycle 1 trains, the others test")
+    sample_s = 1.0 / scenario.sample_rate_hz
+    return [prog.cycle_spans_s(t0, sample_s) for t0 in scenario.start_temperatures_c]
+
+
+@dataclass
+class _Scored:
+    """A test cycle's quantities shared by every row."""
+
+    drift: np.ndarray       # separated drift at the trusted samples [deg/h]
+    raw: np.ndarray         # gyro - Earth rate at the trusted samples [deg/h]
+    window: np.ndarray      # 100 s window id of each trusted sample (unique over cycles)
+    block: np.ndarray       # bootstrap block id of each trusted sample (unique over cycles)
+    ramp: np.ndarray        # +1 up-ramp, -1 down-ramp, 0 otherwise, per trusted sample
+    trusted: np.ndarray     # the mask into the cycle's samples
+
+
+def _score_parts(runs: list[Run], cutoff_period_s: float) -> list[_Scored]:
+    out, w0, b0 = [], 0, 0
+    for run in runs:
+        sep = separate_drift(run, cutoff_period_s=cutoff_period_s)
+        t = np.asarray(run.columns["time_s"], dtype=float)
+        ok = ~np.asarray(sep.moving, dtype=bool) & np.isfinite(sep.raw_drift_dph)
+        rel = t - t[0]
+        window = w0 + np.floor(rel / BIAS_WINDOW_S).astype(int)
+        block = b0 + np.floor(rel / BLOCK_S).astype(int)
+        w0, b0 = int(window.max()) + 1, int(block.max()) + 1
+        chamber = run.columns.get("temp_chamber_c")
+        ramp = np.zeros(t.size, dtype=int)
+        if chamber is not None and t.size > 1:
+            slope = np.gradient(np.asarray(chamber, dtype=float), t)
+            ramp[slope > RAMP_RATE_C_PER_S] = 1
+            ramp[slope < -RAMP_RATE_C_PER_S] = -1
+        out.append(_Scored(np.asarray(sep.drift_dph)[ok], np.asarray(sep.raw_drift_dph)[ok],
+                           window[ok], block[ok], ramp[ok], ok))
+    return out
+
+
+def _block_sums(parts: list[_Scored], preds: list[np.ndarray], n_blocks: int) -> np.ndarray:
+    """Per block: sufficient statistics of one row's residuals, shape (n_blocks, 13)."""
+    e = np.concatenate([p.drift - q[p.trusted] for p, q in zip(parts, preds)])
+    bias = np.concatenate([p.raw - q[p.trusted] for p, q in zip(parts, preds)])
+    window = np.concatenate([p.window for p in parts])
+    block = np.concatenate([p.block for p in parts])
+    ramp = np.concatenate([p.ramp for p in parts])
+    n_w = int(window.max()) + 1
+    w_mean = np.bincount(window, bias, n_w) / np.maximum(np.bincount(window, None, n_w), 1)
+    w_has = np.bincount(window, None, n_w) > 0
+    w_block = np.zeros(n_w, dtype=int)
+    w_block[window] = block                      # a window lies in one block (100 | 1800)
+    stats = np.zeros((n_blocks, 13))
+    cols = [np.ones_like(e), e, e * e, np.abs(e)]
+    for k, c in enumerate(cols):
+        stats[:, k] = np.bincount(block, c, n_blocks)
+    wb = w_block[w_has]
+    for k, c in enumerate([np.ones(wb.size), w_mean[w_has], w_mean[w_has] ** 2]):
+        stats[:, 4 + k] = np.bincount(wb, c, n_blocks)
+    for k, sign in enumerate((1, -1)):
+        on = ramp == sign
+        for j, c in enumerate([np.ones(np.count_nonzero(on)), e[on], e[on] ** 2]):
+            stats[:, 7 + 3 * k + j] = np.bincount(block[on], c, n_blocks)
+    return stats
+
+
+def _metrics(s: np.ndarray) -> dict[str, np.ndarray]:
+    """Metrics from summed statistics, shape (..., 13) -> each (...)."""
+    with np.errstate(invalid="ignore", divide="ignore"):
+        n, s1, s2, sa = s[..., 0], s[..., 1], s[..., 2], s[..., 3]
+        nw, w1, w2 = s[..., 4], s[..., 5], s[..., 6]
+        out = {"mae_dph": sa / n, "rmse_dph": np.sqrt(s2 / n),
+               "std_dph": np.sqrt(np.maximum(s2 / n - (s1 / n) ** 2, 0.0)),
+               "bias_stability_dph": np.sqrt(np.maximum(w2 - w1 * w1 / nw, 0.0) / (nw - 1))}
+        for k, side in enumerate(("up", "down")):
+            nr, r1, r2 = s[..., 7 + 3 * k], s[..., 8 + 3 * k], s[..., 9 + 3 * k]
+            out[f"{side}_rmse_dph"] = np.sqrt(r2 / nr)
+            out[f"{side}_mean_dph"] = r1 / nr
+    return out
+
+
+def _interval(reps: np.ndarray, est: float) -> tuple[float, float]:
+    reps = reps[np.isfinite(reps)]
+    if not np.isfinite(est) or reps.size < 10:
+        return (float("nan"), float("nan"))
+    return tuple(float(v) for v in bc_interval(reps, est))
+
+
+def _train(key: str, data, s, seed: int):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", ConvergenceWarning)
+        return key, train_compensator(key, data, budget=s.budget, random_state=seed, n_jobs=1)
+
+
+def run_cycle_study(scenario, settings=None, *, n_boot: int = 2000,
+                    progress: Callable[[int, int, str], None] | None = None) -> CycleStudy:
+    """Simulate ``scenario``, train every method of ``settings`` (default: the scenario's
+    ``[compensation]``) on cycle 1 of its chamber program, and score it on the other cycles
+    (module docstring).  ``n_boot`` bootstrap replicates, seeded by ``random_state``."""
+    from .study import CompensationSettings
+    s = settings or scenario.compensation or CompensationSettings()
+    spans = _spans(scenario)
+    specs = [get_method(m) for m in s.methods]
+    for spec in specs:
+        if spec.tuned:
+            raise NfsError(f"method '{spec.key}' tunes its hyperparameters by leaving one "
+                           "start temperature or run out, and a cycling study trains on one "
+                           "cycle: use an untuned method (ls, stepwise, bp, rbf, lssvm, "
+                           "ir-lssvm) here")
+    n_steps, step = 4 + len(specs), 0
+
+    def tick(msg):
+        nonlocal step
+        if progress is not None:
+            progress(step, n_steps, msg)
+        step += 1
+
+    tick("simulating the runs")
+    res = run_scenario(scenario)
+    train, test = [], []
+    for k, sim in enumerate(res.simulations):
+        i_temp = k // scenario.repeats
+        for c, (a, b) in enumerate(spans[i_temp]):
+            part = cut_run(sim.run, a, b, f"cycle{c + 1}")
+            (train if c == 0 else test).append(part)
+    tick("separating the drift")
+    mode = check_features_mode(s.features_mode)
+    data = drift_dataset(train, list(s.features), decimate_s=s.decimate_s,
+                         cutoff_period_s=s.cutoff_period_s, features_mode=mode)
+    parts = _score_parts(test, s.cutoff_period_s)
+    n_blocks = int(max(p.block.max() for p in parts)) + 1
+    train_bias = np.concatenate([
+        np.asarray(sep.raw_drift_dph)[~np.asarray(sep.moving, dtype=bool)]
+        for sep in (separate_drift(r, cutoff_period_s=s.cutoff_period_s) for r in train)])
+    constant = float(np.nanmean(train_bias))
+
+    comps: dict[str, DriftCompensator] = {}
+    with Parallel(n_jobs=s.n_jobs, return_as="generator_unordered") as parallel:
+        for key, comp in parallel(delayed(_train)(spec.key, data, s, s.random_state)
+                                  for spec in sorted(specs, key=lambda sp: -sp.cost)):
+            comps[get_method(key).name] = comp
+            tick(f"trained {get_method(key).name}")
+    tick("scoring")
+    preds = {UNCOMPENSATED: [np.full(r.n_samples, constant) for r in test]}
+    for spec in specs:
+        comp = comps[spec.name]
+        preds[spec.name] = [comp.predict_drift(plan=prediction_plan(
+            r, data.feature_names, features_mode=data.features_mode,
+            rate_window_s=data.rate_window_s, stride_s=min(10.0, s.decimate_s))) for r in test]
+    names = list(preds)
+    stats = np.stack([_block_sums(parts, preds[n], n_blocks) for n in names])  # (rows, B, 13)
+    rng = np.random.default_rng(s.random_state)
+    counts = np.stack([np.bincount(rng.integers(0, n_blocks, n_blocks), minlength=n_blocks)
+                       for _ in range(n_boot)]).astype(float)             # (n_boot, blocks)
+    est = _metrics(stats.sum(axis=1))
+    reps = _metrics(np.einsum("rb,nbk->nrk", counts, stats))              # (rows, n_boot)
+    est["improvement_pct"] = 100.0 * (1.0 - est["bias_stability_dph"]
+                                      / est["bias_stability_dph"][0])
+    reps["improvement_pct"] = 100.0 * (1.0 - reps["bias_stability_dph"]
+                                       / reps["bias_stability_dph"][:1])
+    rows = []
+    for i, name in enumerate(names):
+        pred_runs = test if name == UNCOMPENSATED else \
+            [comps[name].compensate(r, drift_dph=p) for r, p in zip(test, preds[name])]
+        if name == UNCOMPENSATED:
+            nf = northfind_runs(test, scenario.northfind)
+        else:
+            nf = northfind_runs(pred_runs, scenario.northfind)
+        heading = pooled_rmse(np.asarray(r.error_deg) for r in nf)
+        keys = CYCLE_METRICS + RAMP_KEYS
+        values = {k: float(est[k][i]) for k in keys}
+        intervals = {k: _interval(reps[k][i], values[k]) for k in keys}
+        if name == UNCOMPENSATED:
+            values["improvement_pct"] = 0.0
+            intervals["improvement_pct"] = (0.0, 0.0)
+        rows.append(CycleRow(name, values, intervals, heading))
+    tick("done")
+    return CycleStudy(scenario=scenario, settings=s,
+                      spans_s=tuple(tuple(sp) for sp in spans[0]), train_runs=tuple(train),
+                      test_runs=tuple(test), rows=tuple(rows), compensators=comps,
+                      n_boot=n_boot, feature_names=tuple(data.feature_names))

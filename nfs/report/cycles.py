@@ -1,0 +1,154 @@
+"""Outputs of a temperature-cycling study (:mod:`nfs.compensate.cycles`): the drift table with
+its intervals, the ramps separately, and the paper's figures beside ours.
+
+The paper set beside the table is Tao, Li, Zheng, Wu and Fu, "High Precision Compensation for
+a Total Reflection Prism Laser Gyro Bias in Consideration of High Frequency Oscillator
+Voltage", Sensors 19(13), 2986 (2019) (:data:`~nfs.report.reference.TAO2019_BIAS_STABILITY`):
+its gyro is not ours, so the comparison is of shape (every method improves the bias
+stability, by how much, which wins), not of digits.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import math
+from pathlib import Path
+
+from ..io.atomic import atomic_write_text
+from .reference import TAO2019_BIAS_STABILITY
+
+__all__ = ["cycle_table_markdown", "cycle_table_json", "write_cycle_study"]
+
+_METRICS = (("mae_dph", "MAE [deg/h]", 4), ("std_dph", "STD [deg/h]", 4),
+            ("rmse_dph", "RMSE [deg/h]", 4), ("bias_stability_dph", "bias stability [deg/h]", 5),
+            ("improvement_pct", "improvement [%]", 1))
+_RAMPS = (("up_rmse_dph", "up-ramp RMSE [deg/h]"), ("up_mean_dph", "up-ramp mean [deg/h]"),
+          ("down_rmse_dph", "down-ramp RMSE [deg/h]"),
+          ("down_mean_dph", "down-ramp mean [deg/h]"))
+
+
+def _cell(v: float, ci, digits: int) -> str:
+    if not math.isfinite(v):
+        return "-"
+    if ci is None or not all(math.isfinite(c) for c in ci) or ci[0] == ci[1]:
+        return f"{v:.{digits}f}"
+    return f"{v:.{digits}f} ({ci[0]:.{digits}f} .. {ci[1]:.{digits}f})"
+
+
+def _j(v: float):
+    return None if not math.isfinite(v) else float(v)
+
+
+def _notes(study) -> list[str]:
+    s = study.settings
+    spans = ", ".join(f"{a / 3600:.2f}-{b / 3600:.2f} h" for a, b in study.spans_s)
+    return [
+        f"Cycles of the chamber program (from power-on): {spans}; cycle 1 of "
+        f"{len(study.train_runs)} run(s) trains every method, the other {len(study.test_runs)} "
+        "cycle(s) are scored.",
+        f"Features {', '.join(study.feature_names)} in {s.features_mode} mode; drift by wavelet "
+        f"separation (cutoff {s.cutoff_period_s:g} s); training samples every "
+        f"{s.decimate_s:g} s.",
+        "MAE, STD, RMSE: the separated drift minus the prediction at every trusted sample of the "
+        "test cycles; bias stability: standard deviation of the 100 s means of the gyro output "
+        "minus Earth rate minus prediction (Tao et al. 2019, section 4.1: data at 100 s); "
+        "improvement: 1 - bias stability / the uncompensated row's.",
+        f"uncompensated: the mean bias of cycle 1 subtracted (a constant calibration). "
+        f"Intervals: 95 %, bias-corrected, from a block bootstrap of the test cycles "
+        f"({study.n_boot} replicates, 30 min blocks, every row with the same draws).",
+        "Ramps: residuals where the chamber rises (up) or falls (down) faster than "
+        "0.006 C/min; opposite signed means on the two are thermal hysteresis, a rate term "
+        "the model lacks.",
+        "heading RMSE: every north-finding cycle of the test cycles, compensated [deg].",
+    ]
+
+
+def _paper(method: str) -> tuple[float, float] | None:
+    return TAO2019_BIAS_STABILITY.get(method)
+
+
+def cycle_table_markdown(study) -> str:
+    """The drift table and the ramp table as Markdown, with the notes and the paper's
+    figures."""
+    head = ["method"] + [h for _, h, _ in _METRICS] + ["heading RMSE [deg]",
+                                                     "paper: bias stability, improvement"]
+    lines = ["| " + " | ".join(head) + " |", "|---|" + "---:|" * (len(head) - 1)]
+    for r in study.rows:
+        cells = [_cell(r.values[k], r.intervals.get(k), d) for k, _, d in _METRICS]
+        pub = _paper(r.method)
+        cells += [f"{r.heading_rmse_deg:.4f}",
+                  f"{pub[0]:.5f} deg/h, {pub[1]:.2f} %" if pub else ""]
+        lines.append(f"| {r.method} | " + " | ".join(cells) + " |")
+    ramp = ["| method | " + " | ".join(h for _, h in _RAMPS) + " |",
+            "|---|" + "---:|" * len(_RAMPS)]
+    for r in study.rows:
+        ramp.append(f"| {r.method} | " + " | ".join(
+            _cell(r.values[k], r.intervals.get(k), 4) for k, _ in _RAMPS) + " |")
+    best = min((r for r in study.rows[1:]), key=lambda r: r.values["bias_stability_dph"],
+               default=None)
+    shape = []
+    if best is not None:
+        improved = [r.method for r in study.rows[1:]
+                    if r.intervals["improvement_pct"][0] > 0]
+        shape = [f"Shape beside Tao et al. 2019: every method there improves the bias "
+                 f"stability (40.5-61.2 %, IR-LSSVM best); here {len(improved)} of "
+                 f"{len(study.rows) - 1} improve it beyond the uncertainty "
+                 f"({', '.join(improved) or 'none'}), {best.method} best "
+                 f"({best.values['improvement_pct']:.1f} %). Their gyro is a laser gyro, ours "
+                 "a FOG: compare shapes, not digits."]
+    notes = _notes(study) + shape
+    return ("\n".join(lines) + "\n\n" + "\n".join(ramp) + "\n\n"
+            + "\n".join(f"- {n}" for n in notes) + "\n")
+
+
+def cycle_table_json(study, title: str = "") -> str:
+    """Every row with ``mae_dph``, ``std_dph``, ``rmse_dph``, ``bias_stability_dph``,
+    ``improvement_pct``, each with ``*_ci`` [low, high], the ramp statistics, the heading
+    RMSE and the paper's figure for the same method (null when it has none)."""
+    rows = []
+    for r in study.rows:
+        row = {"method": r.method}
+        for k in [m for m, _, _ in _METRICS] + [m for m, _ in _RAMPS]:
+            row[k] = _j(r.values[k])
+            lo, hi = r.intervals.get(k, (math.nan, math.nan))
+            row[f"{k}_ci"] = [_j(lo), _j(hi)]
+        row["heading_rmse_deg"] = _j(r.heading_rmse_deg)
+        pub = _paper(r.method)
+        row["published_bias_stability_dph"] = pub[0] if pub else None
+        row["published_improvement_pct"] = pub[1] if pub else None
+        rows.append(row)
+    doc = {"title": title, "scenario": study.scenario.name, "protocol": "cycles",
+           "cycles_s": [list(sp) for sp in study.spans_s], "n_boot": study.n_boot,
+           "published": "Tao, Li, Zheng, Wu and Fu, Sensors 19(13), 2986 (2019), Tables 2-5",
+           "rows": rows, "notes": _notes(study)}
+    return json.dumps(doc, indent=2) + "\n"
+
+
+def write_cycle_study(study, out_dir, *, json_path=None, title: str = "") -> list[Path]:
+    """Write drift_table.md, .csv, .json and report.md into ``out_dir`` (and the JSON also
+    to ``json_path``), each atomically.  Returns the paths written."""
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    md = cycle_table_markdown(study)
+    js = cycle_table_json(study, title)
+    buf = io.StringIO()
+    rows = json.loads(js)["rows"]
+    w = csv.writer(buf, lineterminator="\n")
+    keys = [k for k in rows[0] if not k.endswith("_ci")]
+    cis = [k for k in rows[0] if k.endswith("_ci")]
+    w.writerow(keys + [f"{k}_{e}" for k in cis for e in ("low", "high")])
+    for r in rows:
+        w.writerow([("" if r[k] is None else r[k]) for k in keys]
+                   + [("" if v is None else v) for k in cis for v in r[k]])
+    paths = [out / "drift_table.md", out / "drift_table.csv", out / "drift_table.json",
+             out / "report.md"]
+    atomic_write_text(paths[0], md)
+    atomic_write_text(paths[1], buf.getvalue())
+    atomic_write_text(paths[2], js)
+    atomic_write_text(paths[3], f"# {title or 'Drift table of a temperature cycle'}\n\n" + md)
+    if json_path is not None:
+        atomic_write_text(json_path, js)
+        paths.append(Path(json_path))
+    return paths
