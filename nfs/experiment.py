@@ -17,14 +17,14 @@ import numpy as np
 
 import thermal
 
-from .effects import EffectContext, EffectInstance
+from .effects import EffectContext, EffectInstance, Geometry, apply_geometry, check_geometry
 from .effects.thermometer import THERMOMETERS
 from .errors import EffectError
 from .instrument import Instrument
 from .io.measurement import Run, RunMeta
 from .noise import gyro_noise_dph, white_noise
-from .sensors import (Schedule, axis_elevation_deg, earth_rate_along_axis_dph,
-                      thermometer_reading, turntable_motion)
+from .sensors import (Schedule, earth_rate_along_axis_dph, thermometer_reading,
+                      turntable_motion)
 from .variability import Variability, describe_units, start_up_state, unit_instrument
 
 __all__ = ["RunConditions", "SimulationResult", "simulate_run", "effect_context",
@@ -134,6 +134,9 @@ class SimulationResult:
     instrument: Instrument | None = None
     """The instrument simulated: the unit's draw of the instrument given to
     :func:`simulate_run` (that instrument itself without variability)."""
+    geometry: Geometry | None = None
+    """Where the sensors pointed: the table's true angle, the tilt, the gyro axis (after
+    the geometry effects)."""
 
     @property
     def drift_dph(self) -> np.ndarray:
@@ -148,7 +151,7 @@ def _streams(seed) -> dict[str, np.random.Generator]:
     """Independent random streams per sensor, so switching one effect or sensor off leaves
     the others' draws unchanged."""
     names = ("gyro", "acc_x", "acc_y", "fog_thermometer", "acc_x_thermometer",
-             "acc_y_thermometer", "aux")
+             "acc_y_thermometer", "aux", "turntable")  # new streams go last: the others keep
     seq = np.random.SeedSequence(seed)
     return {n: np.random.default_rng(s) for n, s in zip(names, seq.spawn(len(names)))}
 
@@ -259,6 +262,9 @@ def simulate_run(inst: Instrument, cond: RunConditions) -> SimulationResult:
     start-up's soak and the chamber wanders and cycles (:mod:`nfs.variability`).
     """
     _check_simulated_channels(inst)
+    tilt = inst.turntable
+    check_geometry(inst.effects, cond.schedule.positions_deg, tilt.tilt_north_deg,
+                   tilt.tilt_east_deg)
     t = cond.time_s
     fs = cond.sample_rate_hz
     rngs = _streams(cond.seed)
@@ -266,10 +272,13 @@ def simulate_run(inst: Instrument, cond: RunConditions) -> SimulationResult:
     if var is not None and var.per_unit:
         inst = unit_instrument(inst, var, cond.unit)
     theta, moving = cond.turntable(t)
-    azimuth = np.mod(cond.true_heading_deg + theta, 360.0)
     tilt = inst.turntable
-    elev_x = axis_elevation_deg(azimuth, tilt.tilt_north_deg, tilt.tilt_east_deg)
-    elev_y = axis_elevation_deg(azimuth + 90.0, tilt.tilt_north_deg, tilt.tilt_east_deg)
+    geom = apply_geometry(Geometry(
+        time_s=t, position_deg=theta, moving=moving, positions_deg=cond.schedule.positions_deg,
+        heading_deg=cond.true_heading_deg, rng=rngs["turntable"], theta_deg=theta,
+        tilt_north_deg=tilt.tilt_north_deg, tilt_east_deg=tilt.tilt_east_deg), inst.effects)
+    axes = geom.azimuth_elevation()
+    (_, elev_x), (_, elev_y), (azimuth, elev_gyro) = axes["x"], axes["y"], axes["gyro"]
 
     # 1. thermal network
     power, thermal_terms, stateful = thermal_power(inst, t, moving)
@@ -286,7 +295,7 @@ def simulate_run(inst: Instrument, cond: RunConditions) -> SimulationResult:
 
     # 2. aux channels and the effect context
     aux = _aux_channels(inst, th, fs, rngs["aux"])
-    earth = earth_rate_along_axis_dph(azimuth, elev_x, cond.latitude_deg)
+    earth = earth_rate_along_axis_dph(azimuth, elev_gyro, cond.latitude_deg)
     ctx = effect_context(inst, th, azimuth, earth, moving, aux)
 
     # 3. gyro: K0 * Earth rate + bias + effects + noise
@@ -345,7 +354,7 @@ def simulate_run(inst: Instrument, cond: RunConditions) -> SimulationResult:
     return SimulationResult(conditions=cond, thermal=th, context=ctx,
                             thermal_terms_w=thermal_terms, gyro_terms_dph=gyro_terms,
                             acc_terms_g=acc_terms, gyro_noise_dph=noise, run=run,
-                            instrument=inst)
+                            instrument=inst, geometry=geom)
 
 
 # --------------------------------------------------------------------------------------------
