@@ -378,11 +378,18 @@ class ScenarioResult:
 
 
 def northfind_runs(runs, settings=None) -> list:
-    """North-find each run with the scenario's settings (tilt correction, settle time)."""
+    """North-find each run with the scenario's settings (tilt correction, settle time).
+
+    A two-position schedule leaves the sign of psi + theta_a to a heading hint (a compass
+    in the field): a simulated run's own true heading serves as that hint.  It only picks
+    which of the two mirror-image solutions is returned, never moves the value, and is
+    ignored by schedules of three or more positions.
+    """
     from .northfind import north_find
     tilt = True if settings is None else settings.tilt_correction
     settle = 0.0 if settings is None else settings.settle_s
-    return [north_find(run, tilt_correction=tilt, settle_s=settle) for run in runs]
+    return [north_find(run, tilt_correction=tilt, settle_s=settle,
+                       heading_hint_deg=run.meta.true_heading_deg) for run in runs]
 
 
 def run_scenario(scenario, *, progress: Callable[[int, int, str], None] | None = None
@@ -412,12 +419,20 @@ def stage_errors(result, settings) -> tuple[np.ndarray, np.ndarray]:
 
 
 def floor_deg(scenario) -> float:
-    """White-noise floor of the scenario's schedule: sqrt(2/N) (ARW/sqrt(dwell)) / Omega_h."""
+    """White-noise floor of the scenario's schedule (:func:`~nfs.northfind.white_noise_floor_deg`):
+    sqrt(2/N) (ARW/sqrt(dwell)) / Omega_h, or for two positions 180 deg apart
+    (ARW/sqrt(dwell)) / (sqrt(2 v) Omega_h |sin(psi + theta_a)|) at the scenario's heading."""
     from .northfind import white_noise_floor_deg
-    return white_noise_floor_deg(scenario.instrument.gyro.arw_deg_per_rth_h,
-                                 scenario.schedule.dwell_s,
-                                 len(scenario.schedule.cycle_positions_deg),
-                                 scenario.latitude_deg)
+    sched = scenario.schedule
+    distinct = {round(float(p) % 360.0, 9) for p in sched.positions_deg}
+    if len(distinct) == 2:
+        return white_noise_floor_deg(scenario.instrument.gyro.arw_deg_per_rth_h,
+                                     sched.dwell_s, 2, scenario.latitude_deg,
+                                     heading_deg=scenario.true_heading_deg,
+                                     first_position_deg=sched.positions_deg[0],
+                                     visits=len(sched.cycle_positions_deg) // 2)
+    return white_noise_floor_deg(scenario.instrument.gyro.arw_deg_per_rth_h, sched.dwell_s,
+                                 len(sched.cycle_positions_deg), scenario.latitude_deg)
 
 
 def uncompensated_table(res: ScenarioResult):
@@ -432,6 +447,11 @@ def uncompensated_table(res: ScenarioResult):
     n_t = len(sc.start_temperatures_c)
     fl = floor_deg(sc)
     nf = sc.northfind
+    two = len({round(float(p) % 360.0, 9) for p in sc.schedule.positions_deg}) == 2
+    floor_note = ("(ARW / sqrt(dwell)) / (sqrt(N) Omega_ie cos L |sin(psi + theta_1)|) at the "
+                  "true heading (two positions; the true heading is the hint that picks the "
+                  "sign of each cycle's solution)" if two else
+                  "sqrt(2/N) (ARW / sqrt(dwell)) / (Omega_ie cos L)")
     notes = (
         f"Heading RMSE [deg], {sc.repeats} run(s) per start temperature, seed {sc.seed}, "
         f"latitude {sc.latitude_deg:g} deg, {len(sc.schedule.cycle_positions_deg)}-position "
@@ -439,7 +459,7 @@ def uncompensated_table(res: ScenarioResult):
         f"move {sc.schedule.move_s:g} s.",
         f"before: start-up stage (cycles ending within {nf.startup_end_s:g} s), uncompensated; "
         f"stable: cycles starting after {nf.stable_start_s:g} s; floor: white-noise limit "
-        f"sqrt(2/N) (ARW / sqrt(dwell)) / (Omega_ie cos L).",
+        f"{floor_note}.",
     )
     var = sc.variability
     if sc.units > 1 or var.active:

@@ -182,11 +182,13 @@ def apply_geometry(geom: Geometry, effects) -> Geometry:
 def check_geometry(effects, positions_deg, tilt_north_deg: float,
                    tilt_east_deg: float) -> None:
     """The checks of the geometry effects that need the schedule or the turntable, before
-    any work: EffectError with a one-line message naming the effect."""
+    any work: EffectError with a one-line message naming the effect.  ``positions_deg``
+    None: no schedule to check against yet (an instrument file alone)."""
     for e in effects:
         if not isinstance(e, EffectInstance) or e.spec.kind != "geometry":
             continue
-        if e.name == "indexing_error" and len(e.params["offsets_deg"]) != len(positions_deg):
+        if (e.name == "indexing_error" and positions_deg is not None
+                and len(e.params["offsets_deg"]) != len(positions_deg)):
             raise EffectError(
                 f"effect 'indexing_error': offsets_deg has {len(e.params['offsets_deg'])} "
                 f"value(s), the schedule has {len(positions_deg)} position(s) "

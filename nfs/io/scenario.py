@@ -19,7 +19,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from ..effects import load_effects_file
+from ..effects import check_geometry, load_effects_file
 from ..errors import EffectError, NfsError, ScenarioError
 from ..instrument import Instrument, _check_effect_targets, load_instrument, parse_effects
 from ..parameters import ParameterError, expand_paths
@@ -347,6 +347,18 @@ def _compensation(tbl: dict, file, units: int = 1) -> Any:
         n_jobs=n_jobs)
 
 
+def _check_geometry(inst: Instrument, schedule: Schedule, file, own_effects: bool) -> None:
+    """The geometry effects against the schedule and the turntable (one offset of
+    indexing_error per position, one platform tilt), before any run is simulated."""
+    for i, e in enumerate(inst.effects):
+        try:
+            check_geometry([e], schedule.positions_deg, inst.turntable.tilt_north_deg,
+                           inst.turntable.tilt_east_deg)
+        except EffectError as exc:
+            where = f"effects[{i}]" if own_effects else f"instrument (effects[{i}])"
+            raise ScenarioError(str(exc), file=file, key=where) from None
+
+
 def load_scenario(path: str | Path | None = None) -> Scenario:
     """Read and check a scenario file (the built-in default when ``path`` is None)."""
     path = default_scenario_path() if path is None else Path(path)
@@ -387,6 +399,7 @@ def load_scenario(path: str | Path | None = None) -> Scenario:
         raise
     except NfsError as exc:
         raise ScenarioError(str(exc), file=f, key="schedule") from None
+    _check_geometry(inst, schedule, f, "effects" in d)
 
     nf = table(d, "northfind", "", f, {})
     check_keys(nf, _NORTHFIND, "northfind", f)
