@@ -17,14 +17,14 @@ import numpy as np
 
 import thermal
 
-from .effects import EffectContext, EffectInstance
+from .effects import EffectContext, EffectInstance, Geometry, apply_geometry, check_geometry
 from .effects.thermometer import THERMOMETERS
 from .errors import EffectError
 from .instrument import Instrument
 from .io.measurement import Run, RunMeta
 from .noise import gyro_noise_dph, white_noise
-from .sensors import (Schedule, axis_elevation_deg, earth_rate_along_axis_dph,
-                      thermometer_reading, turntable_motion)
+from .sensors import (Schedule, earth_rate_along_axis_dph, thermometer_reading,
+                      turntable_motion)
 from .variability import (Variability, describe_units, start_up_state, unit_instrument,
                           unpowered_network)
 
@@ -139,6 +139,9 @@ class SimulationResult:
     instrument: Instrument | None = None
     """The instrument simulated: the unit's draw of the instrument given to
     :func:`simulate_run` (that instrument itself without variability)."""
+    geometry: Geometry | None = None
+    """Where the sensors pointed: the table's true angle, the tilt, the gyro axis (after
+    the geometry effects)."""
 
     @property
     def drift_dph(self) -> np.ndarray:
@@ -153,7 +156,7 @@ def _streams(seed) -> dict[str, np.random.Generator]:
     """Independent random streams per sensor, so switching one effect or sensor off leaves
     the others' draws unchanged."""
     names = ("gyro", "acc_x", "acc_y", "fog_thermometer", "acc_x_thermometer",
-             "acc_y_thermometer", "aux")
+             "acc_y_thermometer", "aux", "turntable")  # new streams go last: the others keep
     seq = np.random.SeedSequence(seed)
     return {n: np.random.default_rng(s) for n, s in zip(names, seq.spawn(len(names)))}
 
@@ -267,6 +270,9 @@ def simulate_run(inst: Instrument, cond: RunConditions) -> SimulationResult:
     ``start_temperature_c`` the chamber's temperature at power-on, where it was soaked.
     """
     _check_simulated_channels(inst)
+    tilt = inst.turntable
+    check_geometry(inst.effects, cond.schedule.positions_deg, tilt.tilt_north_deg,
+                   tilt.tilt_east_deg)
     t = cond.time_s
     fs = cond.sample_rate_hz
     rngs = _streams(cond.seed)
@@ -274,10 +280,13 @@ def simulate_run(inst: Instrument, cond: RunConditions) -> SimulationResult:
     if var is not None and var.per_unit:
         inst = unit_instrument(inst, var, cond.unit)
     theta, moving = cond.turntable(t)
-    azimuth = np.mod(cond.true_heading_deg + theta, 360.0)
     tilt = inst.turntable
-    elev_x = axis_elevation_deg(azimuth, tilt.tilt_north_deg, tilt.tilt_east_deg)
-    elev_y = axis_elevation_deg(azimuth + 90.0, tilt.tilt_north_deg, tilt.tilt_east_deg)
+    geom = apply_geometry(Geometry(
+        time_s=t, position_deg=theta, moving=moving, positions_deg=cond.schedule.positions_deg,
+        heading_deg=cond.true_heading_deg, rng=rngs["turntable"], theta_deg=theta,
+        tilt_north_deg=tilt.tilt_north_deg, tilt_east_deg=tilt.tilt_east_deg), inst.effects)
+    axes = geom.azimuth_elevation()
+    (_, elev_x), (_, elev_y), (azimuth, elev_gyro) = axes["x"], axes["y"], axes["gyro"]
 
     # 1. thermal network: the unpowered soak of a chamber program, then the run
     power, thermal_terms, stateful = thermal_power(inst, t, moving)
@@ -303,7 +312,7 @@ def simulate_run(inst: Instrument, cond: RunConditions) -> SimulationResult:
 
     # 2. aux channels and the effect context
     aux = _aux_channels(inst, th, fs, rngs["aux"])
-    earth = earth_rate_along_axis_dph(azimuth, elev_x, cond.latitude_deg)
+    earth = earth_rate_along_axis_dph(azimuth, elev_gyro, cond.latitude_deg)
     ctx = effect_context(inst, th, azimuth, earth, moving, aux)
 
     # 3. gyro: K0 * Earth rate + bias + effects + noise
@@ -364,7 +373,7 @@ def simulate_run(inst: Instrument, cond: RunConditions) -> SimulationResult:
     return SimulationResult(conditions=cond, thermal=th, context=ctx,
                             thermal_terms_w=thermal_terms, gyro_terms_dph=gyro_terms,
                             acc_terms_g=acc_terms, gyro_noise_dph=noise, run=run,
-                            instrument=inst)
+                            instrument=inst, geometry=geom)
 
 
 # --------------------------------------------------------------------------------------------
@@ -388,11 +397,18 @@ class ScenarioResult:
 
 
 def northfind_runs(runs, settings=None) -> list:
-    """North-find each run with the scenario's settings (tilt correction, settle time)."""
+    """North-find each run with the scenario's settings (tilt correction, settle time).
+
+    A two-position schedule leaves the sign of psi + theta_a to a heading hint (a compass
+    in the field): a simulated run's own true heading serves as that hint.  It only picks
+    which of the two mirror-image solutions is returned, never moves the value, and is
+    ignored by schedules of three or more positions.
+    """
     from .northfind import north_find
     tilt = True if settings is None else settings.tilt_correction
     settle = 0.0 if settings is None else settings.settle_s
-    return [north_find(run, tilt_correction=tilt, settle_s=settle) for run in runs]
+    return [north_find(run, tilt_correction=tilt, settle_s=settle,
+                       heading_hint_deg=run.meta.true_heading_deg) for run in runs]
 
 
 def run_scenario(scenario, *, progress: Callable[[int, int, str], None] | None = None
@@ -422,12 +438,20 @@ def stage_errors(result, settings) -> tuple[np.ndarray, np.ndarray]:
 
 
 def floor_deg(scenario) -> float:
-    """White-noise floor of the scenario's schedule: sqrt(2/N) (ARW/sqrt(dwell)) / Omega_h."""
+    """White-noise floor of the scenario's schedule (:func:`~nfs.northfind.white_noise_floor_deg`):
+    sqrt(2/N) (ARW/sqrt(dwell)) / Omega_h, or for two positions 180 deg apart
+    (ARW/sqrt(dwell)) / (sqrt(2 v) Omega_h |sin(psi + theta_a)|) at the scenario's heading."""
     from .northfind import white_noise_floor_deg
-    return white_noise_floor_deg(scenario.instrument.gyro.arw_deg_per_rth_h,
-                                 scenario.schedule.dwell_s,
-                                 len(scenario.schedule.cycle_positions_deg),
-                                 scenario.latitude_deg)
+    sched = scenario.schedule
+    distinct = {round(float(p) % 360.0, 9) for p in sched.positions_deg}
+    if len(distinct) == 2:
+        return white_noise_floor_deg(scenario.instrument.gyro.arw_deg_per_rth_h,
+                                     sched.dwell_s, 2, scenario.latitude_deg,
+                                     heading_deg=scenario.true_heading_deg,
+                                     first_position_deg=sched.positions_deg[0],
+                                     visits=len(sched.cycle_positions_deg) // 2)
+    return white_noise_floor_deg(scenario.instrument.gyro.arw_deg_per_rth_h, sched.dwell_s,
+                                 len(sched.cycle_positions_deg), scenario.latitude_deg)
 
 
 def uncompensated_table(res: ScenarioResult):
@@ -442,6 +466,11 @@ def uncompensated_table(res: ScenarioResult):
     n_t = len(sc.start_temperatures_c)
     fl = floor_deg(sc)
     nf = sc.northfind
+    two = len({round(float(p) % 360.0, 9) for p in sc.schedule.positions_deg}) == 2
+    floor_note = ("(ARW / sqrt(dwell)) / (sqrt(N) Omega_ie cos L |sin(psi + theta_1)|) at the "
+                  "true heading (two positions; the true heading is the hint that picks the "
+                  "sign of each cycle's solution)" if two else
+                  "sqrt(2/N) (ARW / sqrt(dwell)) / (Omega_ie cos L)")
     notes = (
         f"Heading RMSE [deg], {sc.repeats} run(s) per start temperature, seed {sc.seed}, "
         f"latitude {sc.latitude_deg:g} deg, {len(sc.schedule.cycle_positions_deg)}-position "
@@ -449,7 +478,7 @@ def uncompensated_table(res: ScenarioResult):
         f"move {sc.schedule.move_s:g} s.",
         f"before: start-up stage (cycles ending within {nf.startup_end_s:g} s), uncompensated; "
         f"stable: cycles starting after {nf.stable_start_s:g} s; floor: white-noise limit "
-        f"sqrt(2/N) (ARW / sqrt(dwell)) / (Omega_ie cos L).",
+        f"{floor_note}.",
     )
     var = sc.variability
     if sc.units > 1 or var.active:

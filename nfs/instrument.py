@@ -16,7 +16,7 @@ from typing import Any
 from thermal import Link, Network, Node
 
 from .constants import T_REF_C
-from .effects import EffectInstance, make_effect
+from .effects import EffectInstance, check_geometry, make_effect
 from .effects.thermometer import THERMOMETERS
 from .errors import EffectError, ScenarioError, ThermalError
 from .io.tomlio import (check_keys, dumps_toml, load_toml, number, string, table)
@@ -345,6 +345,13 @@ def _check_effect_targets(inst: Instrument, file: Any) -> None:
     aux_names = [a.name for a in inst.aux]
     for i, e in enumerate(inst.effects):
         where = f"effects[{i}] ({e.name})"
+        try:
+            check_geometry([e], None, inst.turntable.tilt_north_deg,
+                           inst.turntable.tilt_east_deg)
+        except EffectError as exc:
+            if file is None:
+                raise
+            raise ScenarioError(str(exc), file=file, key=where) from None
         for p in e.spec.parameters:
             v = e.params.get(p.name)
             if v is None or p.type is not str:

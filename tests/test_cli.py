@@ -85,6 +85,9 @@ def test_preset_and_effects(cli):
     assert code == 0 and "[thermal.nodes.housing]" in out
     code, out, _ = cli("effects")
     assert code == 0 and "shupe_product (gyro)" in out
+    for name in ("indexing_error", "axis_misalignment", "tilt_exact"):
+        assert f"{name} (geometry)" in out
+    assert "parameters: offsets_deg [deg], sigma_deg [deg]" in out
     code, out, _ = cli("preset", "startup_7temps")
     assert code == 0 and out == default_scenario_path().read_text()
     code, out, _ = cli("preset")
@@ -129,6 +132,12 @@ def test_init_writes_a_starter_that_runs(tmp_path, cli):
     (lambda s: s + "[[effects]]\nname = 'heat_source'\nnode = 'attic'\npower = 1.0\n",
      ["unknown node 'attic'"]),
     (lambda s: s + "[[effects]]\nname = 'shupe_rate'\n", ["needs parameter 'k_s'"]),
+    (lambda s: s + "[[effects]]\nname = 'indexing_error'\noffsets_deg = [0.1, 0.2]\n",
+     ["effects[0]", "offsets_deg has 2 value(s), the schedule has 4 position(s)"]),
+    (lambda s: s + "[[effects]]\nname = 'tilt_exact'\npitch_deg = 4.0\nroll_deg = 3.5\n",
+     ["effects[0]", "exceeds 5 deg"]),
+    (lambda s: s + "[[effects]]\nname = 'tilt_exact'\npitch_deg = 1.0\nroll_deg = 0.0\n",
+     ["effects[0]", "the platform tilt is given twice", "tilt_north_deg = 0.02"]),
     (lambda s: s + "[schedule\n", ["TOML syntax error"]),
     (lambda s: s + "[compensation]\nfeatures_mode = 'live'\n",
      ["key 'compensation.features_mode'",

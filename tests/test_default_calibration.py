@@ -30,6 +30,7 @@ import pytest
 from nfs.diagnose.compare import noise_free
 from nfs.experiment import northfind_runs, run_scenario, simulate_run, stage_errors
 from nfs.experiment import uncompensated_table
+from nfs.northfind import tilt_model_error_deg
 from nfs.io.scenario import load_scenario
 
 
@@ -92,15 +93,21 @@ def _startup_rmse_alone(inst, names, cond, settings):
 
 def test_startup_error_is_shupe_type_when_cold():
     # The nominal unit (soaked exactly at T0, no unit scatter) without sensor noise: every
-    # heading error comes from the effects switched on, so a zero-effect run gives 0 exactly
+    # heading error comes from the effects switched on, so a zero-effect run gives only the
+    # geometry's own error (the first-order tilt model against exact levelling:
+    # budget.tilt_model_error_deg, 2.5e-6 deg at this tilt, third-order remainder ~1e-9)
     # and each effect's share is its own run.
     sc = load_scenario().nominal()
     inst = noise_free(sc.instrument)
     assert any(e.name in SHUPE_TYPE for e in inst.effects)
+    tilt = inst.turntable
+    geometry = abs(tilt_model_error_deg(tilt.tilt_north_deg, tilt.tilt_east_deg,
+                                        sc.true_heading_deg, 4))
     for cond in sc.conditions():
         if cond.start_temperature_c >= 0:
             continue
-        assert _startup_rmse_alone(inst, (), cond, sc.northfind) < 1e-9
+        assert _startup_rmse_alone(inst, (), cond, sc.northfind) == pytest.approx(
+            geometry, abs=1e-8)
         bias = _startup_rmse_alone(inst, ("bias_temperature",), cond, sc.northfind)
         shupe = _startup_rmse_alone(inst, SHUPE_TYPE, cond, sc.northfind)
         assert shupe > 2.0 * bias, (cond.start_temperature_c, shupe, bias)

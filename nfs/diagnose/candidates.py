@@ -162,7 +162,10 @@ def candidates(inst: Instrument, runs: Sequence[Run]) -> list[Candidate]:
             if (name, target) in present:
                 continue
             reason = ""
-            if missing:
+            if spec.kind == "geometry":
+                reason = ("a geometry effect: it moves the sensor axes, which the drift and "
+                          "thermal fits do not model")
+            elif missing:
                 reason = "no start value for " + ", ".join(missing)
             elif not coefs:
                 reason = "no linear coefficient to fit"

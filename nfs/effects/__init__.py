@@ -4,8 +4,9 @@ from .context import EffectContext
 from .registry import (KINDS, EffectInstance, EffectSpec, Parameter, available_effects,
                        get_effect, load_effects_file, make_effect, register_effect)
 from . import accelerometer, gyro, thermal, thermometer  # noqa: F401  (registers built-ins)
+from .geometry import Geometry, apply_geometry, check_geometry
 
 __all__ = [
     "KINDS", "EffectContext", "EffectInstance", "EffectSpec", "Parameter",
-    "available_effects", "get_effect", "load_effects_file", "make_effect", "register_effect",
+    "Geometry", "apply_geometry", "check_geometry", "available_effects", "get_effect", "load_effects_file", "make_effect", "register_effect",
 ]

@@ -28,6 +28,10 @@ Kinds and call signatures
     ``state_dependent``, else once with arrays.
 ``thermometer``
     ``f(reading_c, time_s, **params) -> ndarray`` transforms one thermometer reading.
+``geometry``
+    ``f(geom: Geometry, **params) -> Geometry`` changes where the sensors point (the
+    turntable's true angle, the platform tilt, the gyro's input axis): applied before the
+    Earth-rate and gravity projections (:mod:`nfs.effects.geometry`).
 ``null``
     contributes nothing (the explicit null effect, for ablation).
 """
@@ -56,7 +60,7 @@ __all__ = [
 ]
 
 #: The kinds of effect, i.e. which part of the instrument an effect acts on.
-KINDS = ("gyro", "accelerometer", "thermal", "thermometer", "null")
+KINDS = ("gyro", "accelerometer", "thermal", "thermometer", "geometry", "null")
 
 ENTRY_POINT_GROUP = "nfs.effects"
 
@@ -74,7 +78,8 @@ class Parameter:
     default: Any = None
     """Default value; ``None`` means required (unless ``optional``)."""
     type: type = float
-    """``float`` for numbers, ``str`` for names (nodes, channels, axes)."""
+    """``float`` for numbers, ``str`` for names (nodes, channels, axes), ``tuple`` for a list
+    of numbers (one per turntable position, say; ``bounds`` apply to each)."""
     optional: bool = False
     """True when ``None`` is a legal value (the effect then uses its own default target)."""
     shape: bool = False
@@ -109,6 +114,9 @@ class EffectSpec:
     channel), or None."""
     state_dependent: bool = False
     """Thermal effects only: True when the power depends on the node temperature."""
+    check: Callable[[dict[str, Any]], None] | None = None
+    """Checks the resolved parameters together (a bound on a combination of them) and
+    raises EffectError with a one-line message; None: the per-parameter checks suffice."""
 
     @property
     def summary(self) -> str:
@@ -156,12 +164,35 @@ class EffectSpec:
                 elif p.type is str and not isinstance(value, str):
                     raise EffectError(f"{prefix}effect '{self.name}' parameter '{p.name}' "
                                       f"must be a name (string), got {value!r}")
+                elif p.type is tuple:
+                    value = self._number_list(p, value, prefix)
                 out[p.name] = value
             elif p.required:
                 raise EffectError(f"{prefix}effect '{self.name}' needs parameter '{p.name}' "
                                   f"[{p.unit}] ({p.description})")
             else:
                 out[p.name] = p.default
+        if self.check is not None:
+            try:
+                self.check(out)
+            except EffectError as exc:
+                raise EffectError(f"{prefix}effect '{self.name}': {exc}") from None
+        return out
+
+    def _number_list(self, p: Parameter, value: Any, prefix: str) -> tuple[float, ...]:
+        """A list of numbers as a tuple of floats, each inside ``p.bounds``."""
+        if not isinstance(value, (list, tuple)) or any(
+                isinstance(v, bool) or not isinstance(v, (int, float)) for v in value):
+            raise EffectError(f"{prefix}effect '{self.name}' parameter '{p.name}' must be a "
+                              f"list of numbers [{p.unit}], got {value!r}")
+        out = tuple(float(v) for v in value)
+        if p.bounds is not None:
+            lo, hi = p.bounds
+            for i, v in enumerate(out):
+                if not lo <= v <= hi:
+                    raise EffectError(
+                        f"{prefix}effect '{self.name}' parameter '{p.name}[{i}]' = {v:g} "
+                        f"[{p.unit}] is outside [{lo:.6g}, {hi:.6g}] ({p.description})")
         return out
 
 
@@ -192,7 +223,8 @@ class EffectInstance:
     def to_dict(self) -> dict[str, Any]:
         """The scenario-file form: ``{"name": ..., **params}`` without None values."""
         out: dict[str, Any] = {"name": self.name}
-        out.update({k: v for k, v in self.params.items() if v is not None})
+        out.update({k: list(v) if isinstance(v, tuple) else v
+                    for k, v in self.params.items() if v is not None})
         return out
 
 
@@ -202,6 +234,7 @@ _entry_points_loaded = False
 
 def register_effect(name: str, *, kind: str, parameters: list[Parameter] | tuple = (),
                     target: str | None = None, state_dependent: bool = False,
+                    check: Callable[[dict[str, Any]], None] | None = None,
                     replace: bool = False) -> Callable[[Callable], Callable]:
     """Decorator that registers ``function`` under ``name``.
 
@@ -217,6 +250,8 @@ def register_effect(name: str, *, kind: str, parameters: list[Parameter] | tuple
         Name of the parameter that says where the effect acts.
     state_dependent : bool
         Thermal effects: the power depends on the node temperature (evaluated per sample).
+    check : callable, optional
+        ``check(params)`` raises EffectError when the parameters are unphysical together.
     replace : bool
         Allow re-registering an existing name (for reloading a user's file).
     """
@@ -235,7 +270,7 @@ def register_effect(name: str, *, kind: str, parameters: list[Parameter] | tuple
             raise EffectError(f"an effect named '{name}' is registered already")
         _REGISTRY[name] = EffectSpec(name=name, kind=kind, function=function,
                                      parameters=params, target=target,
-                                     state_dependent=state_dependent)
+                                     state_dependent=state_dependent, check=check)
         return function
 
     return decorator

@@ -42,7 +42,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from ..effects import load_effects_file
+from ..effects import check_geometry, load_effects_file
 from ..errors import EffectError, NfsError, ScenarioError
 from ..instrument import (Instrument, _aux, _check_effect_targets, load_instrument,
                           parse_effects)
@@ -483,6 +483,18 @@ def _inherited(path: Path, d: dict, chain: tuple[Path, ...]) -> tuple[dict, dict
     return here, _merged(default, here)
 
 
+def _check_geometry(inst: Instrument, schedule: Schedule, file, own_effects: bool) -> None:
+    """The geometry effects against the schedule and the turntable (one offset of
+    indexing_error per position, one platform tilt), before any run is simulated."""
+    for i, e in enumerate(inst.effects):
+        try:
+            check_geometry([e], schedule.positions_deg, inst.turntable.tilt_north_deg,
+                           inst.turntable.tilt_east_deg)
+        except EffectError as exc:
+            where = f"effects[{i}]" if own_effects else f"instrument (effects[{i}])"
+            raise ScenarioError(str(exc), file=file, key=where) from None
+
+
 def load_scenario(path: str | Path | None = None, *, _chain: tuple[Path, ...] = ()
                   ) -> Scenario:
     """Read and check a scenario file (the built-in default when ``path`` is None), with
@@ -540,6 +552,7 @@ def load_scenario(path: str | Path | None = None, *, _chain: tuple[Path, ...] = 
         raise
     except NfsError as exc:
         raise ScenarioError(str(exc), file=f, key="schedule") from None
+    _check_geometry(inst, schedule, f, "effects" in d)
 
     nf = table(d, "northfind", "", f, {})
     check_keys(nf, _NORTHFIND, "northfind", f)

@@ -3,13 +3,15 @@
 - :mod:`~nfs.northfind.solve`: heading from the mean rates of one cycle (least squares, the
   two-position method) and tilt correction;
 - :mod:`~nfs.northfind.segment`: dwells and cycles of a run;
+- :mod:`~nfs.northfind.level`: exact levelling with both accelerometers;
 - :mod:`~nfs.northfind.heading`: north-find a whole run and score the heading by stage;
 - :mod:`~nfs.northfind.budget`: the error budget in closed form;
 - :mod:`~nfs.northfind.synthetic`: an ideal run from the section 5 rate model, for checks.
 """
 
-from nfs.northfind.budget import (east_tilt_error_deg, linear_drift_error_deg,
-                                  rate_error_heading_deg, white_noise_floor_deg)
+from nfs.northfind.budget import (east_tilt_error_deg, indexing_error_deg,
+                                  linear_drift_error_deg, rate_error_heading_deg,
+                                  tilt_model_error_deg, white_noise_floor_deg)
 from nfs.northfind.heading import NorthFindResult, StageRMSE, heading_rmse, north_find
 from nfs.northfind.segment import Cycle, Dwell, find_dwells, segment_cycles
 from nfs.northfind.solve import (HeadingSolution, solve_heading, tilt_correct, wrap_deg_180,
@@ -34,5 +36,7 @@ __all__ = [
     "rate_error_heading_deg",
     "linear_drift_error_deg",
     "east_tilt_error_deg",
+    "indexing_error_deg",
+    "tilt_model_error_deg",
     "synthetic_run",
 ]

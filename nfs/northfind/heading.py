@@ -15,6 +15,7 @@ import numpy as np
 from nfs.errors import MeasurementError, NfsError
 from nfs.io.measurement import Run
 from nfs.northfind.segment import Cycle, dwell_samples, find_dwells, segment_cycles
+from nfs.northfind.level import LEVEL_UP, gravity_in_table_frame, level_heading, level_two_position
 from nfs.northfind.solve import (_distinct_angles, _solve_stack, _vertical_rate_removed,
                                  solve_heading, wrap_deg_180, wrap_deg_360)
 
@@ -45,7 +46,8 @@ class NorthFindResult:
     """heading_deg - true_heading_deg wrapped to [-180, 180) [deg]; NaN when the true
     heading is unknown."""
     bias_dph: np.ndarray
-    """Gyro bias b fitted in each cycle [deg/h]."""
+    """Gyro bias b fitted in each cycle [deg/h] (with tilt correction, less the vertical
+    Earth rate of the x accelerometer's constant reading: :mod:`nfs.northfind.level`)."""
     horizontal_rate_dph: np.ndarray
     """Horizontal Earth rate sqrt(X^2 + Y^2) fitted in each cycle [deg/h]."""
     residual_dph: np.ndarray
@@ -65,6 +67,10 @@ class NorthFindResult:
     """Whether the rates were tilt-corrected."""
     ambiguous: bool = False
     """True when two-position cycles left the sign of psi unresolved (see solve_heading)."""
+    up_table: np.ndarray | None = None
+    """U_T, the up unit vector in the table frame (x_T, y_T at theta = 0, z_T down) of each
+    cycle, (n_cycles, 3), fitted from both accelerometers (:mod:`nfs.northfind.level`);
+    (0, 0, -1) when tilt correction is off."""
 
     @property
     def n_cycles(self) -> int:
@@ -96,23 +102,29 @@ def north_find(run: Run, *, tilt_correction: bool = True, settle_s: float = 0.0,
                position_tol_deg: float = 0.5) -> NorthFindResult:
     """North-find every complete cycle of a run (physics.md section 5).
 
-    Per dwell: w_k = mean gyro rate, sin e_k = mean acc_x_g. Per cycle: least squares of
+    Per dwell: the mean gyro rate w_k and the mean readings of both accelerometers. Per
+    cycle: least squares of w_k - Omega_ie sin L f_x,k = X cos theta_k - Y sin theta_k + b,
+    and of the accelerometers for the up vector U_T in the table frame; the heading is
+    levelled exactly with U_T (:mod:`nfs.northfind.level`: any tilt, to rounding, for a
+    rigid table).
+    Without tilt correction the table is taken as level: psi = atan2(Y, X).  Two positions
+    180 deg apart: the two-position method of :func:`~nfs.northfind.level.level_two_position`
+    (latitude known; the sign of psi + theta_a from ``heading_hint_deg``, else the cycles
+    are marked ambiguous).
 
-        w_k - Omega_ie sin L sin e_k = cos e_k (X cos theta_k - Y sin theta_k) + b
-
-    (the tilt correction w_k' = (w_k - Omega_ie sin L sin e_k) / cos e_k of
-    :func:`tilt_correct`, written so that the bias b is not rescaled by 1 / cos e_k; exact
-    for the model of physics.md section 5), psi = atan2(Y, X). Without tilt correction:
-    w_k = X cos theta_k - Y sin theta_k + b.
+    Before exact levelling the fit was w_k - Omega_ie sin L f_x,k = cos e_k (X cos theta_k -
+    Y sin theta_k) + b with sin e_k = f_x,k (exact for physics.md section 4's first-order
+    tilt model); the two differ at second order in the tilt
+    (:func:`~nfs.northfind.budget.tilt_model_error_deg`).
 
     Parameters
     ----------
     run : Run
-        The run; uses ``time_s``, ``position_deg``, ``moving``, the gyro column and
-        ``acc_x_g``, and from the metadata ``latitude_deg``, ``positions_deg``, ``dwell_s``
+        The run; uses ``time_s``, ``position_deg``, ``moving``, the gyro column,
+        ``acc_x_g`` and ``acc_y_g``, and from the metadata ``latitude_deg``, ``positions_deg``, ``dwell_s``
         and ``true_heading_deg``.
     tilt_correction : bool
-        Correct each position with the x accelerometer.
+        Level with the accelerometers (else the table is taken as level).
     settle_s : float
         Time dropped at the start of every dwell [s].
     gyro_column : str
@@ -157,29 +169,33 @@ def north_find(run: Run, *, tilt_correction: bool = True, settle_s: float = 0.0,
     else:
         acc_x = np.full(shape, np.nan)
 
+    theta_rad = np.radians(theta)
     if tilt_correction:
-        y, cos_e = _vertical_rate_removed(rate, acc_x, meta.latitude_deg)
+        acc_y = _dwell_means(_column(run, "acc_y_g"), idx, owner, len(dwells)).reshape(shape)
+        up = gravity_in_table_frame(theta_rad, acc_x, acc_y)
+        y, _ = _vertical_rate_removed(rate, acc_x, meta.latitude_deg)
     else:
-        cos_e, y = np.ones(shape), rate
+        up, y = np.tile(LEVEL_UP, (n_cyc, 1)), rate
 
-    x_dph, y_dph, b_dph, omh, rms = (np.full(n_cyc, np.nan) for _ in range(5))
-    ok = np.all(np.isfinite(y), axis=1)
+    x_dph, y_dph, b_dph, omh, rms, psi = (np.full(n_cyc, np.nan) for _ in range(6))
+    ok = np.all(np.isfinite(y), axis=1) & np.all(np.isfinite(up), axis=1)
     ambiguous = False
-    if len(_distinct_angles(np.radians(theta[0]), math.radians(position_tol_deg))) >= 3:
+    distinct = _distinct_angles(theta_rad[0], math.radians(position_tol_deg))
+    if len(distinct) >= 3:
         if np.any(ok):
-            sol = _solve_stack(np.radians(theta[ok]), y[ok], cos_e[ok])
-            x_dph[ok], y_dph[ok], b_dph[ok], rms[ok] = sol
-            omh[ok] = np.hypot(x_dph[ok], y_dph[ok])
-        psi = np.degrees(np.arctan2(y_dph, x_dph))
-    else:  # two positions (or an error message from solve_heading)
-        psi = np.full(n_cyc, np.nan)
-        for k in np.flatnonzero(ok):
-            s = solve_heading(theta[k], y[k], cos_elevation=cos_e[k],
-                              latitude_deg=meta.latitude_deg, heading_hint_deg=heading_hint_deg,
-                              angle_tol_deg=position_tol_deg)
-            psi[k], x_dph[k], y_dph[k], b_dph[k] = s.psi_deg, s.X_dph, s.Y_dph, s.bias_dph
-            omh[k], rms[k] = s.horizontal_rate_dph, s.residual_dph
-            ambiguous |= s.ambiguous
+            x_dph[ok], y_dph[ok], b_dph[ok], rms[ok] = _solve_stack(theta_rad[ok], y[ok])
+            psi[ok], omh[ok] = level_heading(x_dph[ok], y_dph[ok], up[ok])
+        psi = np.degrees(psi)
+    elif len(distinct) == 2 and abs(abs(math.remainder(distinct[1] - distinct[0], 2 * math.pi))
+                                    - math.pi) <= math.radians(position_tol_deg):
+        if np.any(ok):
+            p, omh[ok], b_dph[ok], rms[ok], ambiguous = level_two_position(
+                theta_rad[ok], y[ok], up[ok], meta.latitude_deg, heading_hint_deg)
+            psi[ok] = np.degrees(p)
+            x_dph[ok], y_dph[ok] = omh[ok] * np.cos(p), omh[ok] * np.sin(p)
+    else:  # the error message of solve_heading names what is missing
+        solve_heading(theta[0], rate[0], latitude_deg=meta.latitude_deg,
+                      angle_tol_deg=position_tol_deg)
     heading = wrap_deg_360(psi)
     true = meta.true_heading_deg
     error = (np.full(n_cyc, np.nan) if true is None
@@ -192,7 +208,8 @@ def north_find(run: Run, *, tilt_correction: bool = True, settle_s: float = 0.0,
         horizontal_rate_dph=_frozen(omh), residual_dph=_frozen(rms),
         theta_deg=_frozen(theta), rate_dph=_frozen(rate), acc_x_g=_frozen(acc_x),
         true_heading_deg=true, latitude_deg=float(meta.latitude_deg),
-        tilt_correction=bool(tilt_correction), ambiguous=bool(ambiguous))
+        tilt_correction=bool(tilt_correction), ambiguous=bool(ambiguous),
+        up_table=_frozen(up))
 
 
 @dataclass(frozen=True)

@@ -5,11 +5,14 @@ only the Earth-rate projection with turntable tilt, a constant bias, an optional
 b(t) and optional white noise. It is not the simulator (no thermal network, no named
 effects).
 
-Model, per dwell at turntable angle theta_k (A_k = psi + theta_k):
+Model, per dwell at turntable angle theta_k: the table is tilted exactly by the pitch
+alpha_N and the roll alpha_E (:func:`nfs.effects.geometry.tilt_matrix`), and the x axis,
+whose horizontal projection has the azimuth psi at theta = 0, has azimuth A_k and
+elevation e_k at theta_k (A_k = psi + theta_k and e_k = alpha_N cos A_k + alpha_E sin A_k
+to first order, physics.md section 4):
 
-    e_k   = alpha_N cos A_k + alpha_E sin A_k                  (elevation of x)
     gyro  = Omega_ie cos L cos A_k cos e_k + Omega_ie sin L sin e_k + b + drift(t) + noise
-    acc_x = sin e_k,   acc_y = sin(-alpha_N sin A_k + alpha_E cos A_k)   (elevation of y)
+    acc_x = sin e_k,   acc_y = sin(elevation of y)
 
 White noise has the standard deviation (ARW * 60) sqrt(fs) deg/h per sample (physics.md
 section 3). Samples while moving carry the Earth-rate projection at the interpolated angle
@@ -23,9 +26,10 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 
+from nfs.effects.geometry import Geometry
 from nfs.errors import NfsError
 from nfs.io.measurement import Run, RunMeta
-from nfs.sensors import axis_elevation_deg, earth_rate_along_axis_dph
+from nfs.sensors import earth_rate_along_axis_dph
 
 __all__ = ["synthetic_run"]
 
@@ -64,7 +68,8 @@ def synthetic_run(*, heading_deg: float, latitude_deg: float = 30.0,
     sample_rate_hz : float
         Sample rate fs [Hz].
     tilt_north_deg, tilt_east_deg : float
-        Turntable tilt alpha_N, alpha_E [deg].
+        Turntable tilt alpha_N (pitch, north edge up), alpha_E (roll, east edge up) [deg],
+        applied as an exact rotation.
     bias_dph : float
         Constant gyro bias b [deg/h].
     drift_dph : callable, optional
@@ -115,9 +120,12 @@ def synthetic_run(*, heading_deg: float, latitude_deg: float = 30.0,
     n = position.size
     time_s = np.arange(n) / fs
 
-    azimuth = heading_deg + position
-    e_x = axis_elevation_deg(azimuth, tilt_north_deg, tilt_east_deg)
-    e_y = axis_elevation_deg(azimuth + 90.0, tilt_north_deg, tilt_east_deg)
+    axes = Geometry(time_s=time_s, position_deg=position, moving=is_move,
+                    positions_deg=tuple(float(p) for p in sched), heading_deg=heading_deg,
+                    rng=np.random.default_rng(0), theta_deg=position,
+                    tilt_north_deg=tilt_north_deg, tilt_east_deg=tilt_east_deg,
+                    exact_tilt=True).azimuth_elevation()
+    (azimuth, e_x), (_, e_y) = axes["x"], axes["y"]
     gyro = earth_rate_along_axis_dph(azimuth, e_x, latitude_deg) + bias_dph
     if drift_dph is not None:
         gyro = gyro + np.asarray(drift_dph(time_s), dtype=float)

@@ -27,6 +27,9 @@ EFFECTS_MD = {
     "heat_source": ("thermal", {"node", "power"}),
     "thermometer_lag": ("thermometer", {"thermometer", "tau"}),
     "motor_heat": ("thermal", {"node", "power"}),
+    "axis_misalignment": ("geometry", {"delta_deg", "gamma_deg"}),
+    "indexing_error": ("geometry", {"offsets_deg", "sigma_deg"}),
+    "tilt_exact": ("geometry", {"pitch_deg", "roll_deg"}),
 }
 
 SHARED = Path(__file__).resolve().parents[2].parent / "shared"

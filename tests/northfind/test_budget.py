@@ -35,7 +35,9 @@ def test_rate_error_in_quadrature_turns_the_heading_by_delta_over_omega_h(psi):
 
 
 def test_floor_rejects_what_it_cannot_describe():
-    with pytest.raises(NfsError):
-        white_noise_floor_deg(0.0005, 150.0, 2, 30.0)
+    with pytest.raises(NfsError, match="depends on the heading"):
+        white_noise_floor_deg(0.0005, 150.0, 2, 30.0)   # two positions need the heading
+    with pytest.raises(NfsError, match="dwell_s > 0"):
+        white_noise_floor_deg(0.0005, 0.0, 4, 30.0)
     with pytest.raises(NfsError, match="horizontal Earth rate"):
         rate_error_heading_deg(0.001, 90.0)
