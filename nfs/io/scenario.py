@@ -11,6 +11,7 @@ lists the allowed ones.  See ``scenarios/startup_7temps.toml``.
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 from dataclasses import dataclass, field
 from importlib import resources
@@ -29,7 +30,7 @@ from ..variability import (CYCLING_SHAPES, NO_VARIABILITY, VARIABILITY_KEYS,
 from .tomlio import check_keys, load_toml, number, number_list, string, table
 
 __all__ = ["NorthFindSettings", "ChamberProfile", "Scenario", "load_scenario",
-           "default_scenario_path"]
+           "default_scenario_path", "OVERRIDE_KEYS"]
 
 _TOP = ("name", "description", "instrument", "seed", "start_temperatures_c", "repeats",
         "duration_s", "sample_rate_hz", "latitude_deg", "true_heading_deg", "effects_files",
@@ -43,6 +44,16 @@ _VARIABILITY = ("preset", *VARIABILITY_KEYS, "parameters")
 _SCHEDULE = ("positions_deg", "order", "dwell_s", "move_s")
 _NORTHFIND = ("startup_end_s", "stable_start_s", "tilt_correction", "settle_s")
 _CHAMBER = ("ripple_c", "ripple_period_s")
+
+#: The dotted scenario keys :func:`load_scenario` may override (every value key of the file
+#: but its name, description, seed and effect lists): what a sweep can put on an axis.
+OVERRIDE_KEYS: tuple[str, ...] = (
+    "instrument", "start_temperatures_c", "repeats", "duration_s", "sample_rate_hz",
+    "latitude_deg", "true_heading_deg", "units",
+    *(f"schedule.{k}" for k in _SCHEDULE), *(f"northfind.{k}" for k in _NORTHFIND),
+    *(f"chamber.{k}" for k in _CHAMBER),
+    *(f"variability.{k}" for k in _VARIABILITY if k != "parameters"),
+    *(f"compensation.{k}" for k in _COMPENSATION))
 
 
 @dataclass(frozen=True)
@@ -347,11 +358,36 @@ def _compensation(tbl: dict, file, units: int = 1) -> Any:
         n_jobs=n_jobs)
 
 
-def load_scenario(path: str | Path | None = None) -> Scenario:
-    """Read and check a scenario file (the built-in default when ``path`` is None)."""
+def _overridden(d: dict, overrides: dict[str, Any], file) -> dict:
+    """A copy of the parsed file ``d`` with each dotted key of ``overrides`` set (a table on
+    the way is created when the file leaves it out)."""
+    d = copy.deepcopy(d)
+    for dotted, value in overrides.items():
+        if dotted not in OVERRIDE_KEYS:
+            raise ScenarioError("cannot be overridden; keys that can: "
+                                + ", ".join(OVERRIDE_KEYS), file=file, key=dotted)
+        *heads, last = dotted.split(".")
+        tbl = d
+        for h in heads:
+            tbl = tbl.setdefault(h, {})
+            if not isinstance(tbl, dict):
+                raise ScenarioError(f"must be a table, got {tbl!r}", file=file, key=h)
+        tbl[last] = value
+    return d
+
+
+def load_scenario(path: str | Path | None = None,
+                  overrides: dict[str, Any] | None = None) -> Scenario:
+    """Read and check a scenario file (the built-in default when ``path`` is None).
+
+    ``overrides`` ({dotted key: value}, keys of :data:`OVERRIDE_KEYS`) replace values of the
+    file before it is checked, as if the file said so (``{"schedule.dwell_s": 60.0}``).
+    """
     path = default_scenario_path() if path is None else Path(path)
     d = load_toml(path)
     f = path
+    if overrides:
+        d = _overridden(d, overrides, f)
     check_keys(d, _TOP, "", f, required=("start_temperatures_c", "schedule"))
     base = path.parent
     files = d.get("effects_files", [])
