@@ -36,6 +36,7 @@ Everything is checked before any cell runs: every key, every axis value on the b
 
 from __future__ import annotations
 
+import difflib
 import itertools
 import json
 import math
@@ -231,11 +232,16 @@ def _axis(key: str, v: Any, sc: Scenario, scenario_path, file) -> Axis:
     if key in OVERRIDE_KEYS:
         target = "scenario"
     else:
+        valid = [p for p, _ in param_paths(sc.instrument)]
         try:
-            key = canonical_path(sc.instrument, key, {p for p, _ in param_paths(sc.instrument)})
-        except NfsError as exc:
-            raise SweepError(f"neither a scenario key ({', '.join(OVERRIDE_KEYS)}) nor an "
-                             f"instrument parameter: {exc}", file=file, key=name) from None
+            key = canonical_path(sc.instrument, key, set(valid))
+        except NfsError:
+            close = difflib.get_close_matches(key, [*OVERRIDE_KEYS, *valid], n=4, cutoff=0.6)
+            raise SweepError(
+                "neither a scenario key nor an instrument parameter"
+                + (f"; did you mean {' or '.join(close)}?" if close else "")
+                + " (scenario keys: nfs.io.scenario.OVERRIDE_KEYS; instrument parameters: "
+                "nfs.parameters.list_params)", file=file, key=name) from None
         target = "instrument"
     if isinstance(v, dict):
         check_keys(v, _RANGE, name, file, required=("low", "high"))

@@ -15,7 +15,8 @@ Columns, in order:
 - ``floor_deg``, the white-noise floor sqrt(2/N) (ARW / sqrt(dwell)) / (Omega_ie cos L) of
   the cell's schedule and latitude (:func:`nfs.northfind.white_noise_floor_deg`);
 - ``drift_mean_dph``, ``drift_std_dph``, ``drift_ptp_dph``: the simulated thermal drift (sum
-  of the gyro effect terms, no noise) over the stage's samples [deg/h];
+  of the gyro effect terms, no noise) over the stage's samples [deg/h], the same for every
+  method (the drift the compensator faces);
 - ``cell``: the cell's hash (its record is ``cells/<cell>.json``).
 
 Rows come in cell order (point-major, then seed), then run, method, stage.  Numbers are
@@ -60,7 +61,8 @@ def iter_rows(spec: SweepSpec, store: CellStore) -> Iterator[dict[str, Any]]:
         values = task.values
         axes = {a.key: values[a.key] for a in spec.axes}
         for run in rec["runs"]:
-            for method, res in run["methods"].items():
+            for method in sorted(run["methods"], key=lambda m: (m != "none", m)):
+                res = run["methods"][method]
                 tts = {}
                 if spec.spec_deg is not None:
                     a, b = run_time_to_spec_s(res["t_end_s"], res["error_deg"], spec.spec_deg,
