@@ -180,9 +180,13 @@ def _pair_figure(a: str, b: str, pairs, name: str):
     fig, ax = plt.subplots(figsize=(6.4, 4.2))
     x_of, cats = _positions([p[1] for p in pairs], False)
     lines: dict[tuple[str, str], dict[float, list]] = defaultdict(lambda: defaultdict(list))
+    order: dict[str, int] = {}
     for method, va, vb, r in pairs:
         lines[(method, _text(vb))][x_of(va)].append(r)
-    for i, ((method, vb), pts) in enumerate(sorted(lines.items())):
+        order.setdefault(_text(vb), len(order))          # the file's order of b's values
+    keys = sorted(lines, key=lambda m: (m[0] != "none", m[0], order[m[1]]))
+    for i, (method, vb) in enumerate(keys):
+        pts = lines[(method, vb)]
         xs = sorted(pts)
         label = f"{b} = {vb}" + ("" if method == "none" else f", {method}")
         ax.plot(xs, [_rms(pts[x]) for x in xs], "-o", ms=4, color=f"C{i}", label=label)
@@ -191,7 +195,7 @@ def _pair_figure(a: str, b: str, pairs, name: str):
     ax.set_yscale("log")
     ax.set_xlabel(axis_label(a))
     ax.set_ylabel("start-up heading RMSE [deg] (RMS over runs)")
-    ax.set_title(f"{name}: start-up heading RMSE against {a} by {b}", fontsize=10)
+    ax.set_title(f"{name}: start-up stage, by {b}", fontsize=10)
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=7)
     fig.tight_layout()
