@@ -18,6 +18,7 @@ from pathlib import Path
 from typing import Any
 
 import matplotlib
+import numpy as np
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
@@ -46,8 +47,14 @@ def axis_label(key: str) -> str:
 
 
 def _text(v: Any) -> str:
+    """A short label of an axis value (a long list by its ends and its length)."""
     t = json.dumps(v, separators=(",", ":")) if isinstance(v, (list, tuple)) else f"{v}"
-    return t if len(t) <= 24 else t[:21] + "..."
+    if len(t) <= 24:
+        return t
+    if isinstance(v, (list, tuple)):
+        return f"[{v[0]:g},{v[1]:g},...,{v[-1]:g}] ({len(v)})" if all(
+            isinstance(x, (int, float)) for x in v) else f"{t[:18]}... ({len(v)})"
+    return t[:21] + "..."
 
 
 def _slug(key: str) -> str:
@@ -55,8 +62,15 @@ def _slug(key: str) -> str:
 
 
 def _rms(values) -> float:
+    """RMS of the finite values (NaN if none)."""
     v = [x for x in values if isinstance(x, float) and math.isfinite(x)]
     return math.sqrt(sum(x * x for x in v) / len(v)) if v else math.nan
+
+
+def _median(values) -> float:
+    """Median of the values that are not NaN (``inf``, never within spec, counts)."""
+    v = [x for x in values if not math.isnan(x)]
+    return float(np.median(v)) if v else math.nan
 
 
 def _save(fig, path: Path) -> Path:
@@ -98,7 +112,7 @@ def _positions(values: list, drawn: bool):
 
 
 def _axis_figure(key: str, drawn: bool, series: dict, column: int, ylabel: str, title: str,
-                 floor: bool, log: bool):
+                 floor: bool, log: bool, agg=_rms, agg_name: str = "RMS"):
     fig, ax = plt.subplots(figsize=(6.4, 4.2))
     allv = [p[0] for pts in series.values() for p in pts]
     x_of, cats = _positions(allv, drawn)
@@ -116,8 +130,8 @@ def _axis_figure(key: str, drawn: bool, series: dict, column: int, ylabel: str, 
         label = f"{stage}, {'uncompensated' if method == 'none' else method}"
         if not drawn:
             gx = sorted(groups)
-            ax.plot(gx, [_rms(groups[x]) for x in gx], "-o", color=colour, ms=4,
-                    label=label + " (RMS over runs)")
+            ax.plot(gx, [agg(groups[x]) for x in gx], "-o", color=colour, ms=4,
+                    label=label + f" ({agg_name} over runs)")
         else:
             ax.plot([], [], ".", color=colour, label=label)
         if floor and not floor_done:
@@ -166,7 +180,7 @@ def write_figures(spec: SweepSpec, store: CellStore, folder: str | Path) -> list
             fig = _axis_figure(key, drawn[key], tts, 1, "time to spec [min after power-on]",
                                f"{name}: time until every cycle stays within "
                                f"{spec.spec_deg:g} deg\n({never} start-up(s) never within "
-                               f"spec, not drawn)", False, False)
+                               f"spec, not drawn)", False, False, _median, "median")
             out.append(_save(fig, folder / f"time_to_spec_vs_{_slug(key)}.png"))
     if pairs:
         a, b = spec.grid_axes[0].key, spec.grid_axes[1].key
