@@ -27,6 +27,7 @@ from pathlib import PurePath
 from typing import Any, Iterator
 
 import numpy as np
+from threadpoolctl import threadpool_limits
 
 import nfs
 
@@ -167,7 +168,17 @@ def _cycles(nf, settings) -> dict[str, Any]:
 
 
 def run_cell(task: CellTask) -> dict[str, Any]:
-    """Compute one cell; its record as plain JSON data (module docstring)."""
+    """Compute one cell; its record as plain JSON data (module docstring).
+
+    The cell runs on one BLAS thread: a sweep's parallelism is across cells, the matrices
+    of one start-up are small (threads there cost more than they give: 3x slower on a loaded
+    2-core machine), and one thread gives the same bits in every process.
+    """
+    with threadpool_limits(limits=1):
+        return _compute(task)
+
+
+def _compute(task: CellTask) -> dict[str, Any]:
     sc = load_scenario(task.scenario_path, dict(task.scenario_values))
     if task.instrument_values:
         sc = dataclasses.replace(sc, instrument=set_params(sc.instrument,
