@@ -30,7 +30,11 @@ import numpy as np
 
 from nfs.errors import NfsError
 
-__all__ = ["time_to_spec_s", "rolling_rmse_deg", "run_time_to_spec_s"]
+__all__ = ["time_to_spec_s", "rolling_rmse_deg", "run_time_to_spec_s", "DEFAULT_WINDOW"]
+
+#: Cycles of the rolling RMSE by default: five, as many as a stage RMSE of the default
+#: schedule rests on (the start-up hour holds five 640 s cycles).
+DEFAULT_WINDOW = 5
 
 
 def _check(spec_deg: float) -> None:
@@ -91,7 +95,7 @@ def rolling_rmse_deg(error_deg, window: int) -> np.ndarray:
     return out
 
 
-def run_time_to_spec_s(t_s, error_deg, spec_deg: float, window: int = 5
+def run_time_to_spec_s(t_s, error_deg, spec_deg: float, window: int = DEFAULT_WINDOW
                        ) -> tuple[float, float]:
     """(time to spec of every cycle, time to spec of the rolling RMSE over ``window``
     cycles) of one run [s]: :func:`time_to_spec_s` on the errors and on

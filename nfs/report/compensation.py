@@ -15,6 +15,7 @@ from ..denoise import separate_drift
 from ..io.atomic import atomic_write_bytes, atomic_write_text
 from .reference import (SEED004_TABLE1_SVR, SEED004_TABLE2_DRIFT_DPH,
                         SEED004_TABLE3_HEADING_RMSE_DEG, SEED004_TEMPERATURES_C)
+from .startup import plot_error_vs_time, time_to_spec_table
 from .table import HeadingTable, write_table
 
 __all__ = ["ShapeCheck", "shape_checks", "paper_comparison_markdown", "drift_table_markdown",
@@ -190,8 +191,11 @@ def write_study(study, out_dir, *, json_path=None, title: str = "") -> list[Path
     """Write every output of a compensation study into ``out_dir``.
 
     heading_rmse.{md,csv,json,png} (all rows), drift_residual.{md,csv,json},
-    svr_parameters.{md,csv,json}, drift_vs_compensated.png (the coldest test run) and
-    report.md (tables, figures, the comparison with seed 004).
+    svr_parameters.{md,csv,json}, drift_vs_compensated.png (the coldest test run),
+    time_to_spec.md (median time to spec by method and start temperature at the scenario's
+    ``northfind.spec_deg``), error_vs_time.png (heading error against time since power-on
+    per start temperature, uncompensated and the best row) and report.md (tables, figures,
+    the comparison with seed 004).
     """
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
@@ -225,6 +229,14 @@ def write_study(study, out_dir, *, json_path=None, title: str = "") -> list[Path
     cold = int(np.argmin([s.conditions.start_temperature_c for s in study.test.simulations]))
     atomic_write_bytes(out / "drift_vs_compensated.png",
                        _png(plot_drift_vs_compensated(study, cold)))
+    spec = study.test.scenario.northfind.spec_deg
+    every = {"before": study.test.northfind,
+             **{n: r.northfind for n, r in study.results.items()}}
+    tts_md = time_to_spec_table(study.test, every, spec).to_markdown()
+    atomic_write_text(out / "time_to_spec.md", tts_md)
+    shown = {k: every[k] for k in ("before", table.best) if k in every}
+    atomic_write_bytes(out / "error_vs_time.png", _png(plot_error_vs_time(study.test, shown,
+                                                                          spec)))
     report = "\n".join([
         f"# {title or 'Start-up heading RMSE with drift compensation'}", "",
         f"Features mode: **{mode}**: {FEATURE_MODE_NOTES[mode]}.", "",
@@ -233,9 +245,12 @@ def write_study(study, out_dir, *, json_path=None, title: str = "") -> list[Path
         "## Drift residual over the start-up stage (seed 004, Table 2)", "", drift_md,
         "## Tuned hyperparameters (seed 004, Table 1)", "", p_md_text,
         "![drift and its compensation](drift_vs_compensated.png)", "",
+        "## Time to spec (northfind.spec_deg of the scenario)", "", tts_md,
+        "![heading error against time since power-on](error_vs_time.png)", "",
         paper_comparison_markdown(table)])
     atomic_write_text(out / "report.md", report)
     return paths + [out / n for n in ("drift_residual.md", "drift_residual.csv",
                                       "drift_residual.json", "svr_parameters.md",
                                       "svr_parameters.csv", "svr_parameters.json",
-                                      "drift_vs_compensated.png", "report.md")]
+                                      "drift_vs_compensated.png", "time_to_spec.md",
+                                      "error_vs_time.png", "report.md")]

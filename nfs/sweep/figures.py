@@ -3,8 +3,8 @@
 One PNG per axis (and per start temperature when the scenario has several): every run's
 stage RMSE as a faint point, the RMS over the runs at each grid value as a line, one colour
 per method and stage, and the white-noise floor of the cell's schedule and latitude as a
-dashed line (it follows 1 / cos L on a latitude axis).  With a spec, a second PNG per axis
-gives the time to spec.  With two grid axes or more, one more figure sets the first against
+dashed line (it follows 1 / cos L on a latitude axis).  A second PNG per axis gives the
+time to spec of every run (the median over the runs as a line).  With two grid axes or more, one more figure sets the first against
 the second (start-up stage).  Matplotlib's Agg backend; written atomically.
 """
 
@@ -89,8 +89,7 @@ def _collect(spec: SweepSpec, store: CellStore, keys: list[str]):
         m = (row["method"], row["stage"])
         for k in keys:
             data[m][k].append((row[k], row["heading_rmse_deg"], row["floor_deg"],
-                               row.get("time_to_spec_s", math.nan),
-                               row.get("time_to_spec_rmse_s", math.nan)))
+                               row["time_to_spec_s"], row["time_to_spec_rmse_s"]))
         if len(grid) >= 2 and row["stage"] == "startup":
             pairs.append((row["method"], row[grid[0]], row[grid[1]], row["heading_rmse_deg"]))
     return data, pairs
@@ -117,7 +116,8 @@ def _axis_figure(key: str, drawn: bool, series: dict, column: int, ylabel: str, 
     allv = [p[0] for pts in series.values() for p in pts]
     x_of, cats = _positions(allv, drawn)
     floor_done = False
-    order = sorted(series, key=lambda m: (m[0] != "none", m[0], STAGES.index(m[1])))
+    order = sorted(series, key=lambda m: (m[0] != "none", m[0],
+                                          STAGES.index(m[1]) if m[1] else 0))
     for i, (method, stage) in enumerate(order):
         pts = series[(method, stage)]
         colour = f"C{i}"
@@ -127,7 +127,8 @@ def _axis_figure(key: str, drawn: bool, series: dict, column: int, ylabel: str, 
         groups: dict[float, list] = defaultdict(list)
         for x, y in zip(xs, ys):
             groups[x].append(y)
-        label = f"{stage}, {'uncompensated' if method == 'none' else method}"
+        label = ("uncompensated" if method == "none" else method)
+        label = f"{stage}, {label}" if stage else label
         if not drawn:
             gx = sorted(groups)
             ax.plot(gx, [agg(groups[x]) for x in gx], "-o", color=colour, ms=4,
@@ -173,15 +174,14 @@ def write_figures(spec: SweepSpec, store: CellStore, folder: str | Path) -> list
         fig = _axis_figure(key, drawn[key], series, 1, "heading RMSE [deg]",
                            f"{name}: heading RMSE against {key}", True, True)
         out.append(_save(fig, folder / f"heading_rmse_vs_{_slug(key)}.png"))
-        if spec.spec_deg is not None:
-            tts = {m: [(p[0], p[3] / 60.0) for p in pts]
-                   for m, pts in series.items() if m[1] == "startup"}
-            never = sum(1 for pts in tts.values() for p in pts if p[1] == math.inf)
-            fig = _axis_figure(key, drawn[key], tts, 1, "time to spec [min after power-on]",
-                               f"{name}: time until every cycle stays within "
-                               f"{spec.spec_deg:g} deg\n({never} start-up(s) never within "
-                               f"spec, not drawn)", False, False, _median, "median")
-            out.append(_save(fig, folder / f"time_to_spec_vs_{_slug(key)}.png"))
+        tts = {(m[0], ""): [(p[0], p[3] / 60.0) for p in pts]
+               for m, pts in series.items() if m[1] == "startup"}   # one value per run
+        never = sum(1 for pts in tts.values() for p in pts if p[1] == math.inf)
+        fig = _axis_figure(key, drawn[key], tts, 1, "time to spec [min after power-on]",
+                           f"{name}: time until every cycle stays within "
+                           f"{spec.spec_deg:g} deg\n({never} start-up(s) never within "
+                           f"spec, not drawn)", False, False, _median, "median")
+        out.append(_save(fig, folder / f"time_to_spec_vs_{_slug(key)}.png"))
     if pairs:
         a, b = spec.grid_axes[0].key, spec.grid_axes[1].key
         out.append(_save(_pair_figure(a, b, pairs, name), folder /

@@ -5,7 +5,8 @@ A sweep file (TOML)::
     scenario = "default"                # or a scenario file, relative to the sweep file
     seeds = [1, 2]                      # or { first = 0, count = 100 }
     method = "ls"                       # optional: also compensate with this method
-    spec_deg = 0.01                     # optional: heading spec of the time-to-spec columns
+    spec_deg = 0.01                     # optional: heading spec of the time to spec [deg]
+                                        # (default: the scenario's northfind.spec_deg)
     rmse_window_cycles = 5              # optional: cycles of the rolling RMSE (default 5)
 
     [axes]                              # grid axes: a list of values each
@@ -51,6 +52,7 @@ from ..compensate.methods import get_method
 from ..errors import InputError, NfsError
 from ..io.scenario import OVERRIDE_KEYS, Scenario, load_scenario
 from ..io.tomlio import check_keys, load_toml
+from ..northfind.spec import DEFAULT_WINDOW
 from ..parameters import canonical_path, param_paths, set_params
 
 __all__ = ["SweepError", "Axis", "Draws", "SweepSpec", "load_sweep", "sweep_from_dict"]
@@ -119,9 +121,9 @@ class SweepSpec:
     """The sampler of the drawn axes (None when every axis is a grid)."""
     method: str | None = None
     """Compensation method key (None: uncompensated only)."""
-    spec_deg: float | None = None
-    """Heading specification of the time-to-spec columns [deg] (None: no such columns)."""
-    rmse_window_cycles: int = 5
+    spec_deg: float = 0.02
+    """Heading specification of the time-to-spec columns [deg]."""
+    rmse_window_cycles: int = DEFAULT_WINDOW
     """Cycles of the rolling RMSE whose time to spec is reported."""
     description: str = ""
     """Free text."""
@@ -348,17 +350,18 @@ def sweep_from_dict(d: dict[str, Any], file: Path | None = None,
             raise SweepError(f"seed {train_seed} is the seed of the compensator's training "
                              f"start-ups (compensation.train_seed of the scenario): the "
                              f"test start-ups must differ from them", file=file, key="seeds")
-    spec_deg = d.get("spec_deg")
-    if spec_deg is not None and (not _number(spec_deg) or spec_deg <= 0):
+    spec_deg = d.get("spec_deg", sc.northfind.spec_deg)
+    if not _number(spec_deg) or spec_deg <= 0:
         raise SweepError(f"must be an angle > 0 [deg], got {spec_deg!r}", file=file,
                          key="spec_deg")
-    window = _positive_int(d.get("rmse_window_cycles", 5), file, "rmse_window_cycles")
+    window = _positive_int(d.get("rmse_window_cycles", DEFAULT_WINDOW), file,
+                           "rmse_window_cycles")
     desc = d.get("description", "")
     if not isinstance(desc, str):
         raise SweepError(f"must be a string, got {desc!r}", file=file, key="description")
     return SweepSpec(path=file, scenario_path=scenario_path, scenario=sc, axes=tuple(axes),
                      seeds=seeds, draws=draws, method=method,
-                     spec_deg=None if spec_deg is None else float(spec_deg),
+                     spec_deg=float(spec_deg),
                      rmse_window_cycles=window, description=desc)
 
 

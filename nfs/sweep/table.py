@@ -9,8 +9,8 @@ Columns, in order:
   (``startup``: cycles ending within ``northfind.startup_end_s``; ``stable``: cycles
   starting after ``northfind.stable_start_s``; as in the heading-RMSE table);
 - ``heading_rmse_deg`` of the stage's cycles and their number ``n_cycles``;
-- with a spec: ``time_to_spec_s`` and ``time_to_spec_rmse_s`` [s after power-on] of the whole
-  run (:mod:`nfs.northfind.spec`: ``inf`` never within spec up to the run's end, ``nan`` no
+- ``time_to_spec_s`` and ``time_to_spec_rmse_s`` [s after power-on] of the whole run at the
+  sweep's ``spec_deg`` (:mod:`nfs.northfind.spec`: ``inf`` never within spec up to the run's end, ``nan`` no
   error to judge), the same in both stage rows of a run and method;
 - ``floor_deg``, the white-noise floor sqrt(2/N) (ARW / sqrt(dwell)) / (Omega_ie cos L) of
   the cell's schedule and latitude (:func:`nfs.northfind.white_noise_floor_deg`);
@@ -48,8 +48,7 @@ def columns(spec: SweepSpec) -> list[str]:
     cols = [a.key for a in spec.axes]
     cols += ["seed", "run", "unit", "start_temperature_c", "method", "stage",
              "heading_rmse_deg", "n_cycles"]
-    if spec.spec_deg is not None:
-        cols += ["time_to_spec_s", "time_to_spec_rmse_s"]
+    cols += ["time_to_spec_s", "time_to_spec_rmse_s"]
     cols += ["floor_deg", "drift_mean_dph", "drift_std_dph", "drift_ptp_dph", "cell"]
     return cols
 
@@ -63,11 +62,9 @@ def iter_rows(spec: SweepSpec, store: CellStore) -> Iterator[dict[str, Any]]:
         for run in rec["runs"]:
             for method in sorted(run["methods"], key=lambda m: (m != "none", m)):
                 res = run["methods"][method]
-                tts = {}
-                if spec.spec_deg is not None:
-                    a, b = run_time_to_spec_s(res["t_end_s"], res["error_deg"], spec.spec_deg,
-                                              spec.rmse_window_cycles)
-                    tts = {"time_to_spec_s": a, "time_to_spec_rmse_s": b}
+                a, b = run_time_to_spec_s(res["t_end_s"], res["error_deg"], spec.spec_deg,
+                                          spec.rmse_window_cycles)
+                tts = {"time_to_spec_s": a, "time_to_spec_rmse_s": b}
                 for stage in STAGES:
                     drift = run["drift_dph"][stage]
                     yield {**axes, "seed": rec["seed"], "run": run["name"],
