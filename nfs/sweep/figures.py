@@ -75,7 +75,7 @@ def _median(values) -> float:
 
 def _save(fig, path: Path) -> Path:
     with atomic_output(path, "wb") as fh:
-        fig.savefig(fh, format="png", dpi=110)
+        fig.savefig(fh, format="png", dpi=110, metadata={"Software": None})
     plt.close(fig)
     return path
 
