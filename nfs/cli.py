@@ -584,9 +584,9 @@ def build_parser() -> argparse.ArgumentParser:
                                     "then DIR/results.csv (and results.parquet with pyarrow) "
                                     "and the summary figures are written.")
     sw.add_argument("sweep", help="sweep TOML file")
-    sw.add_argument("-o", "--output", required=True,
+    sw.add_argument("-o", "--output", required=True, metavar="DIR",
                     help="the sweep's folder (cells/, results.csv, figures); reused by a rerun")
-    sw.add_argument("--jobs", type=int, default=-1,
+    sw.add_argument("--jobs", type=int, default=-1, metavar="N",
                     help="local worker processes (default -1: every core; 1: this process)")
     sw.add_argument("--dask-local", type=int, default=None, metavar="N",
                     help="start a Dask LocalCluster of N worker processes and run there "
