@@ -184,6 +184,12 @@ def test_compensated_sweep_has_both_methods(tmp_path, short_scenario):
     rows = _rows(tmp_path / "out" / "results.csv")
     assert [r["method"] for r in rows[:4]] == ["none", "none", "ls", "ls"]
     assert len(rows) == 2 * 2 * 2 * 2            # latitudes x T0 x methods x stages
+    # the uncompensated rows are those of the same sweep without a method (same start-ups)
+    plain = type(spec)(**{**spec.__dict__, "method": None})
+    run_sweep(plain, tmp_path / "plain", executor=LocalExecutor(1), quiet=True, figures=False)
+    none = [(r["run"], r["stage"], r["heading_rmse_deg"]) for r in rows if r["method"] == "none"]
+    assert none == [(r["run"], r["stage"], r["heading_rmse_deg"])
+                    for r in _rows(tmp_path / "plain" / "results.csv")]
 
 
 def test_parquet_holds_the_csv_table(tmp_path, short_scenario):
@@ -197,3 +203,20 @@ def test_parquet_holds_the_csv_table(tmp_path, short_scenario):
     for t, r in zip(table, rows):
         assert repr(t["heading_rmse_deg"]) == r["heading_rmse_deg"]
         assert str(t["seed"]) == r["seed"] and t["stage"] == r["stage"]
+
+
+def test_canonical_form_is_exact_and_leaves_paths_out():
+    import dataclasses
+    from pathlib import Path
+
+    from nfs.sweep import canonical, digest
+
+    @dataclasses.dataclass(frozen=True)
+    class Thing:
+        x: float
+        path: Path | None = None
+
+    one = Thing(0.1, Path("/a"))
+    assert canonical(one)["x"] == "0.1" and "path" not in canonical(one)
+    assert digest(one) == digest(Thing(0.1, Path("/elsewhere")))
+    assert digest(one) != digest(Thing(np.nextafter(0.1, 1.0)))
