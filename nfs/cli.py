@@ -344,6 +344,27 @@ def _cmd_diagnose(args) -> int:
     return 0
 
 
+def _cmd_preset(args) -> int:
+    from .instrument import preset_names, preset_path
+    if args.name is None:
+        print("\n".join(preset_names()))
+        return 0
+    sys.stdout.write(preset_path(args.name).read_text(encoding="utf-8"))
+    return 0
+
+
+def _cmd_effects(args) -> int:
+    from .effects import available_effects, get_effect
+    for name in available_effects():
+        spec = get_effect(name)
+        params = ", ".join(f"{p.name} [{p.unit}]" if p.unit else p.name
+                           for p in spec.parameters)
+        print(f"{name} ({spec.kind}): {spec.summary}")
+        if params:
+            print(f"    parameters: {params}")
+    return 0
+
+
 def _cmd_sweep(args) -> int:
     from .sweep import CellStore, DaskExecutor, LocalExecutor, load_sweep, run_sweep
     spec = load_sweep(args.sweep)                   # the whole sweep checked before any work
@@ -363,27 +384,6 @@ def _cmd_sweep(args) -> int:
           f"from the store), {res.n_rows} rows")
     for p in res.paths:
         print(p)
-    return 0
-
-
-def _cmd_preset(args) -> int:
-    from .instrument import preset_names, preset_path
-    if args.name is None:
-        print("\n".join(preset_names()))
-        return 0
-    sys.stdout.write(preset_path(args.name).read_text(encoding="utf-8"))
-    return 0
-
-
-def _cmd_effects(args) -> int:
-    from .effects import available_effects, get_effect
-    for name in available_effects():
-        spec = get_effect(name)
-        params = ", ".join(f"{p.name} [{p.unit}]" if p.unit else p.name
-                           for p in spec.parameters)
-        print(f"{name} ({spec.kind}): {spec.summary}")
-        if params:
-            print(f"    parameters: {params}")
     return 0
 
 
@@ -575,6 +575,19 @@ def build_parser() -> argparse.ArgumentParser:
                     help="no progress line on standard error")
     dg.set_defaults(func=_cmd_diagnose)
 
+    pr = sub.add_parser("preset", help="print a built-in instrument preset (TOML)",
+                        description="Print a built-in instrument preset to copy and edit; "
+                                    "without a name, list the presets.")
+    pr.add_argument("name", nargs="?", default=None,
+                    help="preset to print (default: list the presets)")
+    pr.set_defaults(func=_cmd_preset)
+
+    e = sub.add_parser("effects", help="list the registered physical effects",
+                       description="List every registered physical effect (built-in and your own\n"
+                                   "registered ones): name, kind (gyro, accelerometer, thermal, "
+                                   "thermometer) and parameters.")
+    e.set_defaults(func=_cmd_effects)
+
     sw = sub.add_parser("sweep", help="Monte Carlo sweep of a scenario over axes and seeds",
                         description="Run a sweep file (a base scenario, axes over scenario "
                                     "keys and instrument parameters, seeds, an optional "
@@ -597,19 +610,6 @@ def build_parser() -> argparse.ArgumentParser:
     sw.add_argument("-q", "--quiet", action="store_true",
                     help="no progress bar or log lines on standard error")
     sw.set_defaults(func=_cmd_sweep)
-
-    pr = sub.add_parser("preset", help="print a built-in instrument preset (TOML)",
-                        description="Print a built-in instrument preset to copy and edit; "
-                                    "without a name, list the presets.")
-    pr.add_argument("name", nargs="?", default=None,
-                    help="preset to print (default: list the presets)")
-    pr.set_defaults(func=_cmd_preset)
-
-    e = sub.add_parser("effects", help="list the registered physical effects",
-                       description="List every registered physical effect (built-in and your own\n"
-                                   "registered ones): name, kind (gyro, accelerometer, thermal, "
-                                   "thermometer) and parameters.")
-    e.set_defaults(func=_cmd_effects)
     return p
 
 
