@@ -201,6 +201,7 @@ def write_study(study, out_dir, *, json_path=None, title: str = "") -> list[Path
     out.mkdir(parents=True, exist_ok=True)
     table = study.heading_table()
     paths = write_table(table, out, json_path=json_path, title=title)
+    tts_md = _write_time_to_spec(study, table, out)
     mode = study.dataset.features_mode
     drift = study.drift_rows()
     # the uncompensated row uses no feature: its mode is left empty
@@ -229,14 +230,6 @@ def write_study(study, out_dir, *, json_path=None, title: str = "") -> list[Path
     cold = int(np.argmin([s.conditions.start_temperature_c for s in study.test.simulations]))
     atomic_write_bytes(out / "drift_vs_compensated.png",
                        _png(plot_drift_vs_compensated(study, cold)))
-    spec = study.test.scenario.northfind.spec_deg
-    every = {"before": study.test.northfind,
-             **{n: r.northfind for n, r in study.results.items()}}
-    tts_md = time_to_spec_table(study.test, every, spec).to_markdown()
-    atomic_write_text(out / "time_to_spec.md", tts_md)
-    shown = {k: every[k] for k in ("before", table.best) if k in every}
-    atomic_write_bytes(out / "error_vs_time.png", _png(plot_error_vs_time(study.test, shown,
-                                                                          spec)))
     report = "\n".join([
         f"# {title or 'Start-up heading RMSE with drift compensation'}", "",
         f"Features mode: **{mode}**: {FEATURE_MODE_NOTES[mode]}.", "",
@@ -254,3 +247,17 @@ def write_study(study, out_dir, *, json_path=None, title: str = "") -> list[Path
                                       "svr_parameters.csv", "svr_parameters.json",
                                       "drift_vs_compensated.png", "time_to_spec.md",
                                       "error_vs_time.png", "report.md")]
+
+
+def _write_time_to_spec(study, table: HeadingTable, out: Path) -> str:
+    """time_to_spec.md (every row, at the scenario's ``northfind.spec_deg``) and
+    error_vs_time.png (``before`` and the best row); the Markdown."""
+    spec = study.test.scenario.northfind.spec_deg
+    every = {"before": study.test.northfind,
+             **{n: r.northfind for n, r in study.results.items()}}
+    md = time_to_spec_table(study.test, every, spec).to_markdown()
+    atomic_write_text(out / "time_to_spec.md", md)
+    shown = {k: every[k] for k in ("before", table.best) if k in every}
+    atomic_write_bytes(out / "error_vs_time.png",
+                       _png(plot_error_vs_time(study.test, shown, spec)))
+    return md
