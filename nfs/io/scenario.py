@@ -30,7 +30,7 @@ from ..variability import (CYCLING_SHAPES, NO_VARIABILITY, VARIABILITY_KEYS,
 from .tomlio import check_keys, load_toml, number, number_list, string, table
 
 __all__ = ["NorthFindSettings", "ChamberProfile", "Scenario", "load_scenario",
-           "default_scenario_path", "OVERRIDE_KEYS"]
+           "default_scenario_path"]
 
 _TOP = ("name", "description", "instrument", "seed", "start_temperatures_c", "repeats",
         "duration_s", "sample_rate_hz", "latitude_deg", "true_heading_deg", "effects_files",
@@ -54,6 +54,7 @@ OVERRIDE_KEYS: tuple[str, ...] = (
     *(f"chamber.{k}" for k in _CHAMBER),
     *(f"variability.{k}" for k in _VARIABILITY if k != "parameters"),
     *(f"compensation.{k}" for k in _COMPENSATION))
+__all__ += ["OVERRIDE_KEYS"]
 
 
 @dataclass(frozen=True)
