@@ -1,8 +1,11 @@
 """A bad sweep file stops before any work with one located line and exit 2."""
 
+from pathlib import Path
+
 import pytest
 
 from nfs.cli import main
+from nfs.sweep import load_sweep
 
 CASES = [
     ("seeds = [1]\nbogus = 1\n", "key 'bogus'", "unknown key"),
@@ -50,3 +53,12 @@ def test_output_that_is_a_file_is_an_error(tmp_path, capsys):
     target.write_text("x")
     assert main(["sweep", str(sweep), "-o", str(target), "-q"]) == 2
     assert "not a folder" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("path", sorted(
+    (Path(__file__).resolve().parents[2] / "scenarios" / "sweeps").glob("*.toml")),
+    ids=lambda p: p.name)
+def test_sample_sweeps_are_valid(path):
+    # Oracle: the files themselves; every axis value is applied to the base scenario
+    spec = load_sweep(path)
+    assert spec.n_cells >= 5 and spec.scenario.name == "startup_7temps"
