@@ -191,11 +191,8 @@ def write_study(study, out_dir, *, json_path=None, title: str = "") -> list[Path
     """Write every output of a compensation study into ``out_dir``.
 
     heading_rmse.{md,csv,json,png} (all rows), drift_residual.{md,csv,json},
-    svr_parameters.{md,csv,json}, drift_vs_compensated.png (the coldest test run),
-    time_to_spec.md (median time to spec by method and start temperature at the scenario's
-    ``northfind.spec_deg``), error_vs_time.png (heading error against time since power-on
-    per start temperature, uncompensated and the best row) and report.md (tables, figures,
-    the comparison with seed 004).
+    svr_parameters.{md,csv,json}, drift_vs_compensated.png (the coldest test run) and
+    report.md (tables, figures, the comparison with seed 004).
     """
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
@@ -250,8 +247,10 @@ def write_study(study, out_dir, *, json_path=None, title: str = "") -> list[Path
 
 
 def _write_time_to_spec(study, table: HeadingTable, out: Path) -> str:
-    """time_to_spec.md (every row, at the scenario's ``northfind.spec_deg``) and
-    error_vs_time.png (``before`` and the best row); the Markdown."""
+    """Outputs of :func:`write_study` on the start-up answers: time_to_spec.md (median time
+    to spec by row and start temperature at the scenario's ``northfind.spec_deg``) and
+    error_vs_time.png (heading error against time since power-on per start temperature,
+    ``before`` and the best row); returns the Markdown."""
     spec = study.test.scenario.northfind.spec_deg
     every = {"before": study.test.northfind,
              **{n: r.northfind for n, r in study.results.items()}}
