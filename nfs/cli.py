@@ -548,6 +548,28 @@ def _cmd_effects(args) -> int:
     return 0
 
 
+def _cmd_sweep(args) -> int:
+    from .sweep import CellStore, DaskExecutor, LocalExecutor, load_sweep, run_sweep
+    spec = load_sweep(args.sweep)                   # the whole sweep checked before any work
+    CellStore(args.output).prepare()
+    if args.dask_local is not None and args.scheduler is not None:
+        raise NfsError("give --dask-local N or --scheduler ADDRESS, not both")
+    if args.dask_local is not None or args.scheduler is not None:
+        executor = DaskExecutor(workers=args.dask_local, address=args.scheduler)
+    else:
+        executor = LocalExecutor(args.jobs)
+    log = None if args.quiet else (lambda msg: print(f"sweep: {msg}", file=sys.stderr))
+    try:
+        res = run_sweep(spec, args.output, executor=executor, quiet=args.quiet, log=log)
+    finally:
+        executor.close()
+    print(f"{res.n_cells} cells ({res.n_computed} computed, {res.n_cells - res.n_computed} "
+          f"from the store), {res.n_rows} rows")
+    for p in res.paths:
+        print(p)
+    return 0
+
+
 def _runs(p: argparse.ArgumentParser) -> None:
     p.add_argument("data", nargs="+", help="NAME.csv files, NAME.toml files or folders")
 
@@ -790,6 +812,29 @@ def build_parser() -> argparse.ArgumentParser:
                                    "registered ones): name, kind (gyro, accelerometer, thermal, "
                                    "thermometer) and parameters.")
     e.set_defaults(func=_cmd_effects)
+
+    sw = sub.add_parser("sweep", help="Monte Carlo sweep of a scenario over axes and seeds",
+                        description="Run a sweep file (a base scenario, axes over scenario "
+                                    "keys and instrument parameters, seeds, an optional "
+                                    "compensation method and heading spec): every missing "
+                                    "cell is simulated, north-found and stored under the hash "
+                                    "of its inputs (a rerun computes only the missing cells), "
+                                    "then DIR/results.csv (and results.parquet with pyarrow) "
+                                    "and the summary figures are written.")
+    sw.add_argument("sweep", help="sweep TOML file")
+    sw.add_argument("-o", "--output", required=True, metavar="DIR",
+                    help="the sweep's folder (cells/, results.csv, figures); reused by a rerun")
+    sw.add_argument("--jobs", type=int, default=-1, metavar="N",
+                    help="local worker processes (default -1: every core; 1: this process)")
+    sw.add_argument("--dask-local", type=int, default=None, metavar="N",
+                    help="start a Dask LocalCluster of N worker processes and run there "
+                         "(needs the dask extra)")
+    sw.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                    help="run on an existing Dask cluster, e.g. tcp://host:8786 (needs the "
+                         "dask extra, and nfs installed on the workers)")
+    sw.add_argument("-q", "--quiet", action="store_true",
+                    help="no progress bar or log lines on standard error")
+    sw.set_defaults(func=_cmd_sweep)
     return p
 
 

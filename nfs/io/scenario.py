@@ -34,6 +34,7 @@ holds the program's last temperature until then.  Start and chamber temperatures
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 from dataclasses import dataclass, field
 from importlib import resources
@@ -67,8 +68,19 @@ _COMPENSATION = ("methods", "features", "features_mode", "budget", "decimate_s",
                  "protocol")
 _VARIABILITY = ("preset", *VARIABILITY_KEYS, "parameters")
 _SCHEDULE = ("positions_deg", "order", "dwell_s", "move_s")
-_NORTHFIND = ("startup_end_s", "stable_start_s", "tilt_correction", "settle_s")
+_NORTHFIND = ("startup_end_s", "stable_start_s", "tilt_correction", "settle_s", "spec_deg")
 _CHAMBER = ("ripple_c", "ripple_period_s", "program")
+
+#: The dotted scenario keys :func:`load_scenario` may override (every value key of the file
+#: but its name, description, seed and effect lists): what a sweep can put on an axis.
+OVERRIDE_KEYS: tuple[str, ...] = (
+    "instrument", "start_temperatures_c", "repeats", "duration_s", "sample_rate_hz",
+    "latitude_deg", "true_heading_deg", "units",
+    *(f"schedule.{k}" for k in _SCHEDULE), *(f"northfind.{k}" for k in _NORTHFIND),
+    *(f"chamber.{k}" for k in _CHAMBER),
+    *(f"variability.{k}" for k in _VARIABILITY if k != "parameters"),
+    *(f"compensation.{k}" for k in _COMPENSATION))
+__all__ += ["OVERRIDE_KEYS"]
 
 
 @dataclass(frozen=True)
@@ -83,6 +95,10 @@ class NorthFindSettings:
     """Correct each position for tilt with the x accelerometer."""
     settle_s: float = 0.0
     """Samples skipped at the start of each dwell [s]."""
+    spec_deg: float = 0.02
+    """Heading specification of the time to spec in the reports [deg]
+    (:mod:`nfs.northfind.spec`); 0.02 deg is about the uncompensated start-up RMSE of the FOG
+    start-up paper ("A FOG start-up drift compensation method at full temperatures", Table 3)."""
 
 
 @dataclass(frozen=True)
@@ -495,10 +511,33 @@ def _check_geometry(inst: Instrument, schedule: Schedule, file, own_effects: boo
             raise ScenarioError(str(exc), file=file, key=where) from None
 
 
-def load_scenario(path: str | Path | None = None, *, _chain: tuple[Path, ...] = ()
-                  ) -> Scenario:
+def _overridden(d: dict, overrides: dict[str, Any], file) -> dict:
+    """A copy of the parsed file ``d`` with each dotted key of ``overrides`` set (a table on
+    the way is created when the file leaves it out)."""
+    d = copy.deepcopy(d)
+    for dotted, value in overrides.items():
+        if dotted not in OVERRIDE_KEYS:
+            raise ScenarioError("cannot be overridden; keys that can: "
+                                + ", ".join(OVERRIDE_KEYS), file=file, key=dotted)
+        *heads, last = dotted.split(".")
+        tbl = d
+        for h in heads:
+            tbl = tbl.setdefault(h, {})
+            if not isinstance(tbl, dict):
+                raise ScenarioError(f"must be a table, got {tbl!r}", file=file, key=h)
+        tbl[last] = value
+    return d
+
+
+def load_scenario(path: str | Path | None = None,
+                  overrides: dict[str, Any] | None = None, *,
+                  _chain: tuple[Path, ...] = ()) -> Scenario:
     """Read and check a scenario file (the built-in default when ``path`` is None), with
-    every key it leaves out from its ``base`` or the built-in default (module docstring)."""
+    every key it leaves out from its ``base`` or the built-in default (module docstring).
+
+    ``overrides`` ({dotted key: value}, keys of :data:`OVERRIDE_KEYS`) replace values of the
+    file before it is checked, as if the file said so (``{"schedule.dwell_s": 60.0}``).
+    """
     path = default_scenario_path() if path is None else Path(path)
     f = path
     d = load_toml(path)
@@ -507,6 +546,8 @@ def load_scenario(path: str | Path | None = None, *, _chain: tuple[Path, ...] = 
                             file=f, key="base")
     check_keys(d, _TOP, "", f)
     d = _inherited(path, d, _chain or (path.resolve(),))[1]
+    if overrides:
+        d = _overridden(d, overrides, f)
     check_keys(d, _TOP, "", f, required=("start_temperatures_c", "schedule"))
     base = path.parent
     files = d.get("effects_files", [])
@@ -560,7 +601,8 @@ def load_scenario(path: str | Path | None = None, *, _chain: tuple[Path, ...] = 
         startup_end_s=number(nf, "startup_end_s", "northfind", f, 3600.0, positive=True),
         stable_start_s=number(nf, "stable_start_s", "northfind", f, 5400.0, minimum=0.0),
         tilt_correction=_bool(nf, "tilt_correction", "northfind", f, True),
-        settle_s=number(nf, "settle_s", "northfind", f, 0.0, minimum=0.0))
+        settle_s=number(nf, "settle_s", "northfind", f, 0.0, minimum=0.0),
+        spec_deg=number(nf, "spec_deg", "northfind", f, 0.02, positive=True))
     ch = table(d, "chamber", "", f, {})
     check_keys(ch, _CHAMBER, "chamber", f)
     chamber = ChamberProfile(ripple_c=number(ch, "ripple_c", "chamber", f, 0.0, minimum=0.0),

@@ -6,6 +6,7 @@
 - :mod:`~nfs.northfind.level`: exact levelling with both accelerometers;
 - :mod:`~nfs.northfind.heading`: north-find a whole run and score the heading by stage;
 - :mod:`~nfs.northfind.budget`: the error budget in closed form;
+- :mod:`~nfs.northfind.spec`: time to spec, when after power-on the heading stays in spec;
 - :mod:`~nfs.northfind.synthetic`: an ideal run from the section 5 rate model, for checks.
 """
 
@@ -16,6 +17,7 @@ from nfs.northfind.heading import NorthFindResult, StageRMSE, heading_rmse, nort
 from nfs.northfind.segment import Cycle, Dwell, find_dwells, segment_cycles
 from nfs.northfind.solve import (HeadingSolution, solve_heading, tilt_correct, wrap_deg_180,
                                  wrap_deg_360)
+from nfs.northfind.spec import rolling_rmse_deg, run_time_to_spec_s, time_to_spec_s
 from nfs.northfind.synthetic import synthetic_run
 
 __all__ = [
@@ -38,5 +40,8 @@ __all__ = [
     "east_tilt_error_deg",
     "indexing_error_deg",
     "tilt_model_error_deg",
+    "time_to_spec_s",
+    "rolling_rmse_deg",
+    "run_time_to_spec_s",
     "synthetic_run",
 ]

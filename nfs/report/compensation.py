@@ -15,6 +15,7 @@ from ..denoise import separate_drift
 from ..io.atomic import atomic_write_bytes, atomic_write_text
 from .reference import (SEED004_TABLE1_SVR, SEED004_TABLE2_DRIFT_DPH,
                         SEED004_TABLE3_HEADING_RMSE_DEG, SEED004_TEMPERATURES_C)
+from .startup import plot_error_vs_time, time_to_spec_table
 from .table import HeadingTable, write_table
 
 __all__ = ["ShapeCheck", "shape_checks", "paper_comparison_markdown", "drift_table_markdown",
@@ -225,6 +226,7 @@ def write_study(study, out_dir, *, json_path=None, title: str = "",
     if table is None:
         table = study.heading_table()
     paths = write_table(table, out, json_path=json_path, title=title)
+    tts_md = _write_time_to_spec(study, table, out)
     mode = study.dataset.features_mode
     drift = study.drift_rows()
     # the uncompensated row uses no feature: its mode is left empty
@@ -260,9 +262,28 @@ def write_study(study, out_dir, *, json_path=None, title: str = "",
         "## Drift residual over the start-up stage (the FOG start-up paper, Table 2)", "", drift_md,
         "## Tuned hyperparameters (the FOG start-up paper, Table 1)", "", p_md_text,
         "![drift and its compensation](drift_vs_compensated.png)", "",
+        "## Time to spec (northfind.spec_deg of the scenario)", "", tts_md,
+        "![heading error against time since power-on](error_vs_time.png)", "",
         paper_comparison_markdown(table)])
     atomic_write_text(out / "report.md", report)
     return paths + [out / n for n in ("drift_residual.md", "drift_residual.csv",
                                       "drift_residual.json", "svr_parameters.md",
                                       "svr_parameters.csv", "svr_parameters.json",
-                                      "drift_vs_compensated.png", "report.md")]
+                                      "drift_vs_compensated.png", "time_to_spec.md",
+                                      "error_vs_time.png", "report.md")]
+
+
+def _write_time_to_spec(study, table: HeadingTable, out: Path) -> str:
+    """Outputs of :func:`write_study` on the start-up answers: time_to_spec.md (median time
+    to spec by row and start temperature at the scenario's ``northfind.spec_deg``) and
+    error_vs_time.png (heading error against time since power-on per start temperature,
+    ``before`` and the best row); returns the Markdown."""
+    spec = study.test.scenario.northfind.spec_deg
+    every = {"before": study.test.northfind,
+             **{n: r.northfind for n, r in study.results.items()}}
+    md = time_to_spec_table(study.test, every, spec).to_markdown()
+    atomic_write_text(out / "time_to_spec.md", md)
+    shown = {k: every[k] for k in ("before", table.best) if k in every}
+    atomic_write_bytes(out / "error_vs_time.png",
+                       _png(plot_error_vs_time(study.test, shown, spec)))
+    return md
