@@ -56,7 +56,7 @@ class GyroModel:
 
 @dataclass(frozen=True)
 class AccelerometerModel:
-    """The two quartz flexure accelerometers (physics.md section 4)."""
+    """The two quartz flexure accelerometers (docs/physics.md section 4)."""
 
     x_node: str
     """Node of QFA x."""
@@ -77,7 +77,7 @@ class AccelerometerModel:
 
 @dataclass(frozen=True)
 class TurntableModel:
-    """Tilt of the turntable axis (physics.md section 4)."""
+    """Tilt of the turntable axis (docs/physics.md section 4)."""
 
     tilt_north_deg: float = 0.0
     """alpha_N, tilt toward north [deg]."""
@@ -87,7 +87,8 @@ class TurntableModel:
 
 @dataclass(frozen=True)
 class AuxChannel:
-    """An auxiliary electrical channel ``aux_*`` (seed 000's oscillator voltage, a TEC drive).
+    """An auxiliary electrical channel ``aux_*`` (Tao et al.'s (2019) oscillator voltage, a TEC
+    drive).
 
     value = offset + gain * source(t) + white noise + random walk, where source is the total
     power of a node (``power:NODE`` [W]) or a node temperature (``temperature:NODE`` [degC]).

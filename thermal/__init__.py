@@ -1,4 +1,4 @@
-"""Lumped thermal network of the north finder, independent of gyros (physics.md section 2).
+"""Lumped thermal network of the north finder, independent of gyros (docs/physics.md section 2).
 
 Build a :class:`Network` of :class:`Node` and :class:`Link` objects, then :func:`simulate`
 it exactly over sample intervals of held input (or of a chamber linear between samples);

@@ -1,6 +1,6 @@
 """The compensation study behind ``nfs table``: train every method, apply, score.
 
-Protocol (seed 004, done on equal terms):
+Protocol (the FOG start-up paper, done on equal terms):
 
 1. Training start-ups: the scenario's instrument at its start temperatures (by default all
    seven), simulated with a different seed from the test start-ups, so no test noise is seen
@@ -13,7 +13,7 @@ Protocol (seed 004, done on equal terms):
 3. Test start-ups (the scenario's own runs, the ``before`` row): predict the drift from each
    run's thermometers, subtract it from the gyro output, north-find, score the start-up RMSE by
    start temperature.  The drift table scores the predicted drift against the separated drift
-   of the test runs over the start-up stage (seed 004, Table 2).
+   of the test runs over the start-up stage (the FOG start-up paper, Table 2).
 4. Uncertainty: every cell and row mean gets a 95 % interval from a two-level bootstrap over
    the test start-ups and their cycles, and rows are compared in pairs on the same start-ups,
    Holm-adjusted (:mod:`nfs.report.intervals`).
@@ -104,7 +104,7 @@ class CompensationSettings:
 @document_fields
 @dataclass(frozen=True)
 class DriftRow:
-    """Drift residual over the start-up stage of the test runs (seed 004, Table 2)."""
+    """Drift residual over the start-up stage of the test runs (the FOG start-up paper, Table 2)."""
 
     method: str
     mae_dph: float
@@ -271,7 +271,7 @@ class CompensationStudy:
         return out + [r.drift for r in self.results.values()]
 
     def tuned_parameters(self) -> dict[str, dict[str, float]]:
-        """Best hyperparameters found by each tuned method (seed 004, Table 1)."""
+        """Best hyperparameters found by each tuned method (the FOG start-up paper, Table 1)."""
         out = {}
         for name, res in self.results.items():
             est = res.compensator.estimator

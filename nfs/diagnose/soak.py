@@ -1,7 +1,7 @@
 """Thermometer offsets anchored by the soak before power-on.
 
 A start-up run begins with the unpowered instrument soaked in the chamber at T0 until uniform
-(physics.md section 1): at t = 0 every node, so every thermometer's sensed temperature, is at
+(docs/physics.md section 1): at t = 0 every node, so every thermometer's sensed temperature, is at
 T0.  A thermometer's reading there is T0 + offset (+ noise, quantisation).  Over the first W
 seconds (:data:`DEFAULT_WINDOW_S`) the instrument already warms; the model predicts the shape
 of that warming, w(t) = m(t) - T0 with m the model's noise-free, offset-free reading through

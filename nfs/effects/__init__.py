@@ -1,4 +1,4 @@
-"""Named physical effects: the registry and the built-in library (effects.md)."""
+"""Named physical effects: the registry and the built-in library (docs/effects.md)."""
 
 from .context import EffectContext
 from .registry import (KINDS, EffectInstance, EffectSpec, Parameter, available_effects,

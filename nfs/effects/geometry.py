@@ -1,5 +1,5 @@
-"""Turntable and geometry effects: where the sensors point (effects.md, "Turntable and
-geometry effects", and ``axis_misalignment``; physics.md sections 4 and 5).
+"""Turntable and geometry effects: where the sensors point (docs/effects.md, "Turntable and
+geometry effects", and ``axis_misalignment``; docs/physics.md sections 4 and 5).
 
 A geometry effect does not add an error to a sensor's output: it changes the directions
 the sensors point in, before the Earth rate and gravity are projected on them.  The state it
@@ -18,7 +18,7 @@ is x (the x accelerometer and the nominal gyro axis), y (the y accelerometer, 90
 clockwise of x seen from above), z (the turntable axis, down).  Angles in deg at the
 boundary, rad inside.
 
-Without a geometry effect the axes follow the first-order tilt model of physics.md
+Without a geometry effect the axes follow the first-order tilt model of docs/physics.md
 section 4 (azimuth A = psi + theta, elevation e = alpha_N cos A + alpha_E sin A), the model
 every run of the package used before this module; with ``tilt_exact`` the platform is
 rotated exactly.
@@ -38,7 +38,7 @@ __all__ = ["Geometry", "tilt_matrix", "table_axes_ned", "azimuth_elevation_deg",
            "apply_geometry", "check_geometry", "indexing_error", "axis_misalignment",
            "tilt_exact", "MAX_TILT_DEG"]
 
-#: Largest platform tilt [deg] for which ``tilt_exact`` is offered (effects.md).
+#: Largest platform tilt [deg] for which ``tilt_exact`` is offered (docs/effects.md).
 MAX_TILT_DEG = 5.0
 
 #: A commanded angle within this of a schedule position [deg] is a visit of that position.
@@ -55,7 +55,7 @@ def tilt_matrix(pitch_deg: float, roll_deg: float) -> np.ndarray:
     so the table's north line keeps the elevation p exactly).  The Euler-angle direction
     cosine matrix of Titterton & Weston, "Strapdown Inertial Navigation Technology" (2004),
     section 3.6, with yaw 0, pitch p and roll -r (equation number not checked).  To first
-    order C tilts an axis of azimuth A by e = p cos A + r sin A, the model of physics.md
+    order C tilts an axis of azimuth A by e = p cos A + r sin A, the model of docs/physics.md
     section 4 with alpha_N = p, alpha_E = r.
     """
     p, r = math.radians(pitch_deg), math.radians(roll_deg)
@@ -98,7 +98,7 @@ def azimuth_elevation_deg(u_ned: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _first_order_axis(azimuth_deg, tilt_north_deg, tilt_east_deg):
-    """Azimuth and elevation e = alpha_N cos A + alpha_E sin A (physics.md section 4) [deg]."""
+    """Azimuth and elevation e = alpha_N cos A + alpha_E sin A (docs/physics.md section 4) [deg]."""
     a = np.radians(azimuth_deg)
     return azimuth_deg, tilt_north_deg * np.cos(a) + tilt_east_deg * np.sin(a)
 
@@ -132,7 +132,7 @@ class Geometry:
     tilt_east_deg: float = 0.0
     """alpha_E (first order) or the roll r (exact) of the platform [deg]."""
     exact_tilt: bool = False
-    """True: the tilt is the exact rotation of :func:`tilt_matrix`; False: physics.md's
+    """True: the tilt is the exact rotation of :func:`tilt_matrix`; False: docs/physics.md's
     first-order model."""
     gyro_axis_body: tuple[float, float, float] = (1.0, 0.0, 0.0)
     """Unit vector of the gyro's input axis in the body frame (x, y, z down)."""
@@ -155,7 +155,7 @@ class Geometry:
     def azimuth_elevation(self) -> dict[str, tuple[np.ndarray, np.ndarray]]:
         """(azimuth, elevation) [deg] of the ``x``, ``y`` and ``gyro`` axes per sample.
 
-        Without an exact tilt or a gyro misalignment these are physics.md's first-order
+        Without an exact tilt or a gyro misalignment these are docs/physics.md's first-order
         values A = psi + theta (wrapped to [0, 360)), e = alpha_N cos A + alpha_E sin A,
         computed exactly as before this module existed.
         """
@@ -310,8 +310,9 @@ def tilt_exact(geom: Geometry, *, pitch_deg: float, roll_deg: float) -> Geometry
     The turntable turns about its own axis n = C e_D; the x axis at table angle theta is
     u = cos theta x_T + sin theta y_T (:func:`table_axes_ned`, x_T in the table plane over
     the heading psi), and gravity and the Earth rate are projected on these exact unit
-    vectors: acc_x = sin e = -u_D, gyro = Omega_ie (cos L u_N - sin L u_D).  p = pitch_deg [deg], r = roll_deg [deg], each and the
-    total tilt acos(cos p cos r) at most 5 deg.  The first-order model of physics.md section
+    vectors: acc_x = sin e = -u_D, gyro = Omega_ie (cos L u_N - sin L u_D).  p = pitch_deg [deg], r
+    = roll_deg [deg], each and the
+    total tilt acos(cos p cos r) at most 5 deg.  The first-order model of docs/physics.md section
     4 (e = alpha_N cos A + alpha_E sin A, azimuth psi + theta) agrees to first order; at
     p = 2 deg, r = 1 deg the two put the north-found heading 6.6e-3 deg apart at psi =
     212.7 deg (:func:`nfs.northfind.budget.tilt_model_error_deg`).  Replaces the

@@ -1,4 +1,4 @@
-"""The registry of named physical effects (../shared/spec/effects.md; the names are a contract).
+"""The registry of named physical effects (docs/effects.md; the names are a contract).
 
 One registry maps each effect name to its function, its kind and the parameters it needs
 (after PyWavelets' ``thresholding_options`` and pvlib's required-key sets per model).  The
@@ -70,7 +70,7 @@ class Parameter:
     """One parameter of an effect."""
 
     name: str
-    """Name as written in scenario files (effects.md spelling)."""
+    """Name as written in scenario files (docs/effects.md spelling)."""
     unit: str
     """Unit, e.g. ``deg/h/K``; ``""`` for names and dimensionless numbers."""
     description: str
@@ -102,13 +102,13 @@ class EffectSpec:
     """A registered effect: its name, kind, function and parameters."""
 
     name: str
-    """The registry name (effects.md)."""
+    """The registry name (docs/effects.md)."""
     kind: str
     """One of :data:`KINDS`."""
     function: Callable[..., Any]
     """The plain function implementing the effect (its docstring holds the physics)."""
     parameters: tuple[Parameter, ...]
-    """Parameters, in the order of effects.md."""
+    """Parameters, in the order of docs/effects.md."""
     target: str | None = None
     """Name of the parameter that says where the effect acts (node, axis, thermometer,
     channel), or None."""

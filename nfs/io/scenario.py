@@ -3,7 +3,8 @@
 A scenario names an instrument (a built-in preset or an instrument TOML file), the start
 temperatures, the schedule and the north-finding settings; ``[[effects]]`` in the scenario,
 when present, replace the instrument's effect list, ``[[added_effects]]`` are added to it and
-``[[aux]]`` channels (the instrument file's format) are added to the instrument's.  ``units`` simulated units make the
+``[[aux]]`` channels (the instrument file's format) are added to the instrument's.  ``units``
+simulated units make the
 start-ups, and ``[variability]`` says how start-ups and units differ
 (:mod:`nfs.variability`; no table: every start-up soaked exactly at T0, every unit the
 nominal instrument).  Every key is checked: an unknown key is an error that names it and
@@ -19,7 +20,8 @@ unless written) and ``description``; and from the built-in default, its ``[varia
 table (a scenario without the table is the world without scatter, as always: write
 ``[variability]`` to get the default's realistic scatter), when the scenario has a chamber
 program its ``duration_s``, and when it sets ``units`` the default's split of its one unit
-(``compensation.train_units``, ``test_units``).  Paths in a base (``instrument``, ``effects_files``) stay
+(``compensation.train_units``, ``test_units``).  Paths in a base (``instrument``,
+``effects_files``) stay
 relative to the base.  The base is checked on its own first, so an error names the file that
 holds the bad value.
 
@@ -262,7 +264,7 @@ class Scenario:
 
 
 def default_scenario_path() -> Path:
-    """The built-in default scenario (seed 004's seven start temperatures)."""
+    """The built-in default scenario (the FOG start-up paper's seven start temperatures)."""
     return Path(str(resources.files("nfs") / "presets" / "startup_7temps.toml"))
 
 

@@ -1,4 +1,4 @@
-"""Multiposition north finding (physics.md section 5).
+"""Multiposition north finding (docs/physics.md section 5).
 
 - :mod:`~nfs.northfind.solve`: heading from the mean rates of one cycle (least squares, the
   two-position method) and tilt correction;

@@ -1,4 +1,4 @@
-"""Heading error budget of multiposition north finding (physics.md section 5).
+"""Heading error budget of multiposition north finding (docs/physics.md section 5).
 
 Closed forms that the tests hold the solver to, and that reports quote as the floor.
 Angles in deg at the boundary; each formula is first order in the error source.
@@ -26,7 +26,7 @@ __all__ = [
 def white_noise_floor_deg(arw_deg_per_rth_h: float, dwell_s: float, n_positions: int,
                           latitude_deg: float, *, heading_deg: float | None = None,
                           first_position_deg: float = 0.0, visits: int = 1) -> float:
-    """Standard deviation of psi from white rate noise (physics.md section 5).
+    """Standard deviation of psi from white rate noise (docs/physics.md section 5).
 
     N >= 3 positions equally spaced over 360 deg:
 
@@ -106,7 +106,7 @@ def tilt_model_error_deg(pitch_deg: float, roll_deg: float, heading_deg,
                          n_positions: int):
     """Heading of a first-order-tilt run minus that of an exactly tilted one [deg].
 
-    physics.md section 4's model keeps the azimuth of the x axis at psi + theta_k and
+    docs/physics.md section 4's model keeps the azimuth of the x axis at psi + theta_k and
     raises it by e_k = alpha_N cos A_k + alpha_E sin A_k; an exactly tilted table
     (:func:`nfs.effects.geometry.tilt_matrix`, pitch p = alpha_N, roll r = alpha_E [rad])
     turns the horizontal projection of the axis at in-plane angle beta to
@@ -157,7 +157,7 @@ def rate_error_heading_deg(rate_error_dph: float, latitude_deg: float) -> float:
 
 def linear_drift_error_deg(drift_dph_per_s: float, step_s: float, n_positions: int,
                            heading_deg, latitude_deg: float):
-    """Heading error of a linear drift with sequential positions (physics.md section 5).
+    """Heading error of a linear drift with sequential positions (docs/physics.md section 5).
 
         delta_psi = (k Delta / Omega_h) (cot(pi / N) cos psi + sin psi)   [rad]
 
@@ -199,7 +199,7 @@ def linear_drift_error_deg(drift_dph_per_s: float, step_s: float, n_positions: i
 def east_tilt_error_deg(tilt_east_deg: float, latitude_deg: float) -> float:
     """Heading error of an uncorrected east-west tilt: delta_psi = -alpha_E tan L [deg].
 
-    physics.md section 4 gives the size, alpha_E tan L. Sign: with e_k = alpha_N cos A_k +
+    docs/physics.md section 4 gives the size, alpha_E tan L. Sign: with e_k = alpha_N cos A_k +
     alpha_E sin A_k, alpha_E > 0 lifts the x axis when it points east (east side of the
     turntable high). The vertical Earth rate then adds Omega_v alpha_E sin A_k to w_k, which
     turns the fitted cosine by -alpha_E Omega_v / Omega_h: the estimated heading is too small,

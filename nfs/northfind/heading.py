@@ -1,6 +1,6 @@
 """North-find a whole run, cycle by cycle, and score its heading by stage.
 
-The chain (physics.md section 5): dwells and cycles (:mod:`nfs.northfind.segment`) -> mean
+The chain (docs/physics.md section 5): dwells and cycles (:mod:`nfs.northfind.segment`) -> mean
 gyro rate and mean x specific force of every dwell -> tilt correction -> least squares per
 cycle (:mod:`nfs.northfind.solve`) -> heading psi and its error against the true heading.
 """
@@ -100,7 +100,7 @@ def _dwell_means(values: np.ndarray, idx: np.ndarray, owner: np.ndarray, n: int)
 def north_find(run: Run, *, tilt_correction: bool = True, settle_s: float = 0.0,
                gyro_column: str = "gyro_dph", heading_hint_deg: float | None = None,
                position_tol_deg: float = 0.5) -> NorthFindResult:
-    """North-find every complete cycle of a run (physics.md section 5).
+    """North-find every complete cycle of a run (docs/physics.md section 5).
 
     Per dwell: the mean gyro rate w_k and the mean readings of both accelerometers. Per
     cycle: least squares of w_k - Omega_ie sin L f_x,k = X cos theta_k - Y sin theta_k + b,
@@ -113,7 +113,7 @@ def north_find(run: Run, *, tilt_correction: bool = True, settle_s: float = 0.0,
     are marked ambiguous).
 
     Before exact levelling the fit was w_k - Omega_ie sin L f_x,k = cos e_k (X cos theta_k -
-    Y sin theta_k) + b with sin e_k = f_x,k (exact for physics.md section 4's first-order
+    Y sin theta_k) + b with sin e_k = f_x,k (exact for docs/physics.md section 4's first-order
     tilt model); the two differ at second order in the tilt
     (:func:`~nfs.northfind.budget.tilt_model_error_deg`).
 
@@ -121,7 +121,8 @@ def north_find(run: Run, *, tilt_correction: bool = True, settle_s: float = 0.0,
     ----------
     run : Run
         The run; uses ``time_s``, ``position_deg``, ``moving``, the gyro column,
-        ``acc_x_g`` and ``acc_y_g``, and from the metadata ``latitude_deg``, ``positions_deg``, ``dwell_s``
+        ``acc_x_g`` and ``acc_y_g``, and from the metadata ``latitude_deg``, ``positions_deg``,
+        ``dwell_s``
         and ``true_heading_deg``.
     tilt_correction : bool
         Level with the accelerometers (else the table is taken as level).
@@ -214,7 +215,7 @@ def north_find(run: Run, *, tilt_correction: bool = True, settle_s: float = 0.0,
 
 @dataclass(frozen=True)
 class StageRMSE:
-    """Heading RMSE of the start-up and the stable stage of a run (seed 004, Table 3)."""
+    """Heading RMSE of the start-up and the stable stage of a run (the FOG start-up paper, Table 3)."""
 
     startup_deg: float
     """RMS heading error of the cycles ending within the start-up stage [deg] (NaN if none)."""

@@ -1,4 +1,4 @@
-"""An ideal north-finder run built from the rate model of physics.md section 5.
+"""An ideal north-finder run built from the rate model of docs/physics.md section 5.
 
 For checking the north-finding chain against closed forms (tests, benchmarks): the gyro sees
 only the Earth-rate projection with turntable tilt, a constant bias, an optional drift
@@ -9,12 +9,12 @@ Model, per dwell at turntable angle theta_k: the table is tilted exactly by the 
 alpha_N and the roll alpha_E (:func:`nfs.effects.geometry.tilt_matrix`), and the x axis,
 whose horizontal projection has the azimuth psi at theta = 0, has azimuth A_k and
 elevation e_k at theta_k (A_k = psi + theta_k and e_k = alpha_N cos A_k + alpha_E sin A_k
-to first order, physics.md section 4):
+to first order, docs/physics.md section 4):
 
     gyro  = Omega_ie cos L cos A_k cos e_k + Omega_ie sin L sin e_k + b + drift(t) + noise
     acc_x = sin e_k,   acc_y = sin(elevation of y)
 
-White noise has the standard deviation (ARW * 60) sqrt(fs) deg/h per sample (physics.md
+White noise has the standard deviation (ARW * 60) sqrt(fs) deg/h per sample (docs/physics.md
 section 3). Samples while moving carry the Earth-rate projection at the interpolated angle
 (no table rate): north finding does not use them.
 """

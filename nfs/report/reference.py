@@ -1,10 +1,12 @@
-"""Published figures of seed 004, for the report that sets our tables beside the paper.
+"""Published figures of the FOG start-up paper, for the report that sets our tables beside the
+paper.
 
 Copied from the paper (facts only); the same numbers are in
 ../shared/reference/seed004_table*.csv, and tests/report checks the copy against them when
 ../shared is present.  Kept in the package because nothing may read ../shared at run time.
 
-Source: "A FOG start-up drift compensation method at full temperatures", seed 004 of this
+Source: "A FOG start-up drift compensation method at full temperatures", the FOG start-up paper of
+this
 project (Opto-Electronic Engineering), Tables 1-3.
 """
 

@@ -86,7 +86,7 @@ def test_offsets_must_match_the_schedule_and_the_tilt_is_given_once(quiet):
 
 
 def test_without_geometry_effects_the_first_order_model_is_unchanged():
-    # Oracle: physics.md section 4 as axis_elevation_deg computes it, bit for bit.
+    # Oracle: docs/physics.md section 4 as axis_elevation_deg computes it, bit for bit.
     theta = np.linspace(0.0, 350.0, 36)
     g = Geometry(time_s=theta, position_deg=theta, moving=np.zeros(36, bool),
                  positions_deg=FOUR, heading_deg=212.7, rng=np.random.default_rng(0),

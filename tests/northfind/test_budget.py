@@ -2,7 +2,7 @@
 
 white_noise_floor_deg, linear_drift_error_deg and east_tilt_error_deg are held to simulated
 runs in test_north_find.py; this file checks the remaining formula and the figures that
-physics.md section 5 quotes.
+docs/physics.md section 5 quotes.
 """
 
 import math
@@ -16,7 +16,7 @@ from nfs.northfind import rate_error_heading_deg, solve_heading, white_noise_flo
 
 
 def test_rate_error_figure_quoted_by_physics_md():
-    # Oracle: physics.md section 5, "0.001 deg/h is about 0.0044 deg at L = 30 deg".
+    # Oracle: docs/physics.md section 5, "0.001 deg/h is about 0.0044 deg at L = 30 deg".
     assert rate_error_heading_deg(0.001, 30.0) == pytest.approx(0.0044, abs=5e-5)
 
 
