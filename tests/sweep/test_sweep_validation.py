@@ -22,7 +22,7 @@ CASES = [
     ("seeds = [1]\n[axes]\n\"thermal.nodes.housing.capacity_j_per_k\" = [-5.0]\n",
      "key 'axes.thermal.nodes.housing.capacity_j_per_k'", "capacity_j_per_k must be > 0"),
     ("seeds = [1]\n[axes]\nschedule.dwell_s = [60.0, 5000.0]\n", "key 'axes.schedule.dwell_s'",
-     "shorter than one cycle"),
+     "shorter than one north-finding cycle"),
     ("seeds = [1]\n[axes]\nlatitude_deg = { low = 0.0, high = 60.0 }\n[draws]\ncount = 6\n",
      "key 'draws.count'", "power of 2"),
     ("seeds = []\n", "key 'seeds'", "non-empty list"),
