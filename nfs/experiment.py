@@ -17,6 +17,7 @@ import numpy as np
 
 import thermal
 
+from .docfields import document_fields
 from .effects import EffectContext, EffectInstance, Geometry, apply_geometry, check_geometry
 from .effects.thermometer import THERMOMETERS
 from .errors import EffectError
@@ -116,6 +117,7 @@ def conditions_from_run(run: Run, *, seed=0, schedule: Schedule | None = None
                 np.asarray(cols["moving"], dtype=float)))
 
 
+@document_fields
 @dataclass(frozen=True)
 class SimulationResult:
     """Everything one simulated run computed, stage by stage."""
@@ -379,6 +381,7 @@ def simulate_run(inst: Instrument, cond: RunConditions) -> SimulationResult:
 # --------------------------------------------------------------------------------------------
 # A whole scenario: simulate every run, north-find, tabulate by start temperature
 
+@document_fields
 @dataclass(frozen=True)
 class ScenarioResult:
     """Every run of a scenario, simulated and north-found."""

@@ -9,7 +9,10 @@ from nfs.compensate.study import CompensationStudy, MethodResult, SeedResult
 from nfs.diagnose.fit import FitResult
 from nfs.diagnose.result import CandidateScore, Diagnosis
 from nfs.docfields import document_fields, field_docs
+from nfs.experiment import ScenarioResult, SimulationResult
 from nfs.io.measurement import Run, RunMeta
+from nfs.io.scenario import Scenario
+from nfs.northfind.heading import NorthFindResult
 from nfs.report.table import HeadingTable, TableRow
 
 
@@ -37,7 +40,8 @@ def test_attributes_section_from_field_docstrings():
 
 @pytest.mark.parametrize("cls", [Run, RunMeta, HeadingTable, TableRow, CompensationStudy,
                                  MethodResult, SeedResult, FitResult, Diagnosis,
-                                 CandidateScore], ids=lambda c: c.__name__)
+                                 CandidateScore, Scenario, SimulationResult, ScenarioResult,
+                                 NorthFindResult], ids=lambda c: c.__name__)
 def test_help_shows_every_documented_field(cls):
     text = pydoc.render_doc(cls, renderer=pydoc.plaintext)
     docs = field_docs(cls)

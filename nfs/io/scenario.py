@@ -45,6 +45,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
+from ..docfields import document_fields
 from ..effects import check_geometry, load_effects_file
 from ..errors import EffectError, NfsError, ScenarioError
 from ..instrument import (Instrument, _aux, _check_effect_targets, load_instrument,
@@ -85,6 +86,7 @@ OVERRIDE_KEYS: tuple[str, ...] = (
 __all__ += ["OVERRIDE_KEYS"]
 
 
+@document_fields
 @dataclass(frozen=True)
 class NorthFindSettings:
     """How runs are north-found and scored."""
@@ -103,6 +105,7 @@ class NorthFindSettings:
     start-up paper ("A FOG start-up drift compensation method at full temperatures", Table 3)."""
 
 
+@document_fields
 @dataclass(frozen=True)
 class ChamberProfile:
     """Chamber air temperature T_amb(t) = P(t) + ripple_c sin(2 pi t / ripple_period_s),
@@ -142,6 +145,7 @@ class ChamberProfile:
         return self.program.powered_s(start_temperature_c, sample_s)
 
 
+@document_fields
 @dataclass(frozen=True)
 class Scenario:
     """A start-up experiment: instrument, temperatures, schedule, scoring."""

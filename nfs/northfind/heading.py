@@ -12,6 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from nfs.docfields import document_fields
 from nfs.errors import MeasurementError, NfsError
 from nfs.io.measurement import Run
 from nfs.northfind.segment import Cycle, dwell_samples, find_dwells, segment_cycles
@@ -28,6 +29,7 @@ def _frozen(a) -> np.ndarray:
     return a
 
 
+@document_fields
 @dataclass(frozen=True)
 class NorthFindResult:
     """North-finding result of one run: one entry per cycle (arrays are read-only)."""
@@ -213,6 +215,7 @@ def north_find(run: Run, *, tilt_correction: bool = True, settle_s: float = 0.0,
         up_table=_frozen(up))
 
 
+@document_fields
 @dataclass(frozen=True)
 class StageRMSE:
     """Heading RMSE of the start-up and the stable stage of a run (the FOG start-up paper, Table 3)."""
