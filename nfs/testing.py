@@ -4,9 +4,11 @@
   wrote earlier, cell by cell, beyond noise and a relative tolerance (the comparison of
   ``nfs table --baseline``: :mod:`nfs.report.baseline`);
 * :func:`assert_compensator_no_worse`: a trained compensator against no compensation on the
-  same runs, start temperature by start temperature, beyond noise.
+  same runs, start temperature by start temperature, beyond noise;
+* :func:`assert_time_to_spec_below`: every run's time to spec (after power-on, the time from
+  which every north-finding cycle's heading error stays within a spec) under a bound.
 
-``examples/test_my_instrument.py`` is a test file to copy.  Both raise ``AssertionError``
+``examples/test_my_instrument.py`` is a test file to copy.  Each raises ``AssertionError``
 listing the cells at fault, so pytest shows what got worse and by how much.
 
 Agreement across platforms (operating system, CPU, BLAS, library versions)
@@ -36,12 +38,13 @@ import numpy as np
 
 from .compensate import load_compensator
 from .io.measurement import read_runs
-from .northfind import north_find
+from .northfind import north_find, run_time_to_spec_s
 from .report.baseline import TOLERANCE, BaselineComparison, compare_tables
 from .report.table import pooled_rmse
 from .report.tablefile import TableData
 
-__all__ = ["assert_table_within", "assert_compensator_no_worse", "EXACT_ATOL_DEG"]
+__all__ = ["assert_table_within", "assert_compensator_no_worse", "assert_time_to_spec_below",
+           "EXACT_ATOL_DEG"]
 
 #: How far the uncompensated rows may move across platforms [deg].
 EXACT_ATOL_DEG = 1e-8
@@ -180,6 +183,72 @@ def assert_compensator_no_worse(compensator, runs, *, tolerance: float = 0.0,
         raise AssertionError(_message(f"{comp.method} is worse than no compensation on "
                                       f"{len(runs)} run(s):", result))
     return result
+
+
+def assert_time_to_spec_below(runs, spec_deg: float, bound_s: float, *,
+                              rolling: bool = False, compensator=None,
+                              tilt_correction: bool = True, settle_s: float = 0.0
+                              ) -> dict[str, float]:
+    """Assert that every run reaches its heading spec within ``bound_s`` after power-on.
+
+    Each run is north-found (after subtracting ``compensator``'s drift when one is given);
+    its time to spec is the output time of the first cycle from which every later cycle's
+    heading error stays within ``spec_deg`` (with ``rolling``, the rolling RMSE of
+    :data:`nfs.northfind.spec.DEFAULT_WINDOW` cycles: :func:`nfs.northfind.run_time_to_spec_s`);
+    a run that never stays within spec has an infinite time and fails.
+
+    Parameters
+    ----------
+    runs : Run, path, or iterable of them
+        Runs with a known heading (``true_heading_deg``).
+    spec_deg : float
+        Heading spec [deg], > 0.
+    bound_s : float
+        Largest acceptable time to spec [s].
+    rolling : bool
+        Judge the rolling RMSE instead of every single cycle.
+    compensator : DriftCompensator or path, optional
+        Compensate the runs first (a trained compensator or an ``nfs train`` model file).
+    tilt_correction, settle_s
+        North finding (:func:`nfs.northfind.north_find`).
+
+    Returns
+    -------
+    dict
+        Run name -> time to spec [s], when every run passes.
+
+    Raises
+    ------
+    AssertionError
+        Listing the runs over the bound with their times.
+    ValueError
+        A non-positive spec or a run without a known heading.
+    """
+    if not (math.isfinite(spec_deg) and spec_deg > 0.0):
+        raise ValueError(f"spec_deg must be a finite number > 0, got {spec_deg}")
+    runs = _runs(runs)
+    unknown = [r.name for r in runs if r.meta.true_heading_deg is None]
+    if unknown:
+        raise ValueError(f"run '{unknown[0]}' has no true_heading_deg: the heading error "
+                         "needs the known heading")
+    if compensator is not None:
+        comp = compensator if hasattr(compensator, "compensate") else \
+            load_compensator(compensator)
+        runs = [comp.compensate(r) for r in runs]
+    times = {}
+    for r in runs:
+        nf = north_find(r, tilt_correction=tilt_correction, settle_s=settle_s)
+        every, roll = run_time_to_spec_s(nf.t_end_s, nf.error_deg, spec_deg)
+        times[r.name] = roll if rolling else every
+    late = {n: t for n, t in times.items() if not t <= bound_s}
+    if late:
+        what = "rolling RMSE" if rolling else "heading error"
+        raise AssertionError(
+            f"{len(late)} of {len(times)} run(s) take longer than {bound_s:g} s for the "
+            f"{what} to stay within {spec_deg:g} deg:\n" + "\n".join(
+                f"  {n}: " + ("never within spec" if not math.isfinite(t) else f"{t:.0f} s")
+                for n, t in late.items()))
+    return times
 
 
 def _runs(runs) -> list:

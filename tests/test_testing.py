@@ -125,3 +125,29 @@ def test_the_example_a_user_copies(tmp_path):
         "my_instrument"
     mod.test_table_no_worse_than_baseline(tmp_path / "second")
     mod.test_compensator_no_worse_than_none(tmp_path / "third")
+
+
+def test_time_to_spec_bound_on_a_run_with_a_known_answer():
+    # Oracle: a noiseless 4-position run whose drift steps off at t = 1200 s, in the last
+    # dwell of cycle 2: cycle 1 takes the constant drift into its bias (error 0), cycle 2 is
+    # off by ~0.1 deg, every later cycle is exact: the time to spec is cycle 3's output time.
+    from nfs.northfind import north_find
+    from nfs.northfind.synthetic import synthetic_run
+    from nfs.testing import assert_time_to_spec_below
+    run = synthetic_run(heading_deg=212.7, n_cycles=6, name="step",
+                        drift_dph=lambda t: 0.05 * (np.asarray(t) < 1200.0))
+    nf = north_find(run)
+    err = np.abs(np.asarray(nf.error_deg))
+    assert err[0] < 1e-9 and err[1] > 0.01 and np.all(err[2:] < 1e-9)
+    t3 = float(nf.t_end_s[2])
+    assert assert_time_to_spec_below([run], 0.001, t3) == {"step": t3}
+    with pytest.raises(AssertionError, match=r"1 of 1 run\(s\) take longer than .* s.*\n  step: "
+                                             rf"{t3:.0f} s"):
+        assert_time_to_spec_below([run], 0.001, t3 - 1.0)
+    # a drift ramp that never stops: never within spec
+    ramp = synthetic_run(heading_deg=212.7, n_cycles=4, name="ramp",
+                         drift_dph=lambda t: 2e-4 * np.asarray(t))
+    with pytest.raises(AssertionError, match="ramp: never within spec"):
+        assert_time_to_spec_below([ramp], 1e-4, 1e9)
+    with pytest.raises(ValueError, match="spec_deg"):
+        assert_time_to_spec_below([run], 0.0, 10.0)
