@@ -13,6 +13,7 @@ import pytest
 
 from nfs.errors import ThermalError
 from thermal import CHAMBER, Link, Network, Node, simulate
+from thermal_networks import seven_nodes
 
 C, G = 200.0, 0.8            # one node: capacity [J/K], conductance to the chamber [W/K]
 TAU = C / G                  # its time constant [s]
@@ -20,18 +21,6 @@ TAU = C / G                  # its time constant [s]
 
 def one_node(power_w: float = 0.0) -> Network:
     return Network((Node("coil", C, power_w),), (Link("coil", CHAMBER, G),))
-
-
-def seven_nodes() -> Network:
-    """The representative north finder of benchmarks/bench_thermal.py."""
-    nodes = (Node("housing", 3500.0), Node("electronics", 200.0, 3.0),
-             Node("board", 250.0, 5.0), Node("coil_outer", 70.0), Node("coil_inner", 140.0),
-             Node("qfa_x", 45.0, 0.45), Node("qfa_y", 45.0, 0.45))
-    links = (Link("housing", CHAMBER, 2.2), Link("electronics", "housing", 1.0),
-             Link("board", "housing", 1.5), Link("coil_outer", "housing", 0.8),
-             Link("coil_outer", "coil_inner", 0.25), Link("electronics", "coil_outer", 0.3),
-             Link("qfa_x", "housing", 0.5), Link("qfa_y", "housing", 0.5))
-    return Network(nodes, links)
 
 
 def ramp_closed_form(t, t0_c, amb0_c, rate_c_per_s):
