@@ -11,8 +11,8 @@ goes through :class:`OutputFolder`:
    created or replaced since the check: the writers replace files atomically, so a rewritten
    file has a new inode and modification time), removes the files that the folder's earlier
    manifest listed and this command did not rewrite (they are stale), and writes the
-   manifest ``nfs-manifest.json``: the command, its arguments, what it read, the package
-   version and every written file with its SHA-256.
+   manifest ``nfs-manifest.json``: the command, its arguments, what it read, the library
+   versions and platform (:mod:`nfs.io.provenance`) and every written file with its SHA-256.
 
 The manifest holds no time stamp, so the same command on the same inputs writes the same
 bytes. Stale files are removed only after everything new is in place: a command that fails
@@ -28,9 +28,9 @@ import os
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from .. import __version__
 from ..errors import NfsError
 from .atomic import atomic_write_text
+from .provenance import library_versions, platform_tag
 
 __all__ = ["MANIFEST_NAME", "OutputFolder", "check_output_file", "read_manifest"]
 
@@ -190,7 +190,8 @@ class OutputFolder:
             "format": _FORMAT,
             "command": self.command,
             "arguments": list(arguments or []),
-            "package_version": __version__,
+            "versions": library_versions(),
+            "platform": platform_tag(),
             "inputs": inputs or {},
             "files": [{"path": rel, "sha256": _sha256(self.path / rel)} for rel in written],
         }
