@@ -381,7 +381,7 @@ def _cmd_compare(args) -> int:
     from .diagnose import compare, write_report
     from .io.atomic import atomic_write_text
     from .io.measurement import read_runs
-    from .io.provenance import instrument_provenance, runs_provenance
+    from .io.provenance import output_provenance
     inst = _load_model(args.model)
     _file(args.json, "--json")
     runs = read_runs(args.data)
@@ -391,11 +391,13 @@ def _cmd_compare(args) -> int:
     c = compare(inst, runs, seed=args.seed, startup_end_s=args.startup_end_s,
                 stable_start_s=args.stable_start_s)
     paths = write_report(c, args.output)
+    # the runs are hashed once, for the JSON and the folder's manifest
+    prov = output_provenance(instrument=inst, runs=runs, seeds={"model_noise": args.seed})
     if args.json:
-        from .io.provenance import output_provenance
-        atomic_write_text(args.json, json.dumps({**c.to_dict(), "provenance": output_provenance(
-            instrument=inst, runs=runs, seeds={"model_noise": args.seed})}, indent=1) + "\n")
-    _finish(folder, args, {"runs": runs_provenance(runs), "model": instrument_provenance(inst)})
+        atomic_write_text(args.json, json.dumps({**c.to_dict(), "provenance": prov}, indent=1)
+                          + "\n")
+    _finish(folder, args, {"runs": prov["runs"], "model": prov["instrument"],
+                           "seeds": prov["seeds"]})
     for line in c.sentences():
         print(f"- {line}")
     if not args.quiet:
