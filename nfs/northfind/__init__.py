@@ -4,6 +4,7 @@
   two-position method) and tilt correction;
 - :mod:`~nfs.northfind.segment`: dwells and cycles of a run;
 - :mod:`~nfs.northfind.level`: exact levelling with both accelerometers;
+- :mod:`~nfs.northfind.known_bias`: the heading with the biases known, down to one position;
 - :mod:`~nfs.northfind.heading`: north-find a whole run and score the heading by stage;
 - :mod:`~nfs.northfind.budget`: the error budget in closed form;
 - :mod:`~nfs.northfind.spec`: time to spec, when after power-on the heading stays in spec;
@@ -14,6 +15,7 @@ from nfs.northfind.budget import (east_tilt_error_deg, indexing_error_deg,
                                   linear_drift_error_deg, rate_error_heading_deg,
                                   tilt_model_error_deg, white_noise_floor_deg)
 from nfs.northfind.heading import NorthFindResult, StageRMSE, heading_rmse, north_find
+from nfs.northfind.known_bias import KnownBiasHeading, north_find_known_bias
 from nfs.northfind.segment import Cycle, Dwell, find_dwells, segment_cycles
 from nfs.northfind.solve import (HeadingSolution, solve_heading, tilt_correct, wrap_deg_180,
                                  wrap_deg_360)
@@ -34,6 +36,8 @@ __all__ = [
     "north_find",
     "StageRMSE",
     "heading_rmse",
+    "KnownBiasHeading",
+    "north_find_known_bias",
     "white_noise_floor_deg",
     "rate_error_heading_deg",
     "linear_drift_error_deg",

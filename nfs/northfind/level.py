@@ -36,7 +36,8 @@ import numpy as np
 from nfs.errors import NfsError
 from nfs.northfind.solve import _omega_h
 
-__all__ = ["LEVEL_UP", "gravity_in_table_frame", "level_heading", "level_two_position"]
+__all__ = ["LEVEL_UP", "gravity_in_table_frame", "gravity_and_biases", "level_heading",
+           "level_two_position", "branch_heading"]
 
 #: U_T of a level table (z_T down): the up vector when tilt correction is off.
 LEVEL_UP = np.array([0.0, 0.0, -1.0])
@@ -50,16 +51,32 @@ def gravity_in_table_frame(theta_rad, acc_x_g, acc_y_g) -> np.ndarray:
     -sqrt(1 - U_x^2 - U_y^2).  Returns U_T (n_cycles, 3); a cycle with a non-finite
     reading gives NaN.  Raises NfsError when the fitted tilt reaches 90 deg.
     """
+    return gravity_and_biases(theta_rad, acc_x_g, acc_y_g)[0]
+
+
+def gravity_and_biases(theta_rad, acc_x_g, acc_y_g, *, biases_known: bool = False):
+    """U_T and the accelerometer biases b_x, b_y [g] per cycle (:func:`gravity_in_table_frame`).
+
+    With ``biases_known`` the readings are taken as bias-free (already corrected) and only
+    (U_x, U_y) are fitted, which one position determines; the biases returned are then 0.
+    Otherwise the positions must determine all four (two distinct angles at least).
+    Returns (U_T (n_cycles, 3), b_x (n_cycles,), b_y (n_cycles,)).
+    """
     th = np.asarray(theta_rad, dtype=float)
     fx = np.asarray(acc_x_g, dtype=float)
     fy = np.asarray(acc_y_g, dtype=float)
     c, s = np.cos(th), np.sin(th)
     one, zero = np.ones_like(th), np.zeros_like(th)
-    design = np.concatenate([np.stack([c, s, one, zero], axis=-1),
-                             np.stack([-s, c, zero, one], axis=-1)], axis=-2)
+    cols_x, cols_y = [c, s], [-s, c]
+    if not biases_known:
+        cols_x += [one, zero]
+        cols_y += [zero, one]
+    design = np.concatenate([np.stack(cols_x, axis=-1), np.stack(cols_y, axis=-1)], axis=-2)
     y = np.concatenate([fx, fy], axis=-1)
     out = np.full(th.shape[:-1] + (3,), np.nan)
+    bias = np.zeros(th.shape[:-1] + (2,))
     ok = np.all(np.isfinite(y), axis=-1)
+    bias[~ok] = np.nan
     if np.any(ok):
         coef = np.einsum("cij,cj->ci", np.linalg.pinv(design[ok]), y[ok])
         horiz = coef[:, 0] ** 2 + coef[:, 1] ** 2
@@ -67,7 +84,9 @@ def gravity_in_table_frame(theta_rad, acc_x_g, acc_y_g) -> np.ndarray:
             raise NfsError(f"the accelerometers give a tilt of 90 deg or more "
                            f"(|U_xy| = {math.sqrt(float(np.max(horiz))):.6g} g)")
         out[ok] = np.column_stack([coef[:, 0], coef[:, 1], -np.sqrt(1.0 - horiz)])
-    return out
+        if not biases_known:
+            bias[ok] = coef[:, 2:4]
+    return out, bias[..., 0], bias[..., 1]
 
 
 def _heading(n: np.ndarray, up: np.ndarray) -> np.ndarray:
@@ -119,7 +138,25 @@ def level_two_position(theta_rad, rate_dph, up, latitude_deg: float,
     coef = np.einsum("cij,cj->ci", np.linalg.pinv(design), w)
     resid = w - np.einsum("cij,cj->ci", design, coef)
     a, b = coef[:, 0], coef[:, 1]
-    d = np.stack([np.cos(theta_a[:, 0]), np.sin(theta_a[:, 0]), np.zeros(len(th))], axis=-1)
+    psi, ambiguous = branch_heading(a, theta_a[:, 0], up, omega_h, heading_hint_deg)
+    rms = np.sqrt(np.mean(resid * resid, axis=-1))
+    return psi, np.full(len(th), omega_h), b, rms, ambiguous
+
+
+def branch_heading(a, theta_a, up, omega_h: float, heading_hint_deg: float | None = None):
+    """Heading [rad] from the Earth rate a = n . d seen along one table direction, per cycle.
+
+    d = (cos theta_a, sin theta_a, 0) in the table frame, n = Omega_h N_T horizontal.  With
+    h1 the unit horizontal projection of d and h2 = U x h1, n = n_1 h1 + n_2 h2,
+    n_1 = a / |d_h|, n_2 = +-sqrt(Omega_h^2 - n_1^2): the sign is not observable (on a level
+    table n_2 = Omega_h sin(psi + theta_a)), so the branch nearest ``heading_hint_deg`` is
+    taken, or without a hint n_2 >= 0 and the result is marked ambiguous.  ``a``,
+    ``theta_a``: (n_cycles,); ``up``: (n_cycles, 3).  Returns (psi, ambiguous).
+    """
+    a = np.asarray(a, dtype=float)
+    theta_a = np.asarray(theta_a, dtype=float)
+    up = np.broadcast_to(np.asarray(up, dtype=float), a.shape + (3,))
+    d = np.stack([np.cos(theta_a), np.sin(theta_a), np.zeros_like(theta_a)], axis=-1)
     du = np.sum(d * up, axis=-1)
     d_h = d - du[:, None] * up
     norm_h = np.linalg.norm(d_h, axis=-1)
@@ -130,13 +167,10 @@ def level_two_position(theta_rad, rate_dph, up, latitude_deg: float,
     psi_pos = _heading(n1[:, None] * h1 + n2[:, None] * h2, up)
     psi_neg = _heading(n1[:, None] * h1 - n2[:, None] * h2, up)
     if heading_hint_deg is None:
-        psi, ambiguous = psi_pos, True
-    else:
-        hint = math.radians(heading_hint_deg)
+        return psi_pos, True
+    hint = math.radians(heading_hint_deg)
 
-        def dist(p):
-            return np.abs(np.angle(np.exp(1j * (p - hint))))
+    def dist(p):
+        return np.abs(np.angle(np.exp(1j * (p - hint))))
 
-        psi, ambiguous = np.where(dist(psi_neg) < dist(psi_pos), psi_neg, psi_pos), False
-    rms = np.sqrt(np.mean(resid * resid, axis=-1))
-    return psi, np.full(len(th), omega_h), b, rms, ambiguous
+    return np.where(dist(psi_neg) < dist(psi_pos), psi_neg, psi_pos), False
