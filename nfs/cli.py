@@ -114,7 +114,18 @@ def _cmd_table(args) -> int:
             cycles = run_cycle_study(scenario, settings, progress=progress)
             text = cycle_table_markdown(cycles)
             paths = write_cycle_study(cycles, args.output, json_path=args.json,
-                                      title=f"{scenario.name}: drift table of the cycles")
+                                      title=f"{scenario.name}: drift table of the cycles",
+                                      provenance=table_provenance(scenario, settings))
+            table = None
+        elif settings.protocol == "parameters":   # every cycle calibrates the biases
+            from .compensate.parameters import run_parameter_study
+            from .report.parameters import parameter_table_markdown, write_parameter_study
+            pstudy = run_parameter_study(scenario, settings, progress=progress)
+            text = parameter_table_markdown(pstudy)
+            paths = write_parameter_study(
+                pstudy, args.output, json_path=args.json,
+                title=f"{scenario.name}: parameter-level compensation",
+                provenance=table_provenance(scenario, settings))
             table = None
         else:
             study = run_study(scenario, settings, progress=progress)
@@ -127,7 +138,7 @@ def _cmd_table(args) -> int:
     if baseline is not None:
         if table is None:
             raise NfsError("--baseline compares heading tables; this scenario's protocol "
-                           "'cycles' writes a drift table")
+                           f"'{settings.protocol}' writes another table")
         from .report.baseline import compare_tables, write_baseline_comparison
         comparison = compare_tables(table, baseline, tolerance=args.tolerance)
         paths += write_baseline_comparison(comparison, args.output)
@@ -166,6 +177,10 @@ def _baseline(args, scenario):
     methods = ["before", "stable", "floor"]
     if not args.no_compensation:
         settings = scenario.compensation or CompensationSettings()
+        if settings.protocol != "start-ups":
+            raise NfsError(f"--baseline compares heading tables; scenario '{scenario.name}' "
+                           f"has compensation.protocol = \"{settings.protocol}\", which writes "
+                           "another table (or add --no-compensation)")
         methods += [get_method(m).name for m in settings.methods]
     check_common(baseline, scenario.start_temperatures_c, methods)
     return baseline

@@ -45,13 +45,13 @@ from .dataset import DriftDataset, drift_dataset
 from .methods import TABLE_METHODS, MethodSpec, get_method
 from .modes import DEFAULT_FEATURE_MODE, FEATURE_MODE_NOTES, check_features_mode
 
-__all__ = ["PROTOCOLS", "CompensationSettings", "MethodResult", "SeedResult",
+__all__ = ["PROTOCOLS", "train_scenario", "CompensationSettings", "MethodResult", "SeedResult",
            "CompensationStudy", "run_study", "test_scenario", "DriftRow", "errors_by_temperature",
            "table_provenance"]
 
 
 #: What ``nfs table`` trains and tests on (:attr:`CompensationSettings.protocol`).
-PROTOCOLS = ("start-ups", "cycles")
+PROTOCOLS = ("start-ups", "cycles", "parameters")
 
 
 @document_fields
@@ -97,8 +97,10 @@ class CompensationSettings:
     last unit)."""
     protocol: str = "start-ups"
     """What ``nfs table`` trains and tests on: ``start-ups`` (training start-ups, then the
-    test start-ups: the heading table) or ``cycles`` (cycle 1 of the chamber program, then
-    the other cycles: the drift table of :mod:`nfs.compensate.cycles`)."""
+    test start-ups: the heading table), ``cycles`` (cycle 1 of the chamber program, then
+    the other cycles: the drift table of :mod:`nfs.compensate.cycles`) or ``parameters``
+    (the parameters every cycle calibrates, modelled against temperature on the training
+    runs and scored on the test runs: :mod:`nfs.compensate.parameters`)."""
 
 
 @document_fields
@@ -332,6 +334,21 @@ def test_scenario(scenario, settings: CompensationSettings | None = None):
     return scenario.made_by(test_units, s.test_repeats or scenario.repeats)
 
 
+def train_scenario(scenario, settings: CompensationSettings | None = None):
+    """The scenario's training start-ups: ``train_repeats`` per training temperature by each
+    training unit, with the training seed.  NfsError when they would be the test start-ups."""
+    s = settings or scenario.compensation or CompensationSettings()
+    train_units, test_units = scenario.unit_split(s.train_units, s.test_units)
+    train_sc = scenario.made_by(
+        train_units, s.train_repeats, seed=s.train_seed, name=f"{scenario.name}_train",
+        start_temperatures_c=tuple(s.train_temperatures_c or scenario.start_temperatures_c))
+    if train_sc.seed == scenario.seed and set(train_units) & set(test_units) and \
+            train_sc.start_temperatures_c == scenario.start_temperatures_c:
+        raise NfsError("the training start-ups must differ from the test start-ups: "
+                       "set compensation.train_seed different from the scenario's seed")
+    return train_sc
+
+
 def table_provenance(scenario, settings: CompensationSettings | None = None, *,
                      compensated: bool = True) -> dict:
     """The ``provenance`` of a heading table of ``scenario`` (as loaded, before the test
@@ -370,7 +387,7 @@ def run_study(scenario, settings: CompensationSettings | None = None, *,
             progress(step, n_steps, msg)
         step += 1
 
-    train_units, test_units = scenario.unit_split(s.train_units, s.test_units)
+    train_sc = train_scenario(scenario, s)
     if test is None:
         scenario = test_scenario(scenario, s)
         tick("simulating the test start-ups")
@@ -378,13 +395,6 @@ def run_study(scenario, settings: CompensationSettings | None = None, *,
     else:
         step += 1
     tick("simulating the training start-ups")
-    train_sc = scenario.made_by(
-        train_units, s.train_repeats, seed=s.train_seed, name=f"{scenario.name}_train",
-        start_temperatures_c=tuple(s.train_temperatures_c or scenario.start_temperatures_c))
-    if train_sc.seed == scenario.seed and set(train_units) & set(test_units) and \
-            train_sc.start_temperatures_c == scenario.start_temperatures_c:
-        raise NfsError("the training start-ups must differ from the test start-ups: "
-                       "set compensation.train_seed different from the scenario's seed")
     train_runs = tuple(simulate_run(train_sc.instrument, c).run for c in train_sc.conditions())
     data = drift_dataset(train_runs, list(s.features), decimate_s=s.decimate_s,
                          cutoff_period_s=s.cutoff_period_s,

@@ -654,6 +654,12 @@ def load_scenario(path: str | Path | None = None,
                                 "out, and a cycling study trains on one cycle: use untuned "
                                 "methods with protocol = \"cycles\"", file=f,
                                 key="compensation.methods")
+    if comp.protocol == "parameters" and len(
+            {round(a % 360.0, 6) for a in schedule.positions_deg}) < 3:
+        raise ScenarioError("\"parameters\" calibrates the biases and the scale factor in "
+                            "every north-finding cycle: [schedule] positions_deg needs three "
+                            "distinct positions or more", file=f,
+                            key="compensation.protocol")
     return Scenario(
         name=string(d, "name", "", f, path.stem), instrument=inst,
         start_temperatures_c=temps, schedule=schedule, seed=seed, repeats=repeats,

@@ -103,7 +103,7 @@ def cycle_table_markdown(study) -> str:
             + "\n".join(f"- {n}" for n in notes) + "\n")
 
 
-def cycle_table_json(study, title: str = "") -> str:
+def cycle_table_json(study, title: str = "", provenance: dict | None = None) -> str:
     """Every row with ``mae_dph``, ``std_dph``, ``rmse_dph``, ``bias_stability_dph``,
     ``improvement_pct``, each with ``*_ci`` [low, high], the ramp statistics, the heading
     RMSE and the paper's figure for the same method (null when it has none)."""
@@ -122,17 +122,19 @@ def cycle_table_json(study, title: str = "") -> str:
     doc = {"title": title, "scenario": study.scenario.name, "protocol": "cycles",
            "cycles_s": [list(sp) for sp in study.spans_s], "n_boot": study.n_boot,
            "published": "Tao, Li, Zheng, Wu and Fu, Sensors 19(13), 2986 (2019), Tables 2-5",
-           "rows": rows, "notes": _notes(study)}
+           "rows": rows, "provenance": provenance,
+           "notes": _notes(study)}
     return json.dumps(doc, indent=2) + "\n"
 
 
-def write_cycle_study(study, out_dir, *, json_path=None, title: str = "") -> list[Path]:
+def write_cycle_study(study, out_dir, *, json_path=None, title: str = "",
+                      provenance: dict | None = None) -> list[Path]:
     """Write drift_table.md, .csv, .json and report.md into ``out_dir`` (and the JSON also
     to ``json_path``), each atomically.  Returns the paths written."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     md = cycle_table_markdown(study)
-    js = cycle_table_json(study, title)
+    js = cycle_table_json(study, title, provenance)
     buf = io.StringIO()
     rows = json.loads(js)["rows"]
     w = csv.writer(buf, lineterminator="\n")

@@ -13,7 +13,8 @@ project (Opto-Electronic Engineering), Tables 1-3.
 from __future__ import annotations
 
 __all__ = ["SEED004_TEMPERATURES_C", "SEED004_TABLE3_HEADING_RMSE_DEG",
-           "SEED004_TABLE2_DRIFT_DPH", "SEED004_TABLE1_SVR", "TAO2019_BIAS_STABILITY"]
+           "SEED004_TABLE2_DRIFT_DPH", "SEED004_TABLE1_SVR", "TAO2019_BIAS_STABILITY",
+           "LIANG2021_RVR_OVER_LS_PCT"]
 
 #: Start temperatures of Table 3 [degC].
 SEED004_TEMPERATURES_C = (-32.0, -16.0, -5.0, 17.0, 28.0, 43.0, 54.0)
@@ -53,3 +54,10 @@ TAO2019_BIAS_STABILITY = {
     "LSSVM": (0.00758, 59.03),
     "IR-LSSVM": (0.00718, 61.19),
 }
+
+
+#: Liang, Tao, Wang, Guo and Zhao, "System-Level Temperature Compensation Method for the RLG-IMU
+#: Based on HHO-RVR", Journal of Sensors 2021, 6613574 (abstract and section 4.2, Table 2):
+#: how much HHO-RVR betters the cubic least squares on average over the 15 temperature-related
+#: parameters of their RLG IMU [%]: RMSE, MAE, R^2 and the residual variance.
+LIANG2021_RVR_OVER_LS_PCT = {"rmse": 35.27, "mae": 39.29, "r2": 2.29, "residual_variance": 30.34}
