@@ -125,14 +125,20 @@ def main(argv=None) -> None:
                else ["none", *HIDDEN_EFFECTS])
     cases = [(None if e == "none" else e, s) for e in effects for s in range(1, args.seeds + 1)]
     t0 = time.perf_counter()
-    rows = Parallel(n_jobs=args.jobs)(delayed(one_set)(h, s) for h, s in cases)
-    wall = time.perf_counter() - t0
     print(f"{'hidden':26s} {'seed':>4s}  {'ok':3s} {'structure':13s} top significant "
-          "(n significant)")
-    for r in rows:
+          "(n significant)", flush=True)
+    rows = []
+    # Each set is printed as it finishes (a run of ~1.5 h shows its progress as it goes);
+    # the summary below is in the order of the cases.
+    for r in Parallel(n_jobs=args.jobs, return_as="generator_unordered")(
+            delayed(one_set)(h, s) for h, s in cases):
+        rows.append(r)
         print(f"{r['hidden']:26s} {r['seed']:4d}  {'yes' if r['ok'] else 'NO ':3s} "
               f"{r['structure']:13s} {r['top']}{' (tied)' if r['tied'] else ''} "
-              f"({r['n_significant']})")
+              f"({r['n_significant']})", flush=True)
+    order = {case: i for i, case in enumerate((h or "none", s) for h, s in cases)}
+    rows.sort(key=lambda r: order[(r["hidden"], r["seed"])])
+    wall = time.perf_counter() - t0
     print()
     hits = [r for r in rows if r["hidden"] not in ("none", "outside")]
     nulls = [r for r in rows if r["hidden"] in ("none", "outside")]

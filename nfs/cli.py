@@ -108,13 +108,15 @@ def _cmd_table(args) -> int:
             settings = dataclasses.replace(settings, tuner_seeds=args.tuner_seeds)
         if args.features_mode is not None:
             settings = dataclasses.replace(settings, features_mode=args.features_mode)
-        if settings.protocol == "cycles":   # cycle 1 of the chamber program trains
-            from .compensate.cycles import run_cycle_study
+        if settings.protocol in ("cycles", "runs"):   # the drift table, trained once
+            from .compensate.cycles import run_cycle_study, run_runs_study
             from .report.cycles import cycle_table_markdown, write_cycle_study
-            cycles = run_cycle_study(scenario, settings, progress=progress)
+            run = run_cycle_study if settings.protocol == "cycles" else run_runs_study
+            cycles = run(scenario, settings, progress=progress)
             text = cycle_table_markdown(cycles)
             paths = write_cycle_study(cycles, args.output, json_path=args.json,
-                                      title=f"{scenario.name}: drift table of the cycles",
+                                      title=f"{scenario.name}: drift table of the "
+                                            f"{settings.protocol}",
                                       provenance=table_provenance(scenario, settings))
             table = None
         elif settings.protocol == "parameters":   # every cycle calibrates the biases

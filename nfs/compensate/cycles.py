@@ -1,5 +1,5 @@
 """Train on a chamber program's first cycle, test on the others: the drift table of a
-temperature-cycling experiment.
+temperature-cycling experiment (and the same table over whole runs: :func:`run_runs_study`).
 
 Protocol (Tao, Li, Zheng, Wu and Fu, "High Precision Compensation for a Total Reflection
 Prism Laser Gyro Bias in Consideration of High Frequency Oscillator Voltage", Sensors 19(13),
@@ -11,8 +11,9 @@ compensation"):
 2. Every method is trained on cycle 1 of every run (drift by wavelet separation, the
    scenario's features and mode, training samples every ``decimate_s``) and predicts the
    drift of the later cycles from their own thermometers and channels.
-3. The uncompensated row subtracts the mean bias of cycle 1: a constant calibrated on the
-   training cycle, the least any user applies.
+3. The uncompensated row subtracts the mean bias of cycle 1 (of the training runs with
+   :func:`run_runs_study`): a constant calibrated on the training data, the least any user
+   applies.
 4. Scores on the test cycles, trusted (not moving) samples, residual e = drift - prediction:
 
    - MAE, STD, RMSE [deg/h] of e on the wavelet-separated drift at every sample (the drift
@@ -46,7 +47,7 @@ from sklearn.exceptions import ConvergenceWarning
 
 from ..denoise import separate_drift
 from ..errors import NfsError
-from ..experiment import northfind_runs, run_scenario
+from ..experiment import northfind_runs, run_scenario, simulate_run
 from ..io.measurement import Run
 from ..report.intervals import bc_interval
 from ..report.table import pooled_rmse
@@ -54,8 +55,9 @@ from .compensator import DriftCompensator, prediction_plan, train_compensator
 from .dataset import drift_dataset
 from .methods import get_method
 from .modes import check_features_mode
+from .study import CompensationSettings, test_scenario, train_scenario
 
-__all__ = ["CycleRow", "CycleStudy", "run_cycle_study", "cut_run", "CYCLE_METRICS",
+__all__ = ["CycleRow", "CycleStudy", "run_cycle_study", "run_runs_study", "cut_run", "CYCLE_METRICS",
            "BIAS_WINDOW_S", "BLOCK_S", "RAMP_RATE_C_PER_S", "UNCOMPENSATED"]
 
 #: The table's metrics, in order (JSON keys).
@@ -84,6 +86,10 @@ class CycleRow:
     """The same keys -> (low, high) 95 % interval."""
     heading_rmse_deg: float
     """Heading RMSE of the test cycles' north-finding cycles [deg]."""
+    msd_by_part: tuple = ()
+    """Mean square deviation of the compensated bias (gyro - Earth rate - prediction) of
+    each test part (cycle or run) at its trusted samples [(deg/h)^2]: Cheng et al.'s (2015)
+    MSD, their Tables 2-4."""
 
 
 @dataclass(frozen=True)
@@ -229,24 +235,10 @@ def run_cycle_study(scenario, settings=None, *, n_boot: int = 2000,
     """Simulate ``scenario``, train every method of ``settings`` (default: the scenario's
     ``[compensation]``) on cycle 1 of its chamber program, and score it on the other cycles
     (module docstring).  ``n_boot`` bootstrap replicates, seeded by ``random_state``."""
-    from .study import CompensationSettings
     s = settings or scenario.compensation or CompensationSettings()
     spans = _spans(scenario)
-    specs = [get_method(m) for m in s.methods]
-    for spec in specs:
-        if spec.tuned:
-            raise NfsError(f"method '{spec.key}' tunes its hyperparameters by leaving one "
-                           "start temperature or run out, and a cycling study trains on one "
-                           "cycle: use an untuned method (ls, stepwise, bp, rbf, lssvm, "
-                           "ir-lssvm) here")
-    n_steps, step = 4 + len(specs), 0
-
-    def tick(msg):
-        nonlocal step
-        if progress is not None:
-            progress(step, n_steps, msg)
-        step += 1
-
+    specs = _untuned(s, "a cycling study trains on one cycle")
+    tick = _ticker(progress, 4 + len(specs))
     tick("simulating the runs")
     res = run_scenario(scenario)
     train, test = [], []
@@ -255,6 +247,52 @@ def run_cycle_study(scenario, settings=None, *, n_boot: int = 2000,
         for c, (a, b) in enumerate(spans[i_temp]):
             part = cut_run(sim.run, a, b, f"cycle{c + 1}")
             (train if c == 0 else test).append(part)
+    return _drift_study(scenario, s, specs, train, test, n_boot, tick,
+                        tuple(tuple(sp) for sp in spans[0]))
+
+
+def run_runs_study(scenario, settings=None, *, n_boot: int = 2000,
+                   progress: Callable[[int, int, str], None] | None = None) -> CycleStudy:
+    """The drift table over whole runs: train every method on the scenario's training runs
+    (:func:`~nfs.compensate.study.train_scenario`), score it on its test runs
+    (:func:`~nfs.compensate.study.test_scenario`), as Cheng, Qi, Chen and Landry (Sensors
+    15(5), 11189, 2015, section 4.2) model one gyro on its runs and test it on five more.
+    The scores are those of :func:`run_cycle_study`, each test run taking the place of a
+    test cycle; :attr:`CycleRow.msd_by_part` holds each test run's mean square deviation
+    (their Table 2)."""
+    s = settings or scenario.compensation or CompensationSettings()
+    specs = _untuned(s, "a drift table of runs trains once")
+    tick = _ticker(progress, 4 + len(specs))
+    tick("simulating the runs")
+    train_sc = train_scenario(scenario, s)
+    train = [simulate_run(train_sc.instrument, c).run for c in train_sc.conditions()]
+    test = [sim.run for sim in run_scenario(test_scenario(scenario, s)).simulations]
+    return _drift_study(scenario, s, specs, train, test, n_boot, tick, ())
+
+
+def _untuned(s, why: str):
+    specs = [get_method(m) for m in s.methods]
+    for spec in specs:
+        if spec.tuned:
+            raise NfsError(f"method '{spec.key}' tunes its hyperparameters by leaving one "
+                           f"start temperature or run out, and {why}: use an untuned method "
+                           "(ls, stepwise, bp, rbf, lssvm, ir-lssvm) here")
+    return specs
+
+
+def _ticker(progress, n_steps: int):
+    step = 0
+
+    def tick(msg):
+        nonlocal step
+        if progress is not None:
+            progress(step, n_steps, msg)
+        step += 1
+    return tick
+
+
+def _drift_study(scenario, s, specs, train, test, n_boot, tick, spans) -> CycleStudy:
+    """Train on ``train``, score on the parts ``test`` (module docstring, steps 2-5)."""
     tick("separating the drift")
     mode = check_features_mode(s.features_mode)
     data = drift_dataset(train, list(s.features), decimate_s=s.decimate_s,
@@ -305,9 +343,11 @@ def run_cycle_study(scenario, settings=None, *, n_boot: int = 2000,
         if name == UNCOMPENSATED:
             values["improvement_pct"] = 0.0
             intervals["improvement_pct"] = (0.0, 0.0)
-        rows.append(CycleRow(name, values, intervals, heading))
+        msd = tuple(float(np.mean((p.raw - q[p.trusted]) ** 2))
+                    for p, q in zip(parts, preds[name]))
+        rows.append(CycleRow(name, values, intervals, heading, msd))
     tick("done")
     return CycleStudy(scenario=scenario, settings=s,
-                      spans_s=tuple(tuple(sp) for sp in spans[0]), train_runs=tuple(train),
+                      spans_s=spans, train_runs=tuple(train),
                       test_runs=tuple(test), rows=tuple(rows), compensators=comps,
                       n_boot=n_boot, feature_names=tuple(data.feature_names))

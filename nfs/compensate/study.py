@@ -51,7 +51,7 @@ __all__ = ["PROTOCOLS", "train_scenario", "CompensationSettings", "MethodResult"
 
 
 #: What ``nfs table`` trains and tests on (:attr:`CompensationSettings.protocol`).
-PROTOCOLS = ("start-ups", "cycles", "parameters")
+PROTOCOLS = ("start-ups", "cycles", "runs", "parameters")
 
 
 @document_fields
@@ -98,7 +98,8 @@ class CompensationSettings:
     protocol: str = "start-ups"
     """What ``nfs table`` trains and tests on: ``start-ups`` (training start-ups, then the
     test start-ups: the heading table), ``cycles`` (cycle 1 of the chamber program, then
-    the other cycles: the drift table of :mod:`nfs.compensate.cycles`) or ``parameters``
+    the other cycles: the drift table of :mod:`nfs.compensate.cycles`), ``runs`` (the same
+    drift table, training runs then test runs) or ``parameters``
     (the parameters every cycle calibrates, modelled against temperature on the training
     runs and scored on the test runs: :mod:`nfs.compensate.parameters`)."""
 

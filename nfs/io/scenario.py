@@ -642,17 +642,18 @@ def load_scenario(path: str | Path | None = None,
                                 else "chamber.program")
     comp = _compensation(table(d, "compensation", "", f, {}), f, units)
     if comp.protocol == "cycles":
-        from ..compensate.methods import get_method
         if chamber.program is None or len(chamber.program.cycles) < 2:
             raise ScenarioError("\"cycles\" trains on cycle 1 of the chamber program and "
                                 "tests on the others: [chamber] needs a program with a "
                                 "{ repeat = N, steps = [...] } step, N >= 2", file=f,
                                 key="compensation.protocol")
+    if comp.protocol in ("cycles", "runs"):
+        from ..compensate.methods import get_method
         tuned = [m for m in comp.methods if get_method(m).tuned]
         if tuned:
             raise ScenarioError(f"{tuned[0]} tunes by leaving a start temperature or a run "
-                                "out, and a cycling study trains on one cycle: use untuned "
-                                "methods with protocol = \"cycles\"", file=f,
+                                "out, and a drift-table study trains once: use untuned "
+                                f"methods with protocol = \"{comp.protocol}\"", file=f,
                                 key="compensation.methods")
     if comp.protocol == "parameters" and len(
             {round(a % 360.0, 6) for a in schedule.positions_deg}) < 3:

@@ -17,7 +17,7 @@ import math
 from pathlib import Path
 
 from ..io.atomic import atomic_write_text
-from .reference import TAO2019_BIAS_STABILITY
+from .reference import CHENG2015_TABLE2_MSD, TAO2019_BIAS_STABILITY
 
 __all__ = ["cycle_table_markdown", "cycle_table_json", "write_cycle_study"]
 
@@ -41,27 +41,40 @@ def _j(v: float):
     return None if not math.isfinite(v) else float(v)
 
 
+def _runs(study) -> bool:
+    """True for a drift table over whole runs (no cycles of a program)."""
+    return not study.spans_s
+
+
 def _notes(study) -> list[str]:
     s = study.settings
-    spans = ", ".join(f"{a / 3600:.2f}-{b / 3600:.2f} h" for a, b in study.spans_s)
+    if _runs(study):
+        split = (f"{len(study.train_runs)} training run(s) train every method, "
+                 f"{len(study.test_runs)} test run(s) are scored (the scenario's train/test "
+                 "split of units and repeats).")
+    else:
+        spans = ", ".join(f"{a / 3600:.2f}-{b / 3600:.2f} h" for a, b in study.spans_s)
+        split = (f"Cycles of the chamber program (from power-on): {spans}; cycle 1 of "
+                 f"{len(study.train_runs)} run(s) trains every method, the other "
+                 f"{len(study.test_runs)} cycle(s) are scored.")
+    part = "run" if _runs(study) else "cycle"
     return [
-        f"Cycles of the chamber program (from power-on): {spans}; cycle 1 of "
-        f"{len(study.train_runs)} run(s) trains every method, the other {len(study.test_runs)} "
-        "cycle(s) are scored.",
+        split,
         f"Features {', '.join(study.feature_names)} in {s.features_mode} mode; drift by wavelet "
         f"separation (cutoff {s.cutoff_period_s:g} s); training samples every "
         f"{s.decimate_s:g} s.",
         "MAE, STD, RMSE: the separated drift minus the prediction at every trusted sample of the "
-        "test cycles; bias stability: standard deviation of the 100 s means of the gyro output "
+        f"test {part}s; bias stability: standard deviation of the 100 s means of the gyro output "
         "minus Earth rate minus prediction (Tao et al. 2019, section 4.1: data at 100 s); "
         "improvement: 1 - bias stability / the uncompensated row's.",
-        f"uncompensated: the mean bias of cycle 1 subtracted (a constant calibration). "
-        f"Intervals: 95 %, bias-corrected, from a block bootstrap of the test cycles "
+        f"uncompensated: the mean bias of the training {part}s subtracted (a constant "
+        f"calibration). Intervals: 95 %, bias-corrected, from a block bootstrap of the test "
+        f"{part}s "
         f"({study.n_boot} replicates, 30 min blocks, every row with the same draws).",
         "Ramps: residuals where the chamber rises (up) or falls (down) faster than "
         "0.006 C/min; opposite signed means on the two are thermal hysteresis, a rate term "
         "the model lacks.",
-        "heading RMSE: every north-finding cycle of the test cycles, compensated [deg].",
+        f"heading RMSE: every north-finding cycle of the test {part}s, compensated [deg].",
     ]
 
 
@@ -77,7 +90,7 @@ def cycle_table_markdown(study) -> str:
     lines = ["| " + " | ".join(head) + " |", "|---|" + "---:|" * (len(head) - 1)]
     for r in study.rows:
         cells = [_cell(r.values[k], r.intervals.get(k), d) for k, _, d in _METRICS]
-        pub = _paper(r.method)
+        pub = None if _runs(study) else _paper(r.method)
         cells += [f"{r.heading_rmse_deg:.4f}",
                   f"{pub[0]:.5f} deg/h, {pub[1]:.2f} %" if pub else ""]
         lines.append(f"| {r.method} | " + " | ".join(cells) + " |")
@@ -89,6 +102,10 @@ def cycle_table_markdown(study) -> str:
     best = min((r for r in study.rows[1:]), key=lambda r: r.values["bias_stability_dph"],
                default=None)
     shape = []
+    if _runs(study):
+        msd = _msd_table(study)
+        return ("\n".join(lines) + "\n\n" + "\n".join(ramp) + "\n\n" + msd + "\n"
+                + "\n".join(f"- {n}" for n in _notes(study) + _cheng_shape(study)) + "\n")
     if best is not None:
         improved = [r.method for r in study.rows[1:]
                     if r.intervals["improvement_pct"][0] > 0]
@@ -103,6 +120,36 @@ def cycle_table_markdown(study) -> str:
             + "\n".join(f"- {n}" for n in notes) + "\n")
 
 
+def _msd_table(study) -> str:
+    """Mean square deviation of every test run by row (Cheng et al. 2015, Table 2), with the
+    paper's before/after figures beside the first five runs."""
+    head = ["test run"] + [f"MSD {r.method} [(deg/h)^2]" for r in study.rows] + \
+        ["paper: before, after"]
+    lines = ["| " + " | ".join(head) + " |", "|---|" + "---:|" * (len(head) - 1)]
+    for i, run in enumerate(study.test_runs):
+        pub = CHENG2015_TABLE2_MSD[i] if i < len(CHENG2015_TABLE2_MSD) else None
+        lines.append(f"| {run.name} | " + " | ".join(f"{r.msd_by_part[i]:.3g}"
+                                                      for r in study.rows)
+                     + (f" | {pub[0]:.3g}, {pub[1]:.3g} |" if pub else " | |"))
+    return "\n".join(lines) + "\n"
+
+
+def _cheng_shape(study) -> list[str]:
+    before = study.rows[0].msd_by_part
+    out = []
+    for r in study.rows[1:]:
+        ratios = [b / a for a, b in zip(r.msd_by_part, before) if a > 0]
+        if ratios:
+            out.append(f"{r.method}: MSD {min(ratios):.1f}x to {max(ratios):.1f}x smaller "
+                       "than uncompensated over the test runs")
+    pub = [b / a for b, a in CHENG2015_TABLE2_MSD]
+    return [f"Shape beside Cheng et al. 2015 (Table 2: the RBF network on T, dT, T x dT makes "
+            f"the MSD {min(pub):.0f}x to {max(pub):.0f}x smaller on five test runs; their "
+            "gyro is not ours, compare shapes, not digits): " + "; ".join(out) + ". The MSD "
+            "is of the samples at the run's rate, so the gyro's white noise (angle random "
+            "walk), which no model removes, sets its floor."]
+
+
 def cycle_table_json(study, title: str = "", provenance: dict | None = None) -> str:
     """Every row with ``mae_dph``, ``std_dph``, ``rmse_dph``, ``bias_stability_dph``,
     ``improvement_pct``, each with ``*_ci`` [low, high], the ramp statistics, the heading
@@ -115,13 +162,18 @@ def cycle_table_json(study, title: str = "", provenance: dict | None = None) -> 
             lo, hi = r.intervals.get(k, (math.nan, math.nan))
             row[f"{k}_ci"] = [_j(lo), _j(hi)]
         row["heading_rmse_deg"] = _j(r.heading_rmse_deg)
-        pub = _paper(r.method)
+        row["msd_by_part_dph2"] = [_j(v) for v in r.msd_by_part]
+        pub = None if _runs(study) else _paper(r.method)
         row["published_bias_stability_dph"] = pub[0] if pub else None
         row["published_improvement_pct"] = pub[1] if pub else None
         rows.append(row)
-    doc = {"title": title, "scenario": study.scenario.name, "protocol": "cycles",
+    doc = {"title": title, "scenario": study.scenario.name,
+           "protocol": "runs" if _runs(study) else "cycles",
+           "parts": [r.name for r in study.test_runs],
            "cycles_s": [list(sp) for sp in study.spans_s], "n_boot": study.n_boot,
-           "published": "Tao, Li, Zheng, Wu and Fu, Sensors 19(13), 2986 (2019), Tables 2-5",
+           "published": ("Cheng, Qi, Chen and Landry, Sensors 15(5), 11189 (2015), Table 2"
+                         if _runs(study) else
+                         "Tao, Li, Zheng, Wu and Fu, Sensors 19(13), 2986 (2019), Tables 2-5"),
            "rows": rows, "provenance": provenance,
            "notes": _notes(study)}
     return json.dumps(doc, indent=2) + "\n"
@@ -138,7 +190,7 @@ def write_cycle_study(study, out_dir, *, json_path=None, title: str = "",
     buf = io.StringIO()
     rows = json.loads(js)["rows"]
     w = csv.writer(buf, lineterminator="\n")
-    keys = [k for k in rows[0] if not k.endswith("_ci")]
+    keys = [k for k in rows[0] if not k.endswith("_ci") and k != "msd_by_part_dph2"]
     cis = [k for k in rows[0] if k.endswith("_ci")]
     w.writerow(keys + [f"{k}_{e}" for k in cis for e in ("low", "high")])
     for r in rows:

@@ -14,7 +14,7 @@ from __future__ import annotations
 
 __all__ = ["SEED004_TEMPERATURES_C", "SEED004_TABLE3_HEADING_RMSE_DEG",
            "SEED004_TABLE2_DRIFT_DPH", "SEED004_TABLE1_SVR", "TAO2019_BIAS_STABILITY",
-           "LIANG2021_RVR_OVER_LS_PCT"]
+           "LIANG2021_RVR_OVER_LS_PCT", "CHENG2015_TABLE2_MSD"]
 
 #: Start temperatures of Table 3 [degC].
 SEED004_TEMPERATURES_C = (-32.0, -16.0, -5.0, 17.0, 28.0, 43.0, 54.0)
@@ -61,3 +61,10 @@ TAO2019_BIAS_STABILITY = {
 #: how much HHO-RVR betters the cubic least squares on average over the 15 temperature-related
 #: parameters of their RLG IMU [%]: RMSE, MAE, R^2 and the residual variance.
 LIANG2021_RVR_OVER_LS_PCT = {"rmse": 35.27, "mae": 39.29, "r2": 2.29, "residual_variance": 30.34}
+
+#: Cheng, Qi, Chen and Landry, "Modification of an RBF ANN-Based Temperature Compensation Model
+#: of Interferometric Fiber Optical Gyroscopes", Sensors 15(5), 11189-11207 (2015), Table 2:
+#: mean square deviation of the gyro output from the known rate in five test experiments,
+#: before and after compensation by the RBF network on T, dT and T x dT (as printed).
+CHENG2015_TABLE2_MSD = ((1.72e-4, 1.24e-5), (9.90e-4, 1.76e-5), (1.80e-3, 2.05e-5),
+                        (2.67e-4, 1.33e-5), (9.29e-4, 0.78e-5))

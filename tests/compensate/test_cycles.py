@@ -155,3 +155,46 @@ def test_published_figures_match_the_shared_reference():
         bs, imp = TAO2019_BIAS_STABILITY[name]
         assert bs == float(rows[weight]["bias_stability_dph"])
         assert imp == float(rows[weight]["improvement_pct"])
+
+
+RUNS = """start_temperatures_c = [10.0]
+units = 2
+repeats = 4
+duration_s = 7200.0
+[chamber]
+program = [{ hold_s = 1800.0 }, { ramp_to_c = 25.0, rate_c_per_min = 0.5 }, { hold_s = 3600.0 }]
+[compensation]
+protocol = "runs"
+methods = ["ls"]
+features = ["T_fog", "dT_fog", "TdT_fog"]
+train_units = [0]
+test_units = [0]
+train_repeats = 1
+test_repeats = 3
+n_jobs = 1
+"""
+
+
+def test_runs_protocol_scores_whole_test_runs_with_their_msd(tmp_path, cli):
+    # Oracle: the drift table of the test runs (not cycles), one MSD per test run and row,
+    # MSD = mean square of (gyro - Earth rate - prediction), so the uncompensated row's is
+    # at least its RMSE about the training mean squared less the noise; the paper is Cheng's.
+    p = tmp_path / "runs.toml"
+    p.write_text(RUNS)
+    code, out, err = cli("table", p, "-q", "-o", tmp_path / "out", "--json", tmp_path / "r.json")
+    assert code == 0, err
+    doc = json.loads((tmp_path / "r.json").read_text())
+    assert doc["protocol"] == "runs" and "Cheng" in doc["published"]
+    assert len(doc["parts"]) == 3 and all(len(r["msd_by_part_dph2"]) == 3 for r in doc["rows"])
+    unc, ls = doc["rows"]
+    assert all(a < b for a, b in zip(ls["msd_by_part_dph2"], unc["msd_by_part_dph2"]))
+    assert ls["bias_stability_dph"] < unc["bias_stability_dph"]
+    assert "| test run | MSD uncompensated" in out and "Cheng et al. 2015" in out
+    assert doc["rows"][0]["published_bias_stability_dph"] is None
+
+
+def test_runs_protocol_refuses_a_tuned_method_at_load(tmp_path):
+    p = tmp_path / "runs.toml"
+    p.write_text(RUNS.replace('["ls"]', '["ssa-svr"]'))
+    with pytest.raises(ScenarioError, match="untuned"):
+        load_scenario(p)
