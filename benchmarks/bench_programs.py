@@ -9,6 +9,9 @@ run twice, 51.3 h at 1 Hz, against the default start-up experiment, in one proce
    row on cycle 1, score cycle 2 with intervals, write the drift table (target: <= 60 s on
    2 cores), beside the wall time of ``nfs table`` on the default scenario (every row of the
    start-up table), both through the command line.
+3. Wall time of ``nfs table`` on the two other papers' scenarios: the ramps of Cheng et al.
+   2015 (the drift table over runs) and the 116.7 h ramp calibration of Liang et al. 2021
+   (parameter-level compensation), beside the same default table.
 
 Run as ``python benchmarks/bench_programs.py``.
 """
@@ -28,7 +31,11 @@ from nfs.experiment import simulate_run
 from nfs.io.scenario import load_scenario
 
 TARGET_S = 60.0
-CYCLE = Path(__file__).resolve().parents[1] / "scenarios" / "seed000_temperature_cycle.toml"
+SCENARIOS = Path(__file__).resolve().parents[1] / "scenarios"
+CYCLE = SCENARIOS / "seed000_temperature_cycle.toml"
+OTHERS = {"Cheng et al. 2015 ramps (drift table over runs)": SCENARIOS / "seed001_ramps.toml",
+          "Liang et al. 2021 ramp calibration (parameter level)":
+              SCENARIOS / "seed003_ramp_calibration.toml"}
 
 
 def best_of(f, n=3):
@@ -71,6 +78,10 @@ def main() -> None:
           f"({'under' if cycle_s <= TARGET_S else 'OVER'} the {TARGET_S:.0f} s target)")
     print(f"baseline, nfs table on the default start-up scenario (every row): {default_s:.1f} s;"
           f" ratio {cycle_s / default_s:.2f}x")
+    for what, path in OTHERS.items():
+        t = table_s(str(path))
+        print(f"nfs table {path.name}, {what}: {t:.1f} s; ratio to the default table "
+              f"{t / default_s:.2f}x")
 
 
 if __name__ == "__main__":
