@@ -7,14 +7,18 @@ per cell (2.5 h at 1 Hz, 4 positions, 150 s dwells), start temperatures -32, 17,
 
 Figures, all in this process's machine and load:
 
-- baseline: the cell function called in a loop in this process (no executor, no store);
+- baseline: the cell function called in a loop in this process (no executor, no store),
+  each start-up simulated alone;
+- the same cells in batches of ``BATCH_CELLS`` of one point (:func:`nfs.sweep.run_cells`),
+  their start-ups' thermal states stacked (one march over the samples for the whole batch):
+  the speed-up of stacking;
 - cells per second through :func:`nfs.sweep.run_sweep` with 1 local worker (in process) and
   2 local workers (joblib's loky processes, started by a 4-cell sweep before the timing, as
   a sweep of thousands of cells amortises their start): the speed-up of 2 workers (target
   >= 1.7x on 2 cores);
 - cells per second on a 2-worker Dask LocalCluster (cluster start-up timed apart);
-- the executor's overhead per cell: (sweep time with 1 worker - baseline) / cells (the
-  store, the hashing, the table and its bookkeeping);
+- the executor's overhead per cell: (sweep time with 1 worker - the batched loop) / cells
+  (the store, the hashing, the table and its bookkeeping);
 - peak memory (max RSS) of a sweep of 100 and of N cells, each in a fresh process with
   1 worker: flat when the two are close.
 
@@ -30,9 +34,9 @@ import subprocess
 import sys
 import tempfile
 import time
-from pathlib import Path
 
-from nfs.sweep import LocalExecutor, cell_tasks, run_cell, run_sweep, sweep_from_dict
+from nfs.sweep import (BATCH_CELLS, LocalExecutor, cell_batches, cell_tasks, run_cell, run_cells,
+                       run_sweep, sweep_from_dict)
 
 T0 = ([-32.0], [17.0], [54.0], [-5.0])
 
@@ -57,6 +61,13 @@ def baseline(spec) -> float:
     t0 = time.perf_counter()
     for task in cell_tasks(spec):
         run_cell(task)
+    return time.perf_counter() - t0
+
+
+def batched(spec) -> float:
+    t0 = time.perf_counter()
+    for batch in cell_batches(cell_tasks(spec)):
+        run_cells(batch)
     return time.perf_counter() - t0
 
 
@@ -89,9 +100,12 @@ def main() -> None:
     t_base = baseline(spec)
     print(f"baseline (cell function in a loop, this process): {t_base:.1f} s, "
           f"{n / t_base:.1f} cells/s")
+    t_stack = batched(spec)
+    print(f"stacked, batches of {BATCH_CELLS} cells of one point (this process): "
+          f"{t_stack:.1f} s, {n / t_stack:.1f} cells/s; {t_base / t_stack:.2f}x the baseline")
     t1 = timed_sweep(spec, LocalExecutor(1))
     print(f"nfs sweep, 1 worker:  {t1:.1f} s, {n / t1:.1f} cells/s; executor overhead "
-          f"{1e3 * (t1 - t_base) / n:.1f} ms per cell")
+          f"{1e3 * (t1 - t_stack) / n:.1f} ms per cell")
     t_warm = timed_sweep(spec_for(4), LocalExecutor(2))  # start joblib's 2 worker processes
     t2 = timed_sweep(spec, LocalExecutor(2))
     print(f"nfs sweep, 2 workers: {t2:.1f} s, {n / t2:.1f} cells/s (workers started apart: a "

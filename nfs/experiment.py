@@ -29,7 +29,7 @@ from .sensors import (Schedule, earth_rate_along_axis_dph, thermometer_reading,
 from .variability import (Variability, describe_units, start_up_state, unit_instrument,
                           unpowered_network)
 
-__all__ = ["RunConditions", "SimulationResult", "simulate_run", "effect_context",
+__all__ = ["RunConditions", "SimulationResult", "simulate_run", "simulate_runs", "effect_context",
            "conditions_from_run", "thermal_power",
            "ScenarioResult", "run_scenario", "northfind_runs", "stage_errors", "floor_deg",
            "uncompensated_table"]
@@ -183,7 +183,9 @@ def thermal_power(inst: Instrument, time_s: np.ndarray, moving: np.ndarray):
     """The heat input of the thermal effects: (power, terms, stateful).
 
     ``power`` is an array (n_samples, n_nodes) when no effect depends on the state, else a
-    per-sample law ``power(t_s, temperature_c)`` for :func:`thermal.simulate`; ``terms``
+    per-sample law ``power(t_s, temperature_c)`` for :func:`thermal.simulate` (or, with
+    temperatures (R, n_nodes) of R stacked runs, for :func:`thermal.simulate_many`: a
+    state-dependent effect then gets an array of the runs' node temperatures); ``terms``
     holds each state-free effect's power by label; ``stateful`` lists the state-dependent
     effects (effect, node index, params) to evaluate on the solution afterwards.
     """
@@ -209,9 +211,15 @@ def thermal_power(inst: Instrument, time_s: np.ndarray, moving: np.ndarray):
 
     def law(t_s: float, temperature_c: np.ndarray) -> np.ndarray:
         k = index[t_s]
-        p = fixed[k].copy()
+        if temperature_c.ndim == 1:
+            p = fixed[k].copy()
+            for f, j, params in calls:
+                p[j] += f(t_s, float(temperature_c[j]), moving_list[k], **params)
+            return p
+        # runs stacked (thermal.simulate_many): the law gets every run's node temperature
+        p = np.repeat(fixed[k][None, :], temperature_c.shape[0], axis=0)
         for f, j, params in calls:
-            p[j] += f(t_s, float(temperature_c[j]), moving_list[k], **params)
+            p[:, j] += f(t_s, temperature_c[:, j], moving_list[k], **params)
         return p
 
     return law, terms, stateful
@@ -260,17 +268,26 @@ def _check_simulated_channels(inst: Instrument) -> None:
                 f"(declared: {', '.join(sorted(declared)) or '(none)'})")
 
 
-def simulate_run(inst: Instrument, cond: RunConditions) -> SimulationResult:
-    """Simulate one start-up run of ``inst`` under ``cond``.
+@dataclass
+class _Prepared:
+    """One run up to its thermal solve (:func:`simulate_run`, :func:`simulate_runs`)."""
 
-    The unpowered instrument is soaked at T0 (every node at T0), follows the chamber
-    unpowered for ``cond.soak_s`` (a program's soak), is powered on at t = 0 and stays in the
-    chamber at T_amb(t) (T0 unless ``cond.chamber_c``).  With ``cond.variability`` the
-    instrument is unit ``cond.unit``'s draw of ``inst``, its nodes start from the start-up's
-    soak and the chamber wanders and cycles (:mod:`nfs.variability`).  The chamber is linear
-    between samples (first-order hold, exact for a program's ramps).  The run records as its
-    ``start_temperature_c`` the chamber's temperature at power-on, where it was soaked.
-    """
+    inst: Instrument
+    cond: RunConditions
+    rngs: dict
+    theta: np.ndarray
+    moving: np.ndarray
+    geom: Any
+    axes: dict
+    power: Any              # array (n_t, n) or a law for thermal.simulate
+    thermal_terms: dict
+    stateful: list
+    initial: Any            # node temperatures at power-on
+    ambient: np.ndarray     # chamber at the run's samples
+
+
+def _prepare(inst: Instrument, cond: RunConditions) -> _Prepared:
+    """Everything of one run before its thermal solve, the unpowered soak included."""
     _check_simulated_channels(inst)
     tilt = inst.turntable
     check_geometry(inst.effects, cond.schedule.positions_deg, tilt.tilt_north_deg,
@@ -288,7 +305,6 @@ def simulate_run(inst: Instrument, cond: RunConditions) -> SimulationResult:
         heading_deg=cond.true_heading_deg, rng=rngs["turntable"], theta_deg=theta,
         tilt_north_deg=tilt.tilt_north_deg, tilt_east_deg=tilt.tilt_east_deg), inst.effects)
     axes = geom.azimuth_elevation()
-    (_, elev_x), (_, elev_y), (azimuth, elev_gyro) = axes["x"], axes["y"], axes["gyro"]
 
     # 1. thermal network: the unpowered soak of a chamber program, then the run
     power, thermal_terms, stateful = thermal_power(inst, t, moving)
@@ -306,9 +322,97 @@ def simulate_run(inst: Instrument, cond: RunConditions) -> SimulationResult:
                                 ambient_c=ambient[:n_pre + 1], initial_c=initial,
                                 ambient_hold="first-order")
         initial, ambient = soak.temperature_c[-1], ambient[n_pre:]
-    th = thermal.simulate(inst.network, t, ambient_c=ambient, initial_c=initial,
-                          power_w=power, ambient_hold="first-order")
-    for e, j, params in stateful:
+    return _Prepared(inst, cond, rngs, theta, moving, geom, axes, power, thermal_terms,
+                     stateful, initial, np.asarray(ambient, dtype=float))
+
+
+def simulate_run(inst: Instrument, cond: RunConditions) -> SimulationResult:
+    """Simulate one start-up run of ``inst`` under ``cond``.
+
+    The unpowered instrument is soaked at T0 (every node at T0), follows the chamber
+    unpowered for ``cond.soak_s`` (a program's soak), is powered on at t = 0 and stays in the
+    chamber at T_amb(t) (T0 unless ``cond.chamber_c``).  With ``cond.variability`` the
+    instrument is unit ``cond.unit``'s draw of ``inst``, its nodes start from the start-up's
+    soak and the chamber wanders and cycles (:mod:`nfs.variability`).  The chamber is linear
+    between samples (first-order hold, exact for a program's ramps).  The run records as its
+    ``start_temperature_c`` the chamber's temperature at power-on, where it was soaked.
+    """
+    prep = _prepare(inst, cond)
+    th = thermal.simulate(prep.inst.network, cond.time_s, ambient_c=prep.ambient,
+                          initial_c=prep.initial, power_w=prep.power,
+                          ambient_hold="first-order")
+    return _finish(prep, th)
+
+
+#: Memory the stacked thermal march of :func:`simulate_runs` may take [bytes].
+STACK_BYTES = 64 * 2 ** 20
+
+
+def _stack_key(prep: _Prepared):
+    """Runs with equal keys share the network, the time grid and the power law."""
+    c = prep.cond
+    unit = c.unit if c.variability is not None and c.variability.per_unit else None
+    t = c.time_s
+    return (unit, t.size, float(t[0]), float(t[-1]), prep.moving.tobytes())
+
+
+def simulate_runs(inst: Instrument, conds, *,
+                  progress: Callable[[int, int, str], None] | None = None
+                  ) -> list[SimulationResult]:
+    """:func:`simulate_run` for many runs of ``inst``, their thermal states stacked.
+
+    Runs of one unit on one time grid and schedule share the network and the heat input law:
+    their thermal networks are solved together (:func:`thermal.simulate_many`, one loop over
+    the samples for all of them, in batches of at most :data:`STACK_BYTES` of state), the
+    rest run by run.  The results equal :func:`simulate_run`'s to the last bits of the
+    temperatures (a matrix product replaces matrix-vector products); the same conditions give
+    the same bytes whatever else is simulated beside them in a batch of the same size.
+    ``progress(i, n, name)`` is called before each run's preparation.
+    """
+    conds = list(conds)
+    preps = []
+    for i, cond in enumerate(conds):
+        if progress is not None:
+            progress(i, len(conds), cond.name)
+        preps.append(_prepare(inst, cond))
+    groups: dict = {}
+    for i, p in enumerate(preps):
+        groups.setdefault(_stack_key(p), []).append(i)
+    ths: list = [None] * len(preps)
+    for idx in groups.values():
+        first = preps[idx[0]]
+        n_t = first.cond.time_s.size
+        width = 2 * len(first.inst.network.node_names) + 3
+        per_batch = max(1, STACK_BYTES // (8 * n_t * width))
+        if not callable(first.power):
+            for i in idx:
+                p = preps[i]
+                ths[i] = thermal.simulate(p.inst.network, p.cond.time_s, ambient_c=p.ambient,
+                                          initial_c=p.initial, power_w=p.power,
+                                          ambient_hold="first-order")
+            continue
+        for b0 in range(0, len(idx), per_batch):
+            batch = idx[b0:b0 + per_batch]
+            n = len(first.inst.network.node_names)
+            initial = np.array([np.broadcast_to(np.asarray(preps[i].initial, dtype=float),
+                                                (n,)) for i in batch])
+            res = thermal.simulate_many(first.inst.network, first.cond.time_s,
+                                        ambient_c=np.array([preps[i].ambient for i in batch]),
+                                        initial_c=initial, power_w=first.power,
+                                        ambient_hold="first-order")
+            for i, th in zip(batch, res):
+                ths[i] = th
+    return [_finish(p, th) for p, th in zip(preps, ths)]
+
+
+def _finish(prep: _Prepared, th) -> SimulationResult:
+    """The run from its thermal solution: effects, sensors, noise, the measurement file."""
+    inst, cond, rngs, moving = prep.inst, prep.cond, prep.rngs, prep.moving
+    t, fs, theta, geom = cond.time_s, cond.sample_rate_hz, prep.theta, prep.geom
+    ambient, thermal_terms = prep.ambient, prep.thermal_terms
+    (_, elev_x), (_, elev_y), (azimuth, elev_gyro) = (prep.axes["x"], prep.axes["y"],
+                                                      prep.axes["gyro"])
+    for e, j, params in prep.stateful:
         thermal_terms[e.label] = np.asarray(
             e.spec.function(t, th.temperature_c[:, j], moving, **params), dtype=float)
 
@@ -421,11 +525,7 @@ def run_scenario(scenario, *, progress: Callable[[int, int, str], None] | None =
     ``progress(i, n, name)`` is called before each run (for a progress line).
     """
     conds = scenario.conditions()
-    sims = []
-    for i, cond in enumerate(conds):
-        if progress is not None:
-            progress(i, len(conds), cond.name)
-        sims.append(simulate_run(scenario.instrument, cond))
+    sims = simulate_runs(scenario.instrument, conds, progress=progress)
     if progress is not None:
         progress(len(conds), len(conds), "north finding")
     nf = northfind_runs([s.run for s in sims], scenario.northfind)

@@ -10,7 +10,8 @@
 - :mod:`~nfs.sweep.run`: the whole sweep.
 """
 
-from .cells import CellTask, canonical, cell_key, cell_tasks, digest, run_cell
+from .cells import (BATCH_CELLS, CellTask, canonical, cell_batches, cell_key, cell_tasks,
+                    digest, run_cell, run_cells)
 from .executors import DaskExecutor, LocalExecutor, SweepProgress
 from .figures import write_figures
 from .run import SweepResult, run_sweep
@@ -20,6 +21,7 @@ from .table import columns, iter_rows, write_csv, write_parquet
 
 __all__ = ["Axis", "Draws", "SweepError", "SweepSpec", "load_sweep", "sweep_from_dict",
            "CellTask", "canonical", "digest", "cell_key", "cell_tasks", "run_cell",
+           "run_cells", "cell_batches", "BATCH_CELLS",
            "CellStore", "LocalExecutor", "DaskExecutor", "SweepProgress", "columns",
            "iter_rows", "write_csv", "write_parquet", "write_figures", "SweepResult",
            "run_sweep"]

@@ -33,17 +33,21 @@ import nfs
 
 from ..compensate.study import CompensationSettings, run_study
 from ..errors import NfsError
-from ..experiment import floor_deg, run_scenario
+from ..experiment import (ScenarioResult, floor_deg, northfind_runs, run_scenario,
+                          simulate_runs)
 from ..io.scenario import load_scenario
 from ..northfind import heading_rmse
 from ..parameters import set_params
 from .spec import SweepSpec
 
 __all__ = ["CellTask", "canonical", "digest", "scenario_digest", "cell_key", "cell_tasks",
-           "run_cell", "STAGES", "STORE_FORMAT"]
+           "run_cell", "run_cells", "cell_batches", "BATCH_CELLS", "STAGES", "STORE_FORMAT"]
 
 #: Version of the stored cell record (part of every key: a new format recomputes).
 STORE_FORMAT = 1
+#: Cells of one point computed in one task, at most (:func:`run_cells`): enough to stack
+#: their start-ups' thermal solves, few enough that a killed sweep loses little.
+BATCH_CELLS = 16
 #: The stages of a run, as in the heading-RMSE table: the start-up stage (cycles ending
 #: within ``northfind.startup_end_s``) and the stable stage (cycles starting after
 #: ``northfind.stable_start_s``).
@@ -178,12 +182,68 @@ def run_cell(task: CellTask) -> dict[str, Any]:
         return _compute(task)
 
 
-def _compute(task: CellTask) -> dict[str, Any]:
+def _point_scenario(task: CellTask):
+    """The base scenario with the task's point applied (its seed not yet)."""
     sc = load_scenario(task.scenario_path, dict(task.scenario_values))
     if task.instrument_values:
         sc = dataclasses.replace(sc, instrument=set_params(sc.instrument,
                                                            dict(task.instrument_values)))
-    sc = dataclasses.replace(sc, seed=task.seed)
+    return sc
+
+
+def _point(task: CellTask) -> tuple:
+    """Cells with equal points (and no method) can be simulated together."""
+    return (task.scenario_path, task.scenario_values, task.instrument_values, task.method)
+
+
+def cell_batches(tasks, size: int | None = None) -> Iterator[list[CellTask]]:
+    """Consecutive tasks of one point without a compensation method, ``size`` at most
+    (default :data:`BATCH_CELLS`), as lists; a task with a method is a batch of its own."""
+    size = BATCH_CELLS if size is None else size
+    batch: list[CellTask] = []
+    for task in tasks:
+        if batch and (task.method is not None or _point(task) != _point(batch[0])
+                      or len(batch) >= size):
+            yield batch
+            batch = []
+        batch.append(task)
+        if task.method is not None:
+            yield batch
+            batch = []
+    if batch:
+        yield batch
+
+
+def run_cells(tasks: list[CellTask]) -> list[dict[str, Any]]:
+    """Compute a batch of cells (:func:`cell_batches`); their records, in order.
+
+    The cells of one point share the instrument: every start-up of the batch is simulated
+    with its thermal state stacked beside the others (:func:`~nfs.experiment.simulate_runs`),
+    whose arithmetic gives each run the same bits whatever is stacked beside it, so a cell's
+    record does not depend on its batch.  A cell with a compensation method is computed
+    alone (:func:`run_cell`).
+    """
+    tasks = list(tasks)
+    if len(tasks) == 1 or tasks[0].method is not None or \
+            any(_point(t) != _point(tasks[0]) for t in tasks):
+        return [run_cell(t) for t in tasks]
+    with threadpool_limits(limits=1):
+        base = _point_scenario(tasks[0])
+        scenarios = [dataclasses.replace(base, seed=t.seed) for t in tasks]
+        conds = [sc.conditions() for sc in scenarios]
+        sims = simulate_runs(base.instrument, [c for cs in conds for c in cs])
+        out, k = [], 0
+        for task, sc, cs in zip(tasks, scenarios, conds):
+            mine = sims[k:k + len(cs)]
+            k += len(cs)
+            nf = northfind_runs([s.run for s in mine], sc.northfind)
+            out.append(_record(task, ScenarioResult(scenario=sc, simulations=tuple(mine),
+                                                    northfind=tuple(nf)), None))
+        return out
+
+
+def _compute(task: CellTask) -> dict[str, Any]:
+    sc = dataclasses.replace(_point_scenario(task), seed=task.seed)
     compensated = None
     if task.method is None:
         res = run_scenario(sc)
@@ -194,6 +254,11 @@ def _compute(task: CellTask) -> dict[str, Any]:
         study = run_study(sc, settings)
         res = study.test
         compensated = next(iter(study.results.values())).northfind
+    return _record(task, res, compensated)
+
+
+def _record(task: CellTask, res, compensated) -> dict[str, Any]:
+    """A cell's record from its simulated and north-found runs (and compensated ones)."""
     nfset = res.scenario.northfind
     floor = _floor(res.scenario)
     runs = []

@@ -11,7 +11,7 @@ from typing import Any, Callable
 import nfs
 
 from ..io.atomic import atomic_write_text
-from .cells import canonical, cell_tasks, run_cell, scenario_digest
+from .cells import canonical, cell_batches, cell_tasks, run_cells, scenario_digest
 from .executors import LocalExecutor, SweepProgress
 from .figures import write_figures
 from .spec import SweepSpec
@@ -86,12 +86,13 @@ def run_sweep(spec: SweepSpec, output: str | Path, *, executor=None, quiet: bool
     try:
         if n_missing:
             missing = (t for t in cell_tasks(spec, base) if not store.has(t.key))
-            for record in executor.map_unordered(run_cell, missing):
-                store.write(record)
-                n_done += 1
-                progress.update()
-                if on_cell is not None:
-                    on_cell(record)
+            for records in executor.map_unordered(run_cells, cell_batches(missing)):
+                for record in records:
+                    store.write(record)
+                    n_done += 1
+                    progress.update()
+                    if on_cell is not None:
+                        on_cell(record)
     finally:
         progress.close()
     paths = [store.folder / "results.csv"]

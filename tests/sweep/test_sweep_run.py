@@ -2,13 +2,15 @@
 resuming an interrupted sweep, closed forms of the white-noise floor across axes."""
 
 import csv
+import json
 import math
 
 import numpy as np
 import pytest
 
 from nfs.cli import main
-from nfs.sweep import LocalExecutor, load_sweep, run_sweep
+from nfs.sweep import (LocalExecutor, cell_batches, cell_tasks, load_sweep, run_cell, run_cells,
+                       run_sweep)
 
 
 
@@ -220,3 +222,16 @@ def test_canonical_form_is_exact_and_leaves_paths_out():
     assert canonical(one)["x"] == "0.1" and "path" not in canonical(one)
     assert digest(one) == digest(Thing(0.1, Path("/elsewhere")))
     assert digest(one) != digest(Thing(np.nextafter(0.1, 1.0)))
+
+
+def test_a_cell_has_the_same_record_alone_and_in_any_batch(tmp_path, short_scenario):
+    # Oracle: the record of run_cell (the cell's runs stacked alone); batches of 2 and of
+    # every cell stack other start-ups beside them, and must not change a bit.
+    spec = _short_sweep(tmp_path, short_scenario)
+    tasks = list(cell_tasks(spec))
+    alone = [json.dumps(run_cell(t), sort_keys=True) for t in tasks]
+    for size in (2, len(tasks)):
+        batched = [json.dumps(r, sort_keys=True) for b in cell_batches(tasks, size)
+                   for r in run_cells(b)]
+        assert batched == alone
+    assert [len(b) for b in cell_batches(tasks, 2)][0] == 2
