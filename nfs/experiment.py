@@ -35,6 +35,8 @@ __all__ = ["RunConditions", "SimulationResult", "simulate_run", "simulate_runs",
            "uncompensated_table"]
 
 _UG = 1e-6
+#: Stacked runs up to this many get the state-dependent heat law row by row.
+_ROW_BY_ROW = 4
 
 
 @dataclass(frozen=True)
@@ -209,14 +211,22 @@ def thermal_power(inst: Instrument, time_s: np.ndarray, moving: np.ndarray):
     moving_list = moving.tolist()
     calls = [(e.spec.function, j, params) for e, j, params in stateful]
 
+    def one(k: int, t_s: float, temperature_c: np.ndarray) -> np.ndarray:
+        p = fixed[k].copy()
+        for f, j, params in calls:
+            p[j] += f(t_s, float(temperature_c[j]), moving_list[k], **params)
+        return p
+
     def law(t_s: float, temperature_c: np.ndarray) -> np.ndarray:
         k = index[t_s]
         if temperature_c.ndim == 1:
-            p = fixed[k].copy()
-            for f, j, params in calls:
-                p[j] += f(t_s, float(temperature_c[j]), moving_list[k], **params)
-            return p
-        # runs stacked (thermal.simulate_many): the law gets every run's node temperature
+            return one(k, t_s, temperature_c)
+        # runs stacked (thermal.simulate_many): the law gets every run's node temperature;
+        # a few runs row by row (float arithmetic, cheaper than ufuncs on tiny arrays), more
+        # at once.  An effect gives the same value for a float and an array element (the
+        # registry's contract for state-dependent effects), so the bits do not depend on R.
+        if temperature_c.shape[0] <= _ROW_BY_ROW:
+            return np.array([one(k, t_s, row) for row in temperature_c])
         p = np.repeat(fixed[k][None, :], temperature_c.shape[0], axis=0)
         for f, j, params in calls:
             p[:, j] += f(t_s, temperature_c[:, j], moving_list[k], **params)

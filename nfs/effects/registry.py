@@ -249,7 +249,10 @@ def register_effect(name: str, *, kind: str, parameters: list[Parameter] | tuple
     target : str, optional
         Name of the parameter that says where the effect acts.
     state_dependent : bool
-        Thermal effects: the power depends on the node temperature (evaluated per sample).
+        Thermal effects: the power depends on the node temperature (evaluated per sample,
+        with a float temperature, or with an array of the temperatures of runs simulated
+        together: the function must give the same value for a float and for the same
+        number in an array).
     check : callable, optional
         ``check(params)`` raises EffectError when the parameters are unphysical together.
     replace : bool

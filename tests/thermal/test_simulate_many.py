@@ -56,3 +56,15 @@ def test_shapes_are_checked():
         simulate_many(net, t, ambient_c=np.zeros(10), initial_c=[0.0])
     with pytest.raises(ThermalError, match="initial_c must have shape"):
         simulate_many(net, t, ambient_c=np.zeros((2, 10)), initial_c=[0.0, 1.0, 2.0])
+
+
+def test_the_tec_law_gives_the_same_bits_for_floats_and_arrays():
+    # Oracle: the registry's contract for state-dependent effects (simulate_runs evaluates
+    # a few stacked runs row by row and many at once).
+    from nfs.effects.thermal import tec_power
+    rng = np.random.default_rng(3)
+    temps = 25.0 + 40.0 * rng.standard_normal(2000)
+    arr = tec_power(0.0, temps, 0, T_set=25.0, c_h=0.031, c_c=0.077)
+    one = np.array([tec_power(0.0, float(v), 0, T_set=25.0, c_h=0.031, c_c=0.077)
+                    for v in temps])
+    assert np.array_equal(arr, one)
