@@ -7,8 +7,11 @@ per cell (2.5 h at 1 Hz, 4 positions, 150 s dwells), start temperatures -32, 17,
 
 Figures, all in this process's machine and load:
 
-- baseline: the cell function called in a loop in this process (no executor, no store),
-  each start-up simulated alone;
+- baseline: every cell's start-up simulated alone (:func:`nfs.experiment.simulate_run`,
+  the single-run thermal march) and north-found, in a loop in this process (no executor, no
+  store): the work of a sweep without stacking;
+- the cell function (:func:`nfs.sweep.run_cell`) in a loop: a cell alone (what a resumed
+  sweep's stray cell costs: the stacked march with one run);
 - the same cells in batches of ``BATCH_CELLS`` of one point (:func:`nfs.sweep.run_cells`),
   their start-ups' thermal states stacked (one march over the samples for the whole batch):
   the speed-up of stacking;
@@ -28,6 +31,7 @@ Each sweep writes into a fresh temporary folder, so every cell is computed.
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import resource
 import subprocess
@@ -35,6 +39,8 @@ import sys
 import tempfile
 import time
 
+from nfs.experiment import northfind_runs, simulate_run
+from nfs.io.scenario import load_scenario
 from nfs.sweep import (BATCH_CELLS, LocalExecutor, cell_batches, cell_tasks, run_cell, run_cells,
                        run_sweep, sweep_from_dict)
 
@@ -58,6 +64,16 @@ def timed_sweep(spec, executor) -> float:
 
 
 def baseline(spec) -> float:
+    t0 = time.perf_counter()
+    for task in cell_tasks(spec):
+        sc = load_scenario(task.scenario_path, dict(task.scenario_values))
+        sc = dataclasses.replace(sc, seed=task.seed)
+        northfind_runs([simulate_run(sc.instrument, c).run for c in sc.conditions()],
+                       sc.northfind)
+    return time.perf_counter() - t0
+
+
+def cells_alone(spec) -> float:
     t0 = time.perf_counter()
     for task in cell_tasks(spec):
         run_cell(task)
@@ -98,8 +114,11 @@ def main() -> None:
     n = spec.n_cells
     print(f"{n} cells: one default start-up each (2.5 h at 1 Hz), simulated and north-found")
     t_base = baseline(spec)
-    print(f"baseline (cell function in a loop, this process): {t_base:.1f} s, "
+    print(f"baseline (each start-up simulated alone and north-found, in a loop): "
+          f"{t_base:.1f} s, "
           f"{n / t_base:.1f} cells/s")
+    t_alone = cells_alone(spec)
+    print(f"cell function alone, in a loop: {t_alone:.1f} s, {n / t_alone:.1f} cells/s")
     t_stack = batched(spec)
     print(f"stacked, batches of {BATCH_CELLS} cells of one point (this process): "
           f"{t_stack:.1f} s, {n / t_stack:.1f} cells/s; {t_base / t_stack:.2f}x the baseline")

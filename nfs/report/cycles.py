@@ -19,7 +19,7 @@ from pathlib import Path
 from ..io.atomic import atomic_write_text
 from .reference import CHENG2015_TABLE2_MSD, TAO2019_BIAS_STABILITY
 
-__all__ = ["cycle_table_markdown", "cycle_table_json", "write_cycle_study"]
+__all__ = ["cycle_table_markdown", "cycle_table_json", "write_cycle_study", "intervals_csv"]
 
 _METRICS = (("mae_dph", "MAE [deg/h]", 4), ("std_dph", "STD [deg/h]", 4),
             ("rmse_dph", "RMSE [deg/h]", 4), ("bias_stability_dph", "bias stability [deg/h]", 5),
@@ -179,6 +179,20 @@ def cycle_table_json(study, title: str = "", provenance: dict | None = None) -> 
     return json.dumps(doc, indent=2) + "\n"
 
 
+def intervals_csv(rows: list[dict], skip=()) -> str:
+    """CSV of JSON rows whose ``*_ci`` [low, high] pairs become ``*_ci_low`` and
+    ``*_ci_high`` columns (null as an empty cell); the keys in ``skip`` (lists) left out."""
+    buf = io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    keys = [k for k in rows[0] if not k.endswith("_ci") and k not in skip]
+    cis = [k for k in rows[0] if k.endswith("_ci")]
+    w.writerow(keys + [f"{k}_{e}" for k in cis for e in ("low", "high")])
+    for r in rows:
+        w.writerow([("" if r[k] is None else r[k]) for k in keys]
+                   + [("" if v is None else v) for k in cis for v in r[k]])
+    return buf.getvalue()
+
+
 def write_cycle_study(study, out_dir, *, json_path=None, title: str = "",
                       provenance: dict | None = None) -> list[Path]:
     """Write drift_table.md, .csv, .json and report.md into ``out_dir`` (and the JSON also
@@ -187,19 +201,11 @@ def write_cycle_study(study, out_dir, *, json_path=None, title: str = "",
     out.mkdir(parents=True, exist_ok=True)
     md = cycle_table_markdown(study)
     js = cycle_table_json(study, title, provenance)
-    buf = io.StringIO()
-    rows = json.loads(js)["rows"]
-    w = csv.writer(buf, lineterminator="\n")
-    keys = [k for k in rows[0] if not k.endswith("_ci") and k != "msd_by_part_dph2"]
-    cis = [k for k in rows[0] if k.endswith("_ci")]
-    w.writerow(keys + [f"{k}_{e}" for k in cis for e in ("low", "high")])
-    for r in rows:
-        w.writerow([("" if r[k] is None else r[k]) for k in keys]
-                   + [("" if v is None else v) for k in cis for v in r[k]])
     paths = [out / "drift_table.md", out / "drift_table.csv", out / "drift_table.json",
              out / "report.md"]
     atomic_write_text(paths[0], md)
-    atomic_write_text(paths[1], buf.getvalue())
+    atomic_write_text(paths[1], intervals_csv(json.loads(js)["rows"],
+                                              skip=("msd_by_part_dph2",)))
     atomic_write_text(paths[2], js)
     atomic_write_text(paths[3], f"# {title or 'Drift table of a temperature cycle'}\n\n" + md)
     if json_path is not None:

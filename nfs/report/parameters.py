@@ -10,13 +10,12 @@ the comparison is of shape (does the RVR better the cubic, by about how much), n
 
 from __future__ import annotations
 
-import csv
-import io
 import json
 import math
 from pathlib import Path
 
 from ..io.atomic import atomic_write_text
+from .cycles import intervals_csv
 from .reference import LIANG2021_RVR_OVER_LS_PCT
 
 __all__ = ["parameter_table_markdown", "parameter_table_json", "write_parameter_study"]
@@ -140,18 +139,6 @@ def parameter_table_json(study, title: str = "", provenance: dict | None = None)
     return json.dumps(doc, indent=2) + "\n"
 
 
-def _csv(rows: list[dict]) -> str:
-    buf = io.StringIO()
-    w = csv.writer(buf, lineterminator="\n")
-    keys = [k for k in rows[0] if not k.endswith("_ci") and k != "positions_deg"]
-    cis = [k for k in rows[0] if k.endswith("_ci")]
-    w.writerow(keys + [f"{k}_{e}" for k in cis for e in ("low", "high")])
-    for r in rows:
-        w.writerow([("" if r[k] is None else r[k]) for k in keys]
-                   + [("" if v is None else v) for k in cis for v in r[k]])
-    return buf.getvalue()
-
-
 def write_parameter_study(study, out_dir, *, json_path=None, title: str = "",
                           provenance: dict | None = None) -> list[Path]:
     """Write parameter_table.md, parameter_table.csv, heading_by_schedule.csv,
@@ -165,8 +152,8 @@ def write_parameter_study(study, out_dir, *, json_path=None, title: str = "",
     paths = [out / "parameter_table.md", out / "parameter_table.csv",
              out / "heading_by_schedule.csv", out / "parameter_table.json", out / "report.md"]
     atomic_write_text(paths[0], md)
-    atomic_write_text(paths[1], _csv(doc["parameters"]))
-    atomic_write_text(paths[2], _csv(doc["headings"]))
+    atomic_write_text(paths[1], intervals_csv(doc["parameters"]))
+    atomic_write_text(paths[2], intervals_csv(doc["headings"], skip=("positions_deg",)))
     atomic_write_text(paths[3], js)
     atomic_write_text(paths[4], f"# {title or 'Parameter-level compensation'}\n\n" + md)
     if json_path is not None:
