@@ -25,6 +25,7 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -88,6 +89,13 @@ def _writable_place(path: Path, option: str) -> None:
         raise NfsError(f"{option} {path}: '{probe}' is a file, so no folder can be made there")
     if not os.access(probe, os.W_OK | os.X_OK):
         raise NfsError(f"{option} {path}: '{probe}' is not writable")
+    # os.access answers yes to root on a read-only or virtual file system (/proc): make and
+    # remove a folder there to be sure, before any work
+    try:
+        os.rmdir(tempfile.mkdtemp(prefix=".nfs-probe-", dir=probe))
+    except OSError as exc:
+        raise NfsError(f"{option} {path}: no folder can be made in '{probe}' "
+                       f"({exc.strerror})") from None
 
 
 def check_output_file(path: str | os.PathLike, option: str = "-o") -> Path:
@@ -103,6 +111,13 @@ def check_output_file(path: str | os.PathLike, option: str = "-o") -> Path:
         raise NfsError(f"{option} {p}: folder '{p.parent}' does not exist")
     if not os.access(p.parent, os.W_OK | os.X_OK):
         raise NfsError(f"{option} {p}: folder '{p.parent}' is not writable")
+    try:   # as in _writable_place: os.access trusts root everywhere
+        fd, probe = tempfile.mkstemp(prefix=".nfs-probe-", dir=p.parent)
+        os.close(fd)
+        os.remove(probe)
+    except OSError as exc:
+        raise NfsError(f"{option} {p}: no file can be written in '{p.parent}' "
+                       f"({exc.strerror})") from None
     return p
 
 

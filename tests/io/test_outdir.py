@@ -150,3 +150,17 @@ def test_file_commands_refuse_a_folder_or_a_missing_place(tmp_path, cli, scenari
                         (tmp_path / "no" / "x.toml", "does not exist")):
         code, _, err = cli(command[0], tmp_path / "runs", *command[1:], "-o", target)
         assert code == 2 and msg in err and len(err.strip().splitlines()) == 1
+
+
+@pytest.mark.skipif(not os.path.isdir("/proc/self"), reason="needs Linux /proc")
+def test_a_place_where_nothing_can_be_made_is_refused_even_for_root(tmp_path, cli):
+    # Oracle: /proc takes no new folder or file, whoever asks (os.access says yes to root);
+    # the command stops before any work with one line, exit 2, and writes nothing.
+    with pytest.raises(NfsError, match="no folder can be made"):
+        OutputFolder("/proc/nfs-test/out", "table")
+    with pytest.raises(NfsError, match="no file can be written"):
+        check_output_file("/proc/nfs-test.json", "--json")
+    code, _, err = cli("table", "--no-compensation", "-q", "-o", tmp_path / "o",
+                       "--json", "/proc/nfs-test.json")
+    assert code == 2 and "--json" in err and "Traceback" not in err
+    assert not (tmp_path / "o").exists()
