@@ -9,7 +9,8 @@ through the network (Kalman filter and smoother, thermal/estimate.py).
 """
 
 from thermal.network import CHAMBER, Link, Network, Node
-from thermal.solve import ThermalResult, simulate, simulate_many
+from thermal.solve import ThermalResult, simulate
+from thermal.batch import simulate_many
 from thermal.estimate import (LinearSensor, NodeEstimate, ProcessNoiseFit, StateEstimate,
                               StatePower, ThermalRecord, estimate_states,
                               fit_process_noise, kalman_smooth)
