@@ -11,7 +11,8 @@ from __future__ import annotations
 
 import time
 
-from nfs.experiment import northfind_runs, simulate_run
+from nfs.experiment import simulate_run
+from nfs.scenario_runs import northfind_runs
 from nfs.io.scenario import load_scenario
 
 

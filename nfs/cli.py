@@ -62,7 +62,7 @@ class Progress:
 def _cmd_table(args) -> int:
     from .compensate.modes import check_features_mode
     from .compensate.study import errors_by_temperature
-    from .experiment import run_scenario, uncompensated_table
+    from .scenario_runs import run_scenario, uncompensated_table
     from .io.scenario import load_scenario
     from .report import write_table
     if args.features_mode is not None:

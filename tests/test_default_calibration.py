@@ -28,8 +28,9 @@ import numpy as np
 import pytest
 
 from nfs.diagnose.compare import noise_free
-from nfs.experiment import northfind_runs, run_scenario, simulate_run, stage_errors
-from nfs.experiment import uncompensated_table
+from nfs.experiment import simulate_run
+from nfs.scenario_runs import northfind_runs, run_scenario, stage_errors
+from nfs.scenario_runs import uncompensated_table
 from nfs.northfind import tilt_model_error_deg
 from nfs.io.scenario import load_scenario
 

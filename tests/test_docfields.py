@@ -9,7 +9,8 @@ from nfs.compensate.study import CompensationStudy, MethodResult, SeedResult
 from nfs.diagnose.fit import FitResult
 from nfs.diagnose.result import CandidateScore, Diagnosis
 from nfs.docfields import document_fields, field_docs
-from nfs.experiment import ScenarioResult, SimulationResult
+from nfs.experiment import SimulationResult
+from nfs.scenario_runs import ScenarioResult
 from nfs.io.measurement import Run, RunMeta
 from nfs.io.scenario import Scenario
 from nfs.northfind.heading import NorthFindResult

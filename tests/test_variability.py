@@ -180,7 +180,7 @@ def test_two_start_ups_differ_beyond_noise(default):
 
 
 def test_run_names_and_notes_record_the_unit(default):
-    from nfs.experiment import run_scenario, uncompensated_table
+    from nfs.scenario_runs import run_scenario, uncompensated_table
     sc = dataclasses.replace(default, repeats=3, start_temperatures_c=(17.0,))
     names = [c.name for c in sc.conditions()]
     assert names == ["startup_7temps_T+17C_u0_r0", "startup_7temps_T+17C_u1_r0",

@@ -47,7 +47,8 @@ from sklearn.exceptions import ConvergenceWarning
 
 from ..denoise import separate_drift
 from ..errors import NfsError
-from ..experiment import northfind_runs, run_scenario, simulate_run
+from ..experiment import simulate_run
+from ..scenario_runs import northfind_runs, run_scenario
 from ..io.measurement import Run
 from ..report.intervals import bc_interval
 from ..report.table import pooled_rmse

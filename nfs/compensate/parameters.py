@@ -55,7 +55,8 @@ from sklearn.model_selection import KFold
 
 from ..constants import earth_rate_components_dph
 from ..errors import NfsError
-from ..experiment import northfind_runs, simulate_run
+from ..experiment import simulate_run
+from ..scenario_runs import northfind_runs
 from ..io.measurement import Run
 from ..northfind.known_bias import dwell_means, north_find_known_bias
 from ..northfind.level import gravity_and_biases

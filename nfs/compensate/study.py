@@ -37,8 +37,8 @@ from ..docfields import document_fields
 from ..denoise import separate_drift
 from ..errors import NfsError
 from ..io.provenance import output_provenance
-from ..experiment import (northfind_runs, run_scenario, simulate_run, stage_errors,
-                          uncompensated_table)
+from ..experiment import simulate_run
+from ..scenario_runs import northfind_runs, run_scenario, stage_errors, uncompensated_table
 from ..report.table import TableRow, pooled_rmse
 from .compensator import DriftCompensator, PredictionPlan, prediction_plan, train_compensator
 from .dataset import DriftDataset, drift_dataset
@@ -167,7 +167,7 @@ class CompensationStudy:
 
     settings: CompensationSettings
     test: Any
-    """The :class:`~nfs.experiment.ScenarioResult` of the test start-ups."""
+    """The :class:`~nfs.scenario_runs.ScenarioResult` of the test start-ups."""
     train_runs: tuple[Any, ...]
     """The training runs (measurements)."""
     dataset: DriftDataset
@@ -292,7 +292,7 @@ def errors_by_temperature(result, northfind=None, *, stage: int = 0
     Parameters
     ----------
     result : ScenarioResult
-        The runs (:func:`~nfs.experiment.run_scenario`).
+        The runs (:func:`~nfs.scenario_runs.run_scenario`).
     northfind : sequence of NorthFindResult, optional
         North-finding of each run (default: the result's own, uncompensated).
     stage : int
@@ -374,7 +374,7 @@ def run_study(scenario, settings: CompensationSettings | None = None, *,
               ) -> CompensationStudy:
     """Train every method of ``settings`` on training start-ups, apply to the test start-ups.
 
-    ``test`` is the scenario's :class:`~nfs.experiment.ScenarioResult` if already computed.
+    ``test`` is the scenario's :class:`~nfs.scenario_runs.ScenarioResult` if already computed.
     """
     s = settings or scenario.compensation or CompensationSettings()
     specs = [get_method(m) for m in s.methods]

@@ -9,7 +9,7 @@ so a rerun finds the cells it already has.
 
 The worker (:func:`run_cell`) loads the base scenario with the point's scenario keys, sets
 the point's instrument parameters, simulates and north-finds every run of the cell
-(:func:`~nfs.experiment.run_scenario`), or, with a method, trains and applies that
+(:func:`~nfs.scenario_runs.run_scenario`), or, with a method, trains and applies that
 compensator as ``nfs table`` does (:func:`~nfs.compensate.study.run_study`), and returns a
 small record: per run, the cycle times and heading errors of each method, the stage RMSE,
 the white-noise floor and the drift statistics.
@@ -33,8 +33,8 @@ import nfs
 
 from ..compensate.study import CompensationSettings, run_study
 from ..errors import NfsError
-from ..experiment import (ScenarioResult, floor_deg, northfind_runs, run_scenario,
-                          simulate_runs)
+from ..experiment import simulate_runs
+from ..scenario_runs import ScenarioResult, floor_deg, northfind_runs, run_scenario
 from ..io.scenario import load_scenario
 from ..northfind import heading_rmse
 from ..parameters import set_params

@@ -43,7 +43,7 @@ def test_a_perfect_compensator_is_at_the_stable_stage():
     # the start-up RMSE equals the stable one up to sampling error (+-6 % per stage).
     from dataclasses import replace
 
-    from nfs.experiment import run_scenario
+    from nfs.scenario_runs import run_scenario
     from nfs.northfind import heading_rmse, north_find
     sc = load_scenario(PRECISE)
     res = run_scenario(dataclasses.replace(sc, repeats=sc.compensation.test_repeats))

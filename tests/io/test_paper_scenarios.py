@@ -8,7 +8,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from nfs.experiment import northfind_runs, simulate_run
+from nfs.experiment import simulate_run
+from nfs.scenario_runs import northfind_runs
 from nfs.io.scenario import load_scenario
 
 SCENARIOS = Path(__file__).resolve().parents[2] / "scenarios"
