@@ -3,6 +3,7 @@ them; the oracle of each test is the paper's text (cited in the scenario files).
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import numpy as np
@@ -65,3 +66,37 @@ def test_ramp_calibration_175_cycles_after_a_soak():
     assert r.run["temp_chamber_c"][-1] == pytest.approx(65.0, abs=2e-4)
     (nf,) = northfind_runs([r.run], sc.northfind)
     assert nf.n_cycles == 175
+
+
+def test_ramps_table_has_the_shape_of_cheng_et_al(tmp_path, cli):
+    # Oracle: Cheng et al. 2015, Table 2: compensation on T, dT and T x dT shrinks the mean
+    # square deviation of every test run; every row's improvement interval lies above 0.
+    code, out, err = cli("table", SCENARIOS / "seed001_ramps.toml", "-q", "-o",
+                         tmp_path / "o", "--json", tmp_path / "t.json")
+    assert code == 0, err
+    doc = json.loads((tmp_path / "t.json").read_text())
+    assert doc["protocol"] == "runs" and len(doc["parts"]) == 5
+    before = doc["rows"][0]["msd_by_part_dph2"]
+    for row in doc["rows"][1:]:
+        assert row["improvement_pct_ci"][0] > 0
+        assert all(a < b for a, b in zip(row["msd_by_part_dph2"], before))
+    assert "Cheng et al. 2015" in out
+
+
+def test_ramp_calibration_table_has_the_shape_of_liang_et_al(tmp_path, cli):
+    # Oracle: Liang et al. 2021: the temperature models of the calibrated parameters beat a
+    # constant (R^2 near 1 for the biases), and the predicted biases are what a schedule
+    # that does not cancel them needs (one position: the parameter rows beat the constant).
+    code, out, err = cli("table", SCENARIOS / "seed003_ramp_calibration.toml", "-q", "-o",
+                         tmp_path / "o", "--json", tmp_path / "p.json")
+    assert code == 0, err
+    doc = json.loads((tmp_path / "p.json").read_text())
+    by = {(r["parameter"], r["method"]): r for r in doc["parameters"]}
+    for method in ("LS", "HHO-RVR"):
+        assert by[("gyro_bias_dph", method)]["r2"] > 0.99
+        assert by[("gyro_bias_dph", method)]["rmse_ci"][1] < \
+            by[("gyro_bias_dph", "constant")]["rmse_ci"][0]
+    one = {h["method"]: h for h in doc["headings"] if h["schedule"] == "one position"}
+    assert one["HHO-RVR (parameters)"]["heading_rmse_deg_ci"][1] < \
+        one["constant"]["heading_rmse_deg_ci"][0]
+    assert "Liang et al. 2021" in out
