@@ -82,10 +82,15 @@ class DriftStructure:
     def tie_message(self, labels: Sequence[str]) -> str:
         """The tie of the candidates ``labels`` with the alternative, in one sentence."""
         try_ = f" (try {self.best_rate} first)" if self.best_rate else ""
+        # A transient at power-on is also what heat released inside the coil, where no
+        # thermometer sits, makes of the gyro (a Shupe transient of the coil's own warming).
+        heat = ("; a power-on transient is also the drift of heat released inside the coil "
+                "that no thermometer sees (a heat_source at the coil)"
+                if any(str(lb).startswith("turn_on_transient") for lb in labels) else "")
         return (", ".join(labels) + " tied with a rate term on every node (held-out RMS "
                 f"-{100 * self.cv_drop:.0f} %): these runs cannot tell "
                 + ("it" if len(labels) == 1 else "them")
-                + " from a Shupe weighting the model lacks" + try_)
+                + " from a Shupe weighting the model lacks" + try_ + heat)
 
     def to_dict(self) -> dict[str, Any]:
         return {"alternative": "a rate term on every node", "nodes": list(self.nodes),

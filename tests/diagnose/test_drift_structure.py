@@ -78,4 +78,7 @@ def test_structure_message():
     assert not bad.adequate
     assert "turn_on_transient" in bad.message and "shupe_rate:a" in bad.message
     assert bad.tie_message(["x"]).startswith("x tied with a rate term")
+    # a tied power-on transient also points at heat inside the coil; other ties do not
+    assert "heat_source at the coil" in bad.message
+    assert "heat_source" not in bad.tie_message(["shupe_rate:b"])
     assert bad.to_dict()["cv_drop"] == bad.cv_drop
