@@ -47,7 +47,7 @@ from sklearn.exceptions import ConvergenceWarning
 
 from ..denoise import separate_drift
 from ..errors import NfsError
-from ..experiment import simulate_run
+from ..experiment import simulate_runs
 from ..scenario_runs import northfind_runs, run_scenario
 from ..io.measurement import Run
 from ..report.intervals import bc_interval
@@ -56,7 +56,7 @@ from .compensator import DriftCompensator, prediction_plan, train_compensator
 from .dataset import drift_dataset
 from .methods import get_method
 from .modes import check_features_mode
-from .study import CompensationSettings, test_scenario, train_scenario
+from .study import CompensationSettings, test_scenario, ticker, train_scenario
 
 __all__ = ["CycleRow", "CycleStudy", "run_cycle_study", "run_runs_study", "cut_run", "CYCLE_METRICS",
            "BIAS_WINDOW_S", "BLOCK_S", "RAMP_RATE_C_PER_S", "UNCOMPENSATED"]
@@ -239,7 +239,7 @@ def run_cycle_study(scenario, settings=None, *, n_boot: int = 2000,
     s = settings or scenario.compensation or CompensationSettings()
     spans = _spans(scenario)
     specs = _untuned(s, "a cycling study trains on one cycle")
-    tick = _ticker(progress, 4 + len(specs))
+    tick = ticker(progress, 4 + len(specs))
     tick("simulating the runs")
     res = run_scenario(scenario)
     train, test = [], []
@@ -263,10 +263,10 @@ def run_runs_study(scenario, settings=None, *, n_boot: int = 2000,
     (their Table 2)."""
     s = settings or scenario.compensation or CompensationSettings()
     specs = _untuned(s, "a drift table of runs trains once")
-    tick = _ticker(progress, 4 + len(specs))
+    tick = ticker(progress, 4 + len(specs))
     tick("simulating the runs")
     train_sc = train_scenario(scenario, s)
-    train = [simulate_run(train_sc.instrument, c).run for c in train_sc.conditions()]
+    train = [r.run for r in simulate_runs(train_sc.instrument, train_sc.conditions())]
     test = [sim.run for sim in run_scenario(test_scenario(scenario, s)).simulations]
     return _drift_study(scenario, s, specs, train, test, n_boot, tick, ())
 
@@ -279,17 +279,6 @@ def _untuned(s, why: str):
                            f"start temperature or run out, and {why}: use an untuned method "
                            "(ls, stepwise, bp, rbf, lssvm, ir-lssvm) here")
     return specs
-
-
-def _ticker(progress, n_steps: int):
-    step = 0
-
-    def tick(msg):
-        nonlocal step
-        if progress is not None:
-            progress(step, n_steps, msg)
-        step += 1
-    return tick
 
 
 def _drift_study(scenario, s, specs, train, test, n_boot, tick, spans) -> CycleStudy:

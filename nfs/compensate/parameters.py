@@ -55,7 +55,7 @@ from sklearn.model_selection import KFold
 
 from ..constants import earth_rate_components_dph
 from ..errors import NfsError
-from ..experiment import simulate_run
+from ..experiment import simulate_runs
 from ..scenario_runs import northfind_runs
 from ..io.measurement import Run
 from ..northfind.known_bias import dwell_means, north_find_known_bias
@@ -66,7 +66,7 @@ from .compensator import prediction_plan, train_compensator
 from .dataset import drift_dataset
 from .methods import get_method
 from .modes import check_features_mode
-from .study import CompensationSettings, test_scenario, train_scenario
+from .study import CompensationSettings, test_scenario, ticker, train_scenario
 
 __all__ = ["PARAMETERS", "PARAMETER_METRICS", "BLOCK_CYCLES", "CONSTANT", "BIAS_FITTED",
            "CycleParameters", "ParameterRow", "HeadingRow", "ParameterStudy",
@@ -271,19 +271,13 @@ def run_parameter_study(scenario, settings=None, *, n_boot: int = 2000,
     docstring)."""
     s = settings or scenario.compensation or CompensationSettings()
     specs = [get_method(m) for m in s.methods]
-    n_steps, step = 5 + 2 * len(specs), 0
-
-    def tick(msg):
-        nonlocal step
-        if progress is not None:
-            progress(step, n_steps, msg)
-        step += 1
+    tick = ticker(progress, 6 + len(specs))
 
     tick("simulating the training runs")
     train_sc, test_sc = train_scenario(scenario, s), test_scenario(scenario, s)
-    train_runs = [simulate_run(train_sc.instrument, c).run for c in train_sc.conditions()]
+    train_runs = [r.run for r in simulate_runs(train_sc.instrument, train_sc.conditions())]
     tick("simulating the test runs")
-    test_runs = [simulate_run(test_sc.instrument, c).run for c in test_sc.conditions()]
+    test_runs = [r.run for r in simulate_runs(test_sc.instrument, test_sc.conditions())]
     tick("calibrating every cycle")
     train_nf = northfind_runs(train_runs, scenario.northfind)
     test_nf = northfind_runs(test_runs, scenario.northfind)
@@ -296,8 +290,7 @@ def run_parameter_study(scenario, settings=None, *, n_boot: int = 2000,
         for key, p, est in parallel(delayed(_fit)(key, p, *_stack(train, p), s.budget,
                                                   s.random_state) for key, p in jobs):
             models[(get_method(key).name, p)] = est
-    for spec in specs:
-        tick(f"modelled the parameters by {spec.name}")
+    tick("modelled every parameter")
 
     block = _blocks(test)
     n_blocks = int(block.max()) + 1
@@ -306,8 +299,9 @@ def run_parameter_study(scenario, settings=None, *, n_boot: int = 2000,
                        for _ in range(n_boot)]).astype(float)
     rows: list[ParameterRow] = []
     predicted: dict = {}      # (row, parameter) -> per test run, per cycle
+    split = np.cumsum([len(c.t_end_s) for c in test])[:-1]
     for p in PARAMETERS:
-        x_tr, y_tr = _stack(train, p)
+        y_tr = _stack(train, p)[1]
         x_te, y_te = _stack(test, p)
         const = float(np.nanmean(y_tr))
         preds = {CONSTANT: np.full(y_te.shape, const)}
@@ -322,7 +316,6 @@ def run_parameter_study(scenario, settings=None, *, n_boot: int = 2000,
             rows.append(ParameterRow(p, name, {k: float(est[k]) for k in PARAMETER_METRICS},
                                      {k: _interval(reps[k], float(est[k]))
                                       for k in PARAMETER_METRICS}))
-            split = np.cumsum([len(c.t_end_s) for c in test])[:-1]
             predicted[(name, p)] = np.split(pred, split)
 
     tick("compensating the test runs sample by sample")

@@ -37,7 +37,7 @@ from ..docfields import document_fields
 from ..denoise import separate_drift
 from ..errors import NfsError
 from ..io.provenance import output_provenance
-from ..experiment import simulate_run
+from ..experiment import simulate_runs
 from ..scenario_runs import northfind_runs, run_scenario, stage_errors, uncompensated_table
 from ..report.table import TableRow, pooled_rmse
 from .compensator import DriftCompensator, PredictionPlan, prediction_plan, train_compensator
@@ -379,14 +379,7 @@ def run_study(scenario, settings: CompensationSettings | None = None, *,
     s = settings or scenario.compensation or CompensationSettings()
     specs = [get_method(m) for m in s.methods]
     jobs = [(spec, seed) for spec in specs for seed in _seeds(spec, s)]
-    n_steps = 3 + len(jobs)
-    step = 0
-
-    def tick(msg):
-        nonlocal step
-        if progress is not None:
-            progress(step, n_steps, msg)
-        step += 1
+    tick = ticker(progress, 3 + len(jobs))
 
     train_sc = train_scenario(scenario, s)
     if test is None:
@@ -394,9 +387,10 @@ def run_study(scenario, settings: CompensationSettings | None = None, *,
         tick("simulating the test start-ups")
         test = run_scenario(scenario)
     else:
-        step += 1
+        tick(None)
     tick("simulating the training start-ups")
-    train_runs = tuple(simulate_run(train_sc.instrument, c).run for c in train_sc.conditions())
+    train_runs = tuple(r.run for r in simulate_runs(train_sc.instrument,
+                                                    train_sc.conditions()))
     data = drift_dataset(train_runs, list(s.features), decimate_s=s.decimate_s,
                          cutoff_period_s=s.cutoff_period_s,
                          features_mode=check_features_mode(s.features_mode))
@@ -443,6 +437,19 @@ def run_study(scenario, settings: CompensationSettings | None = None, *,
             seeds=tuple(done[j] for j in idx))
     tick("done")
     return study
+
+
+def ticker(progress: Callable[[int, int, str], None] | None, n_steps: int):
+    """``tick(msg)``: calls ``progress(step, n_steps, msg)`` and counts the step (a step
+    skipped with ``tick(None)`` is counted without a call)."""
+    step = 0
+
+    def tick(msg: str | None) -> None:
+        nonlocal step
+        if progress is not None and msg is not None:
+            progress(step, n_steps, msg)
+        step += 1
+    return tick
 
 
 def _seeds(spec: MethodSpec, s: CompensationSettings) -> list[int]:
