@@ -138,9 +138,6 @@ def _cmd_table(args) -> int:
             text = table.to_markdown()
     comparison = None
     if baseline is not None:
-        if table is None:
-            raise NfsError("--baseline compares heading tables; this scenario's protocol "
-                           f"'{settings.protocol}' writes another table")
         from .report.baseline import compare_tables, write_baseline_comparison
         comparison = compare_tables(table, baseline, tolerance=args.tolerance)
         paths += write_baseline_comparison(comparison, args.output)
@@ -164,10 +161,11 @@ def _baseline(args, scenario):
         if args.tolerance is not None:
             raise NfsError("--tolerance needs --baseline OLD.json")
         return None
-    import hashlib
     from .compensate import get_method
     from .compensate.study import CompensationSettings
+    from .io.provenance import sha256_of_file
     from .report.baseline import TOLERANCE, check_common, read_table
+    from .report.table import REFERENCE_ROWS
     if args.tolerance is None:
         args.tolerance = TOLERANCE
     if not (math.isfinite(args.tolerance) and args.tolerance >= 0):
@@ -175,8 +173,8 @@ def _baseline(args, scenario):
                        f"{args.tolerance}")
     baseline = read_table(args.baseline, "--baseline")
     # hashed now: the file may be the --json this run replaces
-    args.baseline_sha256 = hashlib.sha256(Path(args.baseline).read_bytes()).hexdigest()
-    methods = ["before", "stable", "floor"]
+    args.baseline_sha256 = sha256_of_file(args.baseline)
+    methods = list(REFERENCE_ROWS)
     if not args.no_compensation:
         settings = scenario.compensation or CompensationSettings()
         if settings.protocol != "start-ups":

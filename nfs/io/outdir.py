@@ -22,7 +22,6 @@ files it had already replaced atomically.
 
 from __future__ import annotations
 
-import hashlib
 import json
 import os
 import tempfile
@@ -31,7 +30,7 @@ from pathlib import Path
 
 from ..errors import NfsError
 from .atomic import atomic_write_text
-from .provenance import library_versions, platform_tag
+from .provenance import library_versions, platform_tag, sha256_of_file
 
 __all__ = ["MANIFEST_NAME", "OutputFolder", "check_output_file", "read_manifest"]
 
@@ -68,14 +67,6 @@ def _files(folder: Path) -> dict[str, tuple[int, int]]:
                 continue
             out[p.relative_to(folder).as_posix()] = (st.st_ino, st.st_mtime_ns)
     return out
-
-
-def _sha256(path: Path) -> str:
-    h = hashlib.sha256()
-    with open(path, "rb") as f:
-        for block in iter(lambda: f.read(1 << 20), b""):
-            h.update(block)
-    return h.hexdigest()
 
 
 def _writable_place(path: Path, option: str) -> None:
@@ -208,7 +199,7 @@ class OutputFolder:
             "versions": library_versions(),
             "platform": platform_tag(),
             "inputs": inputs or {},
-            "files": [{"path": rel, "sha256": _sha256(self.path / rel)} for rel in written],
+            "files": [{"path": rel, "sha256": sha256_of_file(self.path / rel)} for rel in written],
         }
         out = self.path / MANIFEST_NAME
         atomic_write_text(out, json.dumps(manifest, indent=1, sort_keys=False) + "\n")

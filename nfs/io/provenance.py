@@ -16,7 +16,7 @@ from importlib.metadata import PackageNotFoundError, version
 
 from .. import __version__
 
-__all__ = ["library_versions", "sha256_of_text", "runs_provenance", "scenario_provenance",
+__all__ = ["library_versions", "sha256_of_file", "sha256_of_text", "runs_provenance", "scenario_provenance",
            "instrument_provenance", "platform_tag", "output_provenance"]
 
 #: Distributions whose versions change the numbers (name in the metadata -> key written).
@@ -37,6 +37,15 @@ def library_versions() -> dict[str, str]:
     return out
 
 
+def sha256_of_file(path) -> str:
+    """SHA-256 of a file's bytes, read in blocks of 1 MiB (hex)."""
+    h = hashlib.sha256()
+    with open(path, "rb") as f:
+        for block in iter(lambda: f.read(1 << 20), b""):
+            h.update(block)
+    return h.hexdigest()
+
+
 def sha256_of_text(text: str) -> str:
     """SHA-256 (hex) of *text* encoded as UTF-8."""
     return hashlib.sha256(text.encode("utf-8")).hexdigest()
@@ -51,7 +60,7 @@ def runs_provenance(runs: Iterable) -> list[dict]:
         if path is not None:
             entry["file"] = str(path)
             try:
-                entry["sha256"] = hashlib.sha256(path.read_bytes()).hexdigest()
+                entry["sha256"] = sha256_of_file(path)
             except OSError:
                 pass
         out.append(entry)

@@ -30,7 +30,7 @@ import numpy as np
 
 from nfs.errors import NfsError
 
-__all__ = ["time_to_spec_s", "rolling_rmse_deg", "run_time_to_spec_s", "DEFAULT_WINDOW"]
+__all__ = ["median_time_s", "time_to_spec_s", "rolling_rmse_deg", "run_time_to_spec_s", "DEFAULT_WINDOW"]
 
 #: Cycles of the rolling RMSE by default: five, as many as a stage RMSE of the default
 #: schedule rests on (the start-up hour holds five 640 s cycles).
@@ -81,8 +81,8 @@ def time_to_spec_s(t_s, error_deg, spec_deg: float) -> float:
 def rolling_rmse_deg(error_deg, window: int) -> np.ndarray:
     """r_k = sqrt(mean of e_j^2 over the ``window`` cycles ending at k) [deg].
 
-    The first ``window - 1`` values are NaN (an incomplete window); NaN errors (no data) are
-    left out before the window is formed.
+    The first ``window - 1`` values are NaN (an incomplete window), and so is every window
+    after a NaN error (no data): drop those first, as :func:`run_time_to_spec_s` does.
     """
     if isinstance(window, bool) or not isinstance(window, int) or window < 1:
         raise NfsError(f"the rolling RMSE window must be a positive number of cycles, got "
@@ -106,3 +106,10 @@ def run_time_to_spec_s(t_s, error_deg, spec_deg: float, window: int = DEFAULT_WI
     t, e = t[ok], e[ok]
     return (time_to_spec_s(t, e, spec_deg),
             time_to_spec_s(t, rolling_rmse_deg(e, window), spec_deg))
+
+
+def median_time_s(values) -> float:
+    """Median of times to spec that are not NaN (``inf``, never within spec, counts) [s];
+    NaN when none is."""
+    v = [x for x in values if not math.isnan(x)]
+    return float(np.median(v)) if v else math.nan

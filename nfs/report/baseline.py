@@ -45,7 +45,7 @@ import numpy as np
 from ..docfields import document_fields
 from ..errors import InputError
 from ..io.atomic import atomic_write_text
-from .intervals import DEFAULT_N_BOOT, _nanmean, bc_interval, cluster_bootstrap
+from .intervals import DEFAULT_N_BOOT, _nanmean, bc_interval, cluster_bootstrap, json_number
 from .tablefile import TableData, check_common, common_columns, read_table
 
 __all__ = ["TOLERANCE", "CellChange", "BaselineComparison", "compare_tables",
@@ -97,10 +97,12 @@ class CellChange:
     def to_dict(self) -> dict:
         """JSON form (NaN as null)."""
         return {"method": self.method, "temperature_c": self.temperature_c,
-                "baseline_deg": _j(self.baseline_deg), "new_deg": _j(self.new_deg),
-                "change_deg": _j(self.change_deg),
-                "change_pct": _j(100.0 * self.relative, 4),
-                "ci_low_deg": _j(self.ci_low_deg), "ci_high_deg": _j(self.ci_high_deg),
+                "baseline_deg": json_number(self.baseline_deg, 9),
+                "new_deg": json_number(self.new_deg, 9),
+                "change_deg": json_number(self.change_deg, 9),
+                "change_pct": json_number(100.0 * self.relative, 4),
+                "ci_low_deg": json_number(self.ci_low_deg, 9),
+                "ci_high_deg": json_number(self.ci_high_deg, 9),
                 "verdict": self.verdict}
 
 
@@ -202,10 +204,6 @@ def _pct(r: float) -> str:
     return "0 %" if r == 0.0 else f"{100.0 * r:+.1f} %"
 
 
-def _j(v: float, digits: int = 9):
-    return None if v is None or not math.isfinite(v) else round(float(v), digits)
-
-
 def compare_tables(table, baseline, *, tolerance: float = TOLERANCE,
                    n_boot: int = DEFAULT_N_BOOT, random_state: int = 0,
                    paired: bool | None = None) -> BaselineComparison:
@@ -273,7 +271,7 @@ def compare_tables(table, baseline, *, tolerance: float = TOLERANCE,
             if j < len(temps):
                 a, b, ra, rb = c_new[m_i, j], c_old[m_i, j], r_new[m_i, j], r_old[m_i, j]
             else:                                       # the mean over compared columns
-                a, b = _mean(c_new[m_i]), _mean(c_old[m_i])
+                a, b = float(_nanmean(c_new[m_i], axis=0)), float(_nanmean(c_old[m_i], axis=0))
                 ra, rb = _nanmean(r_new[m_i], axis=0), _nanmean(r_old[m_i], axis=0)
             out.append(_cell(m, temps[j] if j < len(temps) else None, b, a, ra - rb,
                              tolerance))
@@ -282,11 +280,6 @@ def compare_tables(table, baseline, *, tolerance: float = TOLERANCE,
     return BaselineComparison(tuple(methods), temps, tuple(out), float(tolerance), paired,
                               tuple(n for n in notes if n), old.source, new.provenance,
                               old.provenance)
-
-
-def _mean(v: np.ndarray) -> float:
-    v = np.asarray(v, dtype=float)
-    return float(np.nanmean(v)) if np.any(np.isfinite(v)) else math.nan
 
 
 def _cell(method: str, t: float | None, old: float, new: float, reps: np.ndarray,

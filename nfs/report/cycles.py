@@ -17,6 +17,7 @@ import math
 from pathlib import Path
 
 from ..io.atomic import atomic_write_text
+from .intervals import json_number
 from .reference import CHENG2015_TABLE2_MSD, TAO2019_BIAS_STABILITY
 
 __all__ = ["cycle_table_markdown", "cycle_table_json", "write_cycle_study", "intervals_csv"]
@@ -35,10 +36,6 @@ def _cell(v: float, ci, digits: int) -> str:
     if ci is None or not all(math.isfinite(c) for c in ci) or ci[0] == ci[1]:
         return f"{v:.{digits}f}"
     return f"{v:.{digits}f} ({ci[0]:.{digits}f} .. {ci[1]:.{digits}f})"
-
-
-def _j(v: float):
-    return None if not math.isfinite(v) else float(v)
 
 
 def _runs(study) -> bool:
@@ -158,11 +155,11 @@ def cycle_table_json(study, title: str = "", provenance: dict | None = None) -> 
     for r in study.rows:
         row = {"method": r.method}
         for k in [m for m, _, _ in _METRICS] + [m for m, _ in _RAMPS]:
-            row[k] = _j(r.values[k])
+            row[k] = json_number(r.values[k])
             lo, hi = r.intervals.get(k, (math.nan, math.nan))
-            row[f"{k}_ci"] = [_j(lo), _j(hi)]
-        row["heading_rmse_deg"] = _j(r.heading_rmse_deg)
-        row["msd_by_part_dph2"] = [_j(v) for v in r.msd_by_part]
+            row[f"{k}_ci"] = [json_number(lo), json_number(hi)]
+        row["heading_rmse_deg"] = json_number(r.heading_rmse_deg)
+        row["msd_by_part_dph2"] = [json_number(v) for v in r.msd_by_part]
         pub = None if _runs(study) else _paper(r.method)
         row["published_bias_stability_dph"] = pub[0] if pub else None
         row["published_improvement_pct"] = pub[1] if pub else None

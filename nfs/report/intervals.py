@@ -342,9 +342,12 @@ class Comparison:
     def to_dict(self) -> dict:
         """JSON form (NaN as null)."""
         return {"method_a": self.method_a, "method_b": self.method_b,
-                "difference_deg": _j(self.difference_deg), "ci_low_deg": _j(self.ci_low_deg),
-                "ci_high_deg": _j(self.ci_high_deg), "p_value": _j(self.p_value),
-                "p_adjusted": _j(self.p_adjusted), "distinguishable": self.distinguishable}
+                "difference_deg": json_number(self.difference_deg, 8),
+                "ci_low_deg": json_number(self.ci_low_deg, 8),
+                "ci_high_deg": json_number(self.ci_high_deg, 8),
+                "p_value": json_number(self.p_value, 8),
+                "p_adjusted": json_number(self.p_adjusted, 8),
+                "distinguishable": self.distinguishable}
 
 
 def _p(p: float) -> str:
@@ -353,8 +356,12 @@ def _p(p: float) -> str:
     return f"{p:.2g}" if p >= 1e-3 else "< 0.001"
 
 
-def _j(v: float):
-    return None if not math.isfinite(v) else round(float(v), 8)
+def json_number(v: float | None, digits: int | None = None):
+    """``v`` for JSON: None when missing or not finite, else a float (rounded to ``digits``
+    decimals when given)."""
+    if v is None or not math.isfinite(v):
+        return None
+    return float(v) if digits is None else round(float(v), digits)
 
 
 def compare_rows(boot: ClusterBootstrap, names: Sequence[str],

@@ -15,6 +15,7 @@ import math
 from pathlib import Path
 
 from ..io.atomic import atomic_write_text
+from .intervals import json_number
 from .cycles import intervals_csv
 from .reference import LIANG2021_RVR_OVER_LS_PCT
 
@@ -35,10 +36,6 @@ def _cell(v: float, ci) -> str:
     if ci is None or not all(math.isfinite(c) for c in ci) or ci[0] == ci[1]:
         return _num(v)
     return f"{_num(v)} ({_num(ci[0])} .. {_num(ci[1])})"
-
-
-def _j(v: float):
-    return None if not math.isfinite(v) else float(v)
 
 
 def _gain_pct(study, parameter: str, metric: str) -> float:
@@ -120,14 +117,14 @@ def parameter_table_json(study, title: str = "", provenance: dict | None = None)
         row = {"parameter": r.parameter, "unit": study.described[r.parameter][1],
                "thermometer": study.described[r.parameter][2], "method": r.method}
         for k, _ in _METRICS:
-            row[k] = _j(r.values[k])
-            row[f"{k}_ci"] = [_j(v) for v in r.intervals.get(k, (math.nan, math.nan))]
+            row[k] = json_number(r.values[k])
+            row[f"{k}_ci"] = [json_number(v) for v in r.intervals.get(k, (math.nan, math.nan))]
         params.append(row)
     heads = [{"schedule": h.schedule, "positions_deg": list(h.positions_deg),
-              "method": h.method, "heading_rmse_deg": _j(h.rmse_deg),
-              "heading_rmse_deg_ci": [_j(v) for v in h.interval],
-              "startup_rmse_deg": _j(h.startup_rmse_deg),
-              "startup_rmse_deg_ci": [_j(v) for v in h.startup_interval],
+              "method": h.method, "heading_rmse_deg": json_number(h.rmse_deg),
+              "heading_rmse_deg_ci": [json_number(v) for v in h.interval],
+              "startup_rmse_deg": json_number(h.startup_rmse_deg),
+              "startup_rmse_deg_ci": [json_number(v) for v in h.startup_interval],
               "versus_best": h.versus_best} for h in study.headings]
     doc = {"title": title, "scenario": study.scenario.name, "protocol": "parameters",
            "n_boot": study.n_boot, "parameters": params, "headings": heads,

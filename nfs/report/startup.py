@@ -18,7 +18,7 @@ import numpy as np
 from matplotlib import colormaps
 from matplotlib.figure import Figure
 
-from ..northfind.spec import DEFAULT_WINDOW, run_time_to_spec_s
+from ..northfind.spec import DEFAULT_WINDOW, median_time_s, run_time_to_spec_s
 
 __all__ = ["TimeToSpecTable", "time_to_spec_table", "plot_error_vs_time"]
 
@@ -67,10 +67,6 @@ def _minutes(v: float) -> str:
     return "never" if math.isinf(v) else f"{v / 60.0:.1f}"
 
 
-def _median(values) -> float:
-    v = [x for x in values if not math.isnan(x)]
-    return float(np.median(v)) if v else math.nan
-
 
 def time_to_spec_table(result, northfind: Mapping[str, Sequence], spec_deg: float,
                        window: int = DEFAULT_WINDOW) -> TimeToSpecTable:
@@ -95,8 +91,8 @@ def time_to_spec_table(result, northfind: Mapping[str, Sequence], spec_deg: floa
         for i in range(len(sc.start_temperatures_c)):
             times = [run_time_to_spec_s(nfs_[k].t_end_s, nfs_[k].error_deg, spec_deg, window)
                      for k in result.runs_at(i)]
-            a.append(_median(t[0] for t in times))
-            b.append(_median(t[1] for t in times))
+            a.append(median_time_s(t[0] for t in times))
+            b.append(median_time_s(t[1] for t in times))
         every[name], rolling[name] = tuple(a), tuple(b)
     return TimeToSpecTable(tuple(sc.start_temperatures_c), float(spec_deg), window, every,
                            rolling, sc.repeats)

@@ -24,7 +24,7 @@ import numpy as np
 
 from ..docfields import document_fields
 from ..io.atomic import atomic_write_bytes, atomic_write_text
-from .intervals import DEFAULT_N_BOOT, Comparison, cluster_bootstrap, compare_rows
+from .intervals import DEFAULT_N_BOOT, Comparison, cluster_bootstrap, compare_rows, json_number
 
 __all__ = ["TableRow", "HeadingTable", "pooled_rmse", "write_table", "plot_heading_table",
            "REFERENCE_ROWS"]
@@ -311,17 +311,18 @@ class HeadingTable:
             "temperatures_c": [float(t) for t in self.temperatures_c],
             "features_mode": self.features_mode,
             "best": self.best,
-            "rows": [{"method": r.method, "rmse_deg": [_json(v) for v in r.rmse_deg],
-                      "mean_deg": _json(r.mean_deg), "ci_low_deg": _json(r.ci_low_deg),
-                      "ci_high_deg": _json(r.ci_high_deg),
+            "rows": [{"method": r.method, "rmse_deg": [json_number(v, 8) for v in r.rmse_deg],
+                      "mean_deg": json_number(r.mean_deg, 8),
+                      "ci_low_deg": json_number(r.ci_low_deg, 8),
+                      "ci_high_deg": json_number(r.ci_high_deg, 8),
                       "cell_ci_deg": None if r.cell_ci_deg is None else
-                      [[_json(a), _json(b)] for a, b in r.cell_ci_deg],
-                      "seed_means_deg": [_json(v) for v in r.seed_means_deg],
+                      [[json_number(a, 8), json_number(b, 8)] for a, b in r.cell_ci_deg],
+                      "seed_means_deg": [json_number(v, 8) for v in r.seed_means_deg],
                       "group": r.group or None,
                       "vs_best": self.versus_best(r.method) or None} for r in self.rows],
             "comparisons": [c.to_dict() for c in self.comparisons],
             "notes": list(self.notes),
-            "errors_deg": {n: [[[_json(v, 9) for v in c] for c in col] for col in errs]
+            "errors_deg": {n: [[[json_number(v, 9) for v in c] for c in col] for col in errs]
                            for n, errs in (self.errors_deg or {}).items()},
             "provenance": self.provenance,
         }
@@ -341,10 +342,6 @@ class HeadingTable:
 
 def _fmt(v: float, digits: int) -> str:
     return "nan" if not math.isfinite(v) else f"{v:.{digits}f}"
-
-
-def _json(v: float, digits: int = 8):
-    return None if not math.isfinite(v) else round(float(v), digits)
 
 
 def plot_heading_table(table: HeadingTable, title: str = ""):

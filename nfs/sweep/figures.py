@@ -18,12 +18,12 @@ from pathlib import Path
 from typing import Any
 
 import matplotlib
-import numpy as np
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 from ..io.atomic import atomic_output  # noqa: E402
+from ..northfind.spec import median_time_s  # noqa: E402
 from .cells import STAGES  # noqa: E402
 from .spec import SweepSpec  # noqa: E402
 from .store import CellStore  # noqa: E402
@@ -66,11 +66,6 @@ def _rms(values) -> float:
     v = [x for x in values if isinstance(x, float) and math.isfinite(x)]
     return math.sqrt(sum(x * x for x in v) / len(v)) if v else math.nan
 
-
-def _median(values) -> float:
-    """Median of the values that are not NaN (``inf``, never within spec, counts)."""
-    v = [x for x in values if not math.isnan(x)]
-    return float(np.median(v)) if v else math.nan
 
 
 def _save(fig, path: Path) -> Path:
@@ -180,7 +175,7 @@ def write_figures(spec: SweepSpec, store: CellStore, folder: str | Path) -> list
         fig = _axis_figure(key, drawn[key], tts, 1, "time to spec [min after power-on]",
                            f"{name}: time until every cycle stays within "
                            f"{spec.spec_deg:g} deg\n({never} start-up(s) never within "
-                           f"spec, not drawn)", False, False, _median, "median")
+                           f"spec, not drawn)", False, False, median_time_s, "median")
         out.append(_save(fig, folder / f"time_to_spec_vs_{_slug(key)}.png"))
     if pairs:
         a, b = spec.grid_axes[0].key, spec.grid_axes[1].key

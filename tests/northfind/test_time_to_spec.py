@@ -33,7 +33,8 @@ def test_rolling_rmse_of_exponential_closed_form():
     assert np.all(np.isnan(rolling_rmse_deg(err, w)[:w - 1]))
     t_star = tau * math.log(a * math.sqrt(g) / s)   # r(t) = s
     ok = (T >= t_star) & (np.arange(T.size) >= w - 1)
-    assert run_time_to_spec_s(T, err, s, window=w) == (time_to_spec_s(T, err, s), T[ok][0])
+    t_e = tau * math.log(a / s)                     # |e(t)| = s
+    assert run_time_to_spec_s(T, err, s, window=w) == (T[T > t_e][0], T[ok][0])
 
 
 def test_a_late_excursion_resets_the_time_and_a_last_one_means_never():
