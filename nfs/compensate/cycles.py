@@ -37,26 +37,25 @@ compensation"):
 
 from __future__ import annotations
 
-import warnings
 from dataclasses import dataclass, field
 from typing import Callable
 
 import numpy as np
 from joblib import Parallel, delayed
-from sklearn.exceptions import ConvergenceWarning
 
-from ..denoise import separate_drift
+from ..denoise import earth_rate_projection_dph, separate_drift
 from ..errors import NfsError
 from ..experiment import simulate_runs
-from ..scenario_runs import northfind_runs, run_scenario
+from ..scenario_runs import northfind_runs
 from ..io.measurement import Run
-from ..report.intervals import bc_interval
+from ..report.intervals import MIN_REPLICATES, bc_interval, block_counts
 from ..report.table import pooled_rmse
-from .compensator import DriftCompensator, prediction_plan, train_compensator
+from .compensator import DriftCompensator, prediction_plan
 from .dataset import drift_dataset
 from .methods import get_method
 from .modes import check_features_mode
-from .study import CompensationSettings, test_scenario, ticker, train_scenario
+from .study import (CompensationSettings, test_scenario, ticker, train_and_predict,
+                    train_scenario)
 
 __all__ = ["CycleRow", "CycleStudy", "run_cycle_study", "run_runs_study", "cut_run", "CYCLE_METRICS",
            "BIAS_WINDOW_S", "BLOCK_S", "RAMP_RATE_C_PER_S", "UNCOMPENSATED"]
@@ -219,16 +218,7 @@ def _metrics(s: np.ndarray) -> dict[str, np.ndarray]:
 
 
 def _interval(reps: np.ndarray, est: float) -> tuple[float, float]:
-    reps = reps[np.isfinite(reps)]
-    if not np.isfinite(est) or reps.size < 10:
-        return (float("nan"), float("nan"))
-    return tuple(float(v) for v in bc_interval(reps, est))
-
-
-def _train(key: str, data, s, seed: int):
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", ConvergenceWarning)
-        return key, train_compensator(key, data, budget=s.budget, random_state=seed, n_jobs=1)
+    return bc_interval(reps, est, min_replicates=MIN_REPLICATES)
 
 
 def run_cycle_study(scenario, settings=None, *, n_boot: int = 2000,
@@ -241,9 +231,9 @@ def run_cycle_study(scenario, settings=None, *, n_boot: int = 2000,
     specs = _untuned(s, "a cycling study trains on one cycle")
     tick = ticker(progress, 4 + len(specs))
     tick("simulating the runs")
-    res = run_scenario(scenario)
+    sims = simulate_runs(scenario.instrument, scenario.conditions())
     train, test = [], []
-    for k, sim in enumerate(res.simulations):
+    for k, sim in enumerate(sims):
         i_temp = k // scenario.repeats
         for c, (a, b) in enumerate(spans[i_temp]):
             part = cut_run(sim.run, a, b, f"cycle{c + 1}")
@@ -267,7 +257,8 @@ def run_runs_study(scenario, settings=None, *, n_boot: int = 2000,
     tick("simulating the runs")
     train_sc = train_scenario(scenario, s)
     train = [r.run for r in simulate_runs(train_sc.instrument, train_sc.conditions())]
-    test = [sim.run for sim in run_scenario(test_scenario(scenario, s)).simulations]
+    test_sc = test_scenario(scenario, s)
+    test = [r.run for r in simulate_runs(test_sc.instrument, test_sc.conditions())]
     return _drift_study(scenario, s, specs, train, test, n_boot, tick, ())
 
 
@@ -289,29 +280,29 @@ def _drift_study(scenario, s, specs, train, test, n_boot, tick, spans) -> CycleS
                          cutoff_period_s=s.cutoff_period_s, features_mode=mode)
     parts = _score_parts(test, s.cutoff_period_s)
     n_blocks = int(max(p.block.max() for p in parts)) + 1
+    # the constant calibration: the mean of gyro - Earth rate over the training runs at rest
     train_bias = np.concatenate([
-        np.asarray(sep.raw_drift_dph)[~np.asarray(sep.moving, dtype=bool)]
-        for sep in (separate_drift(r, cutoff_period_s=s.cutoff_period_s) for r in train)])
+        (np.asarray(r.columns["gyro_dph"], dtype=float) - earth_rate_projection_dph(r))[
+            np.asarray(r.columns["moving"], dtype=float) == 0.0] for r in train])
     constant = float(np.nanmean(train_bias))
 
+    plans = [prediction_plan(r, data.feature_names, features_mode=data.features_mode,
+                             rate_window_s=data.rate_window_s,
+                             stride_s=min(10.0, s.decimate_s)) for r in test]
     comps: dict[str, DriftCompensator] = {}
-    with Parallel(n_jobs=s.n_jobs, return_as="generator_unordered") as parallel:
-        for key, comp in parallel(delayed(_train)(spec.key, data, s, s.random_state)
-                                  for spec in sorted(specs, key=lambda sp: -sp.cost)):
-            comps[get_method(key).name] = comp
-            tick(f"trained {get_method(key).name}")
-    tick("scoring")
     preds = {UNCOMPENSATED: [np.full(r.n_samples, constant) for r in test]}
-    for spec in specs:
-        comp = comps[spec.name]
-        preds[spec.name] = [comp.predict_drift(plan=prediction_plan(
-            r, data.feature_names, features_mode=data.features_mode,
-            rate_window_s=data.rate_window_s, stride_s=min(10.0, s.decimate_s))) for r in test]
+    order = sorted(specs, key=lambda sp: -sp.cost)
+    with Parallel(n_jobs=s.n_jobs, return_as="generator_unordered") as parallel:
+        for j, comp, pred in parallel(delayed(train_and_predict)(
+                j, spec.key, data, s, s.random_state, plans) for j, spec in enumerate(order)):
+            comps[order[j].name], preds[order[j].name] = comp, pred
+            tick(f"trained {order[j].name}")
+    tick("scoring")
+    preds = {n: preds[n] for n in [UNCOMPENSATED] + [spec.name for spec in specs]}
     names = list(preds)
     stats = np.stack([_block_sums(parts, preds[n], n_blocks) for n in names])  # (rows, B, 13)
     rng = np.random.default_rng(s.random_state)
-    counts = np.stack([np.bincount(rng.integers(0, n_blocks, n_blocks), minlength=n_blocks)
-                       for _ in range(n_boot)]).astype(float)             # (n_boot, blocks)
+    counts = block_counts(n_blocks, n_boot, rng)             # (n_boot, blocks)
     est = _metrics(stats.sum(axis=1))
     reps = _metrics(np.einsum("rb,nbk->nrk", counts, stats))              # (rows, n_boot)
     est["improvement_pct"] = 100.0 * (1.0 - est["bias_stability_dph"]
@@ -322,10 +313,7 @@ def _drift_study(scenario, s, specs, train, test, n_boot, tick, spans) -> CycleS
     for i, name in enumerate(names):
         pred_runs = test if name == UNCOMPENSATED else \
             [comps[name].compensate(r, drift_dph=p) for r, p in zip(test, preds[name])]
-        if name == UNCOMPENSATED:
-            nf = northfind_runs(test, scenario.northfind)
-        else:
-            nf = northfind_runs(pred_runs, scenario.northfind)
+        nf = northfind_runs(pred_runs, scenario.northfind)
         heading = pooled_rmse(np.asarray(r.error_deg) for r in nf)
         keys = CYCLE_METRICS + RAMP_KEYS
         values = {k: float(est[k][i]) for k in keys}

@@ -61,12 +61,13 @@ from ..io.measurement import Run
 from ..northfind.known_bias import dwell_means, north_find_known_bias
 from ..northfind.level import gravity_and_biases
 from ..northfind.solve import _distinct_angles
-from ..report.intervals import bc_interval
-from .compensator import prediction_plan, train_compensator
+from ..report.intervals import MIN_REPLICATES, bc_interval, block_counts
+from .compensator import prediction_plan
 from .dataset import drift_dataset
 from .methods import get_method
 from .modes import check_features_mode
-from .study import CompensationSettings, test_scenario, ticker, train_scenario
+from .study import (CompensationSettings, test_scenario, ticker, train_and_predict,
+                    train_scenario)
 
 __all__ = ["PARAMETERS", "PARAMETER_METRICS", "BLOCK_CYCLES", "CONSTANT", "BIAS_FITTED",
            "CycleParameters", "ParameterRow", "HeadingRow", "ParameterStudy",
@@ -239,10 +240,7 @@ def _param_metrics(s: np.ndarray) -> dict:
 
 
 def _interval(reps: np.ndarray, est: float) -> tuple[float, float]:
-    reps = reps[np.isfinite(reps)]
-    if not np.isfinite(est) or reps.size < 10:
-        return (float("nan"), float("nan"))
-    return tuple(float(v) for v in bc_interval(reps, est))
+    return bc_interval(reps, est, min_replicates=MIN_REPLICATES)
 
 
 def _block_sums(cols: list[np.ndarray], block: np.ndarray, n_blocks: int) -> np.ndarray:
@@ -295,8 +293,7 @@ def run_parameter_study(scenario, settings=None, *, n_boot: int = 2000,
     block = _blocks(test)
     n_blocks = int(block.max()) + 1
     rng = np.random.default_rng(s.random_state)
-    counts = np.stack([np.bincount(rng.integers(0, n_blocks, n_blocks), minlength=n_blocks)
-                       for _ in range(n_boot)]).astype(float)
+    counts = block_counts(n_blocks, n_boot, rng)
     rows: list[ParameterRow] = []
     predicted: dict = {}      # (row, parameter) -> per test run, per cycle
     split = np.cumsum([len(c.t_end_s) for c in test])[:-1]
@@ -322,18 +319,17 @@ def run_parameter_study(scenario, settings=None, *, n_boot: int = 2000,
     mode = check_features_mode(s.features_mode)
     data = drift_dataset(train_runs, list(s.features), decimate_s=s.decimate_s,
                          cutoff_period_s=s.cutoff_period_s, features_mode=mode)
+    plans = [prediction_plan(r, data.feature_names, features_mode=data.features_mode,
+                             rate_window_s=data.rate_window_s,
+                             stride_s=min(10.0, s.decimate_s)) for r in test_runs]
     sample_nf: dict = {}
-    for spec in specs:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", ConvergenceWarning)
-            comp = train_compensator(spec.key, data, budget=s.budget,
-                                     random_state=s.random_state, n_jobs=s.n_jobs)
-        runs = [comp.compensate(r, drift_dph=comp.predict_drift(plan=prediction_plan(
-            r, data.feature_names, features_mode=data.features_mode,
-            rate_window_s=data.rate_window_s, stride_s=min(10.0, s.decimate_s))))
-            for r in test_runs]
-        sample_nf[spec.name] = (runs, northfind_runs(runs, scenario.northfind))
-        tick(f"compensated by {spec.name} sample by sample")
+    order = sorted(specs, key=lambda sp: -sp.cost)
+    with Parallel(n_jobs=s.n_jobs, return_as="generator_unordered") as parallel:
+        for j, comp, preds in parallel(delayed(train_and_predict)(
+                j, spec.key, data, s, s.random_state, plans) for j, spec in enumerate(order)):
+            runs = [comp.compensate(r, drift_dph=p) for r, p in zip(test_runs, preds)]
+            sample_nf[order[j].name] = (runs, northfind_runs(runs, scenario.northfind))
+            tick(f"compensated by {order[j].name} sample by sample")
 
     tick("north-finding with the biases known")
     headings = _heading_rows(scenario, test_runs, test_nf, test, predicted, sample_nf, specs,

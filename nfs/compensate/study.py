@@ -45,7 +45,7 @@ from .dataset import DriftDataset, drift_dataset
 from .methods import TABLE_METHODS, MethodSpec, get_method
 from .modes import DEFAULT_FEATURE_MODE, FEATURE_MODE_NOTES, check_features_mode
 
-__all__ = ["PROTOCOLS", "train_scenario", "CompensationSettings", "MethodResult", "SeedResult",
+__all__ = ["PROTOCOLS", "train_scenario", "train_and_predict", "ticker", "CompensationSettings", "MethodResult", "SeedResult",
            "CompensationStudy", "run_study", "test_scenario", "DriftRow", "errors_by_temperature",
            "table_provenance"]
 
@@ -409,7 +409,7 @@ def run_study(scenario, settings: CompensationSettings | None = None, *,
     done: dict[int, SeedResult] = {}
     fitted: dict[int, tuple] = {}
     with Parallel(n_jobs=s.n_jobs, return_as="generator_unordered") as parallel:
-        out = parallel(delayed(_train_and_predict)(j, jobs[j][0].key, data, s, jobs[j][1],
+        out = parallel(delayed(train_and_predict)(j, jobs[j][0].key, data, s, jobs[j][1],
                                                    plans) for j in order)
         for j, comp, preds in out:
             spec, seed = jobs[j]
@@ -459,10 +459,11 @@ def _seeds(spec: MethodSpec, s: CompensationSettings) -> list[int]:
     return [s.random_state + k for k in range(n)]
 
 
-def _train_and_predict(j: int, key: str, data: DriftDataset, s: CompensationSettings,
+def train_and_predict(j: int, key: str, data: DriftDataset, s: CompensationSettings,
                        seed: int, plans: list[PredictionPlan]):
     """Train method ``key`` with ``seed`` (one worker: the tuner's own evaluations are
-    serial) and predict the drift of every test run from its plan."""
+    serial) and predict the drift of every test run from its plan; (j, compensator,
+    predictions), ``j`` passed through to tell the jobs apart."""
     with warnings.catch_warnings():
         # capped iterations (RVR's evidence sweeps, BP's epochs) are part of the recipes
         warnings.simplefilter("ignore", ConvergenceWarning)

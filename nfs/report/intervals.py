@@ -74,8 +74,12 @@ DEFAULT_N_BOOT = 4000
 LEVEL = 0.95
 
 
-def bc_interval(replicates: np.ndarray, estimate: float, level: float = LEVEL
-                ) -> tuple[float, float]:
+#: Fewest finite bootstrap replicates the drift and parameter tables draw an interval from.
+MIN_REPLICATES = 10
+
+
+def bc_interval(replicates: np.ndarray, estimate: float, level: float = LEVEL, *,
+                min_replicates: int = 1) -> tuple[float, float]:
     """Bias-corrected percentile interval of ``estimate`` from its bootstrap replicates.
 
     Parameters
@@ -86,15 +90,18 @@ def bc_interval(replicates: np.ndarray, estimate: float, level: float = LEVEL
         The statistic on the original data, theta_hat.
     level : float
         Confidence level (0.95: the 2.5 % and 97.5 % bounds).
+    min_replicates : int
+        Fewest finite replicates an interval is drawn from.
 
     Returns
     -------
     (low, high) : tuple of float
-        NaN when there is no finite replicate or the estimate is not finite.
+        NaN when there are fewer finite replicates than ``min_replicates`` (or none) or the
+        estimate is not finite.
     """
     b = np.asarray(replicates, dtype=float)
     b = b[np.isfinite(b)]
-    if b.size == 0 or not math.isfinite(estimate):
+    if b.size < max(1, min_replicates) or not math.isfinite(estimate):
         return math.nan, math.nan
     z0 = _z0(b, estimate)
     a = norm.cdf(2.0 * z0 + norm.ppf([(1.0 - level) / 2.0, (1.0 + level) / 2.0]))
@@ -354,6 +361,14 @@ def _p(p: float) -> str:
     if not math.isfinite(p):
         return "nan"
     return f"{p:.2g}" if p >= 1e-3 else "< 0.001"
+
+
+def block_counts(n_blocks: int, n_boot: int, rng: np.random.Generator) -> np.ndarray:
+    """How often each of ``n_blocks`` blocks is drawn in each of ``n_boot`` bootstrap
+    replicates (each draws ``n_blocks`` blocks with replacement), shape (n_boot, n_blocks):
+    a statistic summed per block is resampled by ``counts @ sums``."""
+    return np.stack([np.bincount(rng.integers(0, n_blocks, n_blocks), minlength=n_blocks)
+                     for _ in range(n_boot)]).astype(float)
 
 
 def json_number(v: float | None, digits: int | None = None):
