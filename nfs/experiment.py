@@ -373,8 +373,8 @@ def simulate_runs(inst: Instrument, conds, *,
     their thermal networks are solved together (:func:`thermal.simulate_many`, one loop over
     the samples for all of them, in batches of at most :data:`STACK_BYTES` of state), the
     rest run by run.  The results equal :func:`simulate_run`'s to the last bits of the
-    temperatures (a matrix product replaces matrix-vector products); the same conditions give
-    the same bytes whatever else is simulated beside them in a batch of the same size.
+    temperatures (the sums of a step run in another order); the same conditions give the
+    same bytes whatever else is simulated beside them.
     ``progress(i, n, name)`` is called before each run's preparation.
     """
     conds = list(conds)
@@ -389,27 +389,15 @@ def simulate_runs(inst: Instrument, conds, *,
     ths: list = [None] * len(preps)
     for idx in groups.values():
         first = preps[idx[0]]
-        n_t = first.cond.time_s.size
-        width = 2 * len(first.inst.network.node_names) + 3
-        per_batch = max(1, STACK_BYTES // (8 * n_t * width))
-        if not callable(first.power):
-            for i in idx:
-                p = preps[i]
-                ths[i] = thermal.simulate(p.inst.network, p.cond.time_s, ambient_c=p.ambient,
-                                          initial_c=p.initial, power_w=p.power,
-                                          ambient_hold="first-order")
-            continue
-        for b0 in range(0, len(idx), per_batch):
-            batch = idx[b0:b0 + per_batch]
-            n = len(first.inst.network.node_names)
-            initial = np.array([np.broadcast_to(np.asarray(preps[i].initial, dtype=float),
-                                                (n,)) for i in batch])
-            res = thermal.simulate_many(first.inst.network, first.cond.time_s,
-                                        ambient_c=np.array([preps[i].ambient for i in batch]),
-                                        initial_c=initial, power_w=first.power,
-                                        ambient_hold="first-order")
-            for i, th in zip(batch, res):
-                ths[i] = th
+        n = len(first.inst.network.node_names)
+        initial = np.array([np.broadcast_to(np.asarray(preps[i].initial, dtype=float), (n,))
+                            for i in idx])
+        res = thermal.simulate_many(first.inst.network, first.cond.time_s,
+                                    ambient_c=np.array([preps[i].ambient for i in idx]),
+                                    initial_c=initial, power_w=first.power,
+                                    ambient_hold="first-order", max_bytes=STACK_BYTES)
+        for i, th in zip(idx, res):
+            ths[i] = th
     return [_finish(p, th) for p, th in zip(preps, ths)]
 
 

@@ -12,8 +12,8 @@ import numpy as np
 from nfs.errors import ThermalError
 from thermal.network import Network
 from thermal.solve import (AMBIENT_HOLDS, PowerLaw, StepMatrices, ThermalResult, _as_ambient,
-                           _as_time, _check_power_array, _result, _step_classes, simulate,
-                           step_matrices)
+                           _as_time, _check_power_array, _result, _step_classes, _step_maps,
+                           simulate, step_matrices)
 
 __all__ = ["simulate_many"]
 
@@ -26,9 +26,7 @@ def _march_many(steps: list[StepMatrices], cls: list[int], x: np.ndarray, time_s
     (R, n).  The step's arithmetic is that of :func:`_march`, its rounding may differ in the
     last bit (another order of the sums), the same for every R."""
     n = node_power_w.size
-    maps = [np.column_stack([m.phi_minus_i, m.gamma[:, 1:], m.gamma[:, 0],
-                             m.gamma[:, 1:] @ node_power_w]
-                            + ([] if m.lam is None else [m.lam])).T.copy() for m in steps]
+    maps = [m.T.copy() for m in _step_maps(steps, node_power_w)]
     frozen = x.view()
     frozen.flags.writeable = False
     times = time_s.tolist()
@@ -53,7 +51,8 @@ def _march_many(steps: list[StepMatrices], cls: list[int], x: np.ndarray, time_s
 
 def simulate_many(network: Network, time_s: np.ndarray, *, ambient_c, initial_c,
                   power_w: PowerLaw | np.ndarray | None = None,
-                  ambient_hold: str = "zero-order") -> list[ThermalResult]:
+                  ambient_hold: str = "zero-order",
+                  max_bytes: int | None = None) -> list[ThermalResult]:
     """:func:`simulate` for R runs of one network on one time grid, solved together.
 
     Many start-ups of one instrument differ only in where they start and what the chamber
@@ -74,6 +73,9 @@ def simulate_many(network: Network, time_s: np.ndarray, *, ambient_c, initial_c,
         run at t_s, shape (R, n_nodes), and returns the extra powers, shape (R, n_nodes).
     time_s, ambient_hold :
         As :func:`simulate`.
+    max_bytes : int, optional
+        The marched state of at most this many bytes at once: the runs are taken in as many
+        batches as that needs (a run's bits do not depend on its batch).
 
     Returns
     -------
@@ -109,25 +111,31 @@ def simulate_many(network: Network, time_s: np.ndarray, *, ambient_c, initial_c,
     a, b = network.matrices()
     steps, cls = _step_classes(t)
     mats = [step_matrices(a, b, h, slope=linear) for h in steps]
-    x = np.zeros((n_t, r, 2 * n + 2 + linear))
-    x[0, :, :n] = t0_all
     slopes = []
-    for i, amb in enumerate(ambs):
+    for amb in ambs:
         slope = np.zeros(n_t)
         if linear and n_t > 1:
             slope[:-1] = np.diff(amb) / np.diff(t)
         slopes.append(slope)
-        x[:, i, 2 * n] = amb
-        x[:, i, 2 * n + 1] = 1.0
-        if linear:
-            x[:, i, 2 * n + 2] = slope
-    _march_many(mats, cls.tolist(), x, t, network.node_power_w, law)
+    width = 2 * n + 2 + linear
+    per = r if max_bytes is None else max(1, int(max_bytes) // (8 * n_t * width))
     out = []
-    for i in range(r):
-        _check_power_array(x[:, i, n:2 * n], t, names, "power_w(t_s, temperature_c)")
-        inputs = np.empty((n_t, 1 + n))
-        inputs[:, 0] = ambs[i]
-        inputs[:, 1:] = network.node_power_w + x[:, i, n:2 * n]
-        out.append(_result(network, a, b, mats, steps, cls, t, ambs[i], slopes[i], linear,
-                           np.ascontiguousarray(x[:, i, :n]), inputs, ambient_hold))
+    for b0 in range(0, r, per):
+        batch = range(b0, min(r, b0 + per))
+        x = np.zeros((n_t, len(batch), width))
+        x[0, :, :n] = t0_all[b0:b0 + len(batch)]
+        for k, i in enumerate(batch):
+            x[:, k, 2 * n] = ambs[i]
+            x[:, k, 2 * n + 1] = 1.0
+            if linear:
+                x[:, k, 2 * n + 2] = slopes[i]
+        _march_many(mats, cls.tolist(), x, t, network.node_power_w, law)
+        for k, i in enumerate(batch):
+            _check_power_array(x[:, k, n:2 * n], t, names, "power_w(t_s, temperature_c)")
+            inputs = np.empty((n_t, 1 + n))
+            inputs[:, 0] = ambs[i]
+            inputs[:, 1:] = network.node_power_w + x[:, k, n:2 * n]
+            out.append(_result(network, a, b, mats, steps, cls, t, ambs[i], slopes[i],
+                               linear, np.ascontiguousarray(x[:, k, :n]), inputs,
+                               ambient_hold))
     return out

@@ -247,6 +247,14 @@ def _modal_recursion(phi_minus_i: np.ndarray, capacity: np.ndarray, t0: np.ndarr
     return (z @ q.T) / d
 
 
+def _step_maps(steps: list[StepMatrices], node_power_w: np.ndarray) -> list[np.ndarray]:
+    """Per step class, [Phi - I | Gamma_P | Gamma_amb | Gamma_P P_const (| Lambda)]: the
+    increment of (3) (and (7)) from one augmented row [T_k, p_k, T_amb,k, 1 (, v_k)]."""
+    return [np.column_stack([m.phi_minus_i, m.gamma[:, 1:], m.gamma[:, 0],
+                             m.gamma[:, 1:] @ node_power_w]
+                            + ([] if m.lam is None else [m.lam])) for m in steps]
+
+
 def _march(steps: list[StepMatrices], cls: list[int], x: np.ndarray, time_s: np.ndarray,
            node_power_w: np.ndarray, power: PowerLaw | None) -> None:
     """Fill T_1, ..., T_{n_t-1} of ``x`` one interval at a time, calling the power law.
@@ -268,9 +276,7 @@ def _march(steps: list[StepMatrices], cls: list[int], x: np.ndarray, time_s: np.
     T_{k+1} is known; the law gets a read-only view of T_{k+1}, which is never changed after.
     """
     n = node_power_w.size
-    maps = [np.column_stack([m.phi_minus_i, m.gamma[:, 1:], m.gamma[:, 0],
-                             m.gamma[:, 1:] @ node_power_w]
-                            + ([] if m.lam is None else [m.lam])) for m in steps]
+    maps = _step_maps(steps, node_power_w)
     frozen = x.view()
     frozen.flags.writeable = False
     times = time_s.tolist()

@@ -39,6 +39,24 @@ def test_stacked_runs_match_single_runs(hold):
         assert res.temperature_c.flags.writeable is False
 
 
+def test_a_run_has_the_same_bits_in_any_batch():
+    # Oracle: the march's sums run in one order whatever the number of runs beside (einsum);
+    # max_bytes splits the runs into batches of one here.
+    net = seven_nodes()
+    t = np.arange(0.0, 900.0, 1.0)
+    starts = np.array([-32.0, 0.0, 17.0, 40.0, 54.0, 60.0])
+    ambient = np.repeat(starts[:, None], t.size, axis=1)
+    law = _tec(net.node_names.index("electronics"))
+    together = simulate_many(net, t, ambient_c=ambient, initial_c=starts, power_w=law)
+    apart = simulate_many(net, t, ambient_c=ambient, initial_c=starts, power_w=law,
+                          max_bytes=1)
+    three = simulate_many(net, t, ambient_c=ambient[:3], initial_c=starts[:3], power_w=law)
+    for a, b in zip(together, apart):
+        assert np.array_equal(a.temperature_c, b.temperature_c)
+    for a, b in zip(together, three):
+        assert np.array_equal(a.temperature_c, b.temperature_c)
+
+
 def test_without_a_law_each_run_is_the_closed_form_bit_for_bit():
     net = seven_nodes()
     t = np.arange(0.0, 1800.0, 2.0)
