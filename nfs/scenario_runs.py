@@ -12,7 +12,7 @@ from .docfields import document_fields
 from .experiment import SimulationResult, simulate_runs
 from .variability import describe_units
 
-__all__ = ["ScenarioResult", "run_scenario", "northfind_runs", "stage_errors", "floor_deg",
+__all__ = ["ScenarioResult", "run_scenario", "run_scenarios", "northfind_runs", "stage_errors", "floor_deg",
            "uncompensated_table"]
 
 @document_fields
@@ -54,12 +54,27 @@ def run_scenario(scenario, *, progress: Callable[[int, int, str], None] | None =
 
     ``progress(i, n, name)`` is called before each run (for a progress line).
     """
-    conds = scenario.conditions()
-    sims = simulate_runs(scenario.instrument, conds, progress=progress)
+    return run_scenarios([scenario], progress=progress)[0]
+
+
+def run_scenarios(scenarios, *, progress: Callable[[int, int, str], None] | None = None
+                  ) -> list[ScenarioResult]:
+    """:func:`run_scenario` for scenarios of one instrument (e.g. one scenario under several
+    seeds), every run of all of them simulated together (:func:`simulate_runs`: a run's
+    bits do not depend on the runs beside it)."""
+    scenarios = list(scenarios)
+    conds = [sc.conditions() for sc in scenarios]
+    flat = [c for cs in conds for c in cs]
+    sims = simulate_runs(scenarios[0].instrument, flat, progress=progress)
     if progress is not None:
-        progress(len(conds), len(conds), "north finding")
-    nf = northfind_runs([s.run for s in sims], scenario.northfind)
-    return ScenarioResult(scenario=scenario, simulations=tuple(sims), northfind=tuple(nf))
+        progress(len(flat), len(flat), "north finding")
+    out, k = [], 0
+    for sc, cs in zip(scenarios, conds):
+        mine = tuple(sims[k:k + len(cs)])
+        k += len(cs)
+        nf = northfind_runs([s.run for s in mine], sc.northfind)
+        out.append(ScenarioResult(scenario=sc, simulations=mine, northfind=tuple(nf)))
+    return out
 
 
 def stage_errors(result, settings) -> tuple[np.ndarray, np.ndarray]:
@@ -70,14 +85,18 @@ def stage_errors(result, settings) -> tuple[np.ndarray, np.ndarray]:
     return err[up], err[st]
 
 
+def _two_positions(schedule) -> bool:
+    """True for a schedule of two distinct turntable angles."""
+    return len({round(float(p) % 360.0, 9) for p in schedule.positions_deg}) == 2
+
+
 def floor_deg(scenario) -> float:
     """White-noise floor of the scenario's schedule (:func:`~nfs.northfind.white_noise_floor_deg`):
     sqrt(2/N) (ARW/sqrt(dwell)) / Omega_h, or for two positions 180 deg apart
     (ARW/sqrt(dwell)) / (sqrt(2 v) Omega_h |sin(psi + theta_a)|) at the scenario's heading."""
     from .northfind import white_noise_floor_deg
     sched = scenario.schedule
-    distinct = {round(float(p) % 360.0, 9) for p in sched.positions_deg}
-    if len(distinct) == 2:
+    if _two_positions(sched):
         return white_noise_floor_deg(scenario.instrument.gyro.arw_deg_per_rth_h,
                                      sched.dwell_s, 2, scenario.latitude_deg,
                                      heading_deg=scenario.true_heading_deg,
@@ -99,7 +118,7 @@ def uncompensated_table(res: ScenarioResult):
     n_t = len(sc.start_temperatures_c)
     fl = floor_deg(sc)
     nf = sc.northfind
-    two = len({round(float(p) % 360.0, 9) for p in sc.schedule.positions_deg}) == 2
+    two = _two_positions(sc.schedule)
     floor_note = ("(ARW / sqrt(dwell)) / (sqrt(N) Omega_ie cos L |sin(psi + theta_1)|) at the "
                   "true heading (two positions; the true heading is the hint that picks the "
                   "sign of each cycle's solution)" if two else

@@ -33,8 +33,7 @@ import nfs
 
 from ..compensate.study import CompensationSettings, run_study
 from ..errors import NfsError
-from ..experiment import simulate_runs
-from ..scenario_runs import ScenarioResult, floor_deg, northfind_runs, run_scenario
+from ..scenario_runs import floor_deg, run_scenario, run_scenarios
 from ..io.scenario import load_scenario
 from ..northfind import heading_rmse
 from ..parameters import set_params
@@ -158,7 +157,7 @@ def _stats(x: np.ndarray) -> dict[str, float]:
 def _floor(sc) -> float:
     try:
         return floor_deg(sc)
-    except NfsError:                       # fewer than 3 positions: no closed-form floor
+    except NfsError:                       # one position (or no pair): no closed-form floor
         return math.nan
 
 
@@ -224,22 +223,12 @@ def run_cells(tasks: list[CellTask]) -> list[dict[str, Any]]:
     alone (:func:`run_cell`).
     """
     tasks = list(tasks)
-    if len(tasks) == 1 or tasks[0].method is not None or \
-            any(_point(t) != _point(tasks[0]) for t in tasks):
+    if tasks[0].method is not None or any(_point(t) != _point(tasks[0]) for t in tasks):
         return [run_cell(t) for t in tasks]
     with threadpool_limits(limits=1):
         base = _point_scenario(tasks[0])
-        scenarios = [dataclasses.replace(base, seed=t.seed) for t in tasks]
-        conds = [sc.conditions() for sc in scenarios]
-        sims = simulate_runs(base.instrument, [c for cs in conds for c in cs])
-        out, k = [], 0
-        for task, sc, cs in zip(tasks, scenarios, conds):
-            mine = sims[k:k + len(cs)]
-            k += len(cs)
-            nf = northfind_runs([s.run for s in mine], sc.northfind)
-            out.append(_record(task, ScenarioResult(scenario=sc, simulations=tuple(mine),
-                                                    northfind=tuple(nf)), None))
-        return out
+        results = run_scenarios([dataclasses.replace(base, seed=t.seed) for t in tasks])
+        return [_record(task, res, None) for task, res in zip(tasks, results)]
 
 
 def _compute(task: CellTask) -> dict[str, Any]:
