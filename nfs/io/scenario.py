@@ -488,8 +488,7 @@ def _inherited(path: Path, d: dict, chain: tuple[Path, ...]) -> tuple[dict, dict
         if key in chain:
             loop = " -> ".join(str(p) for p in (*chain, key))
             raise ScenarioError(f"the bases loop back: {loop}", file=path, key="base")
-        load_scenario(bpath, _chain=(*chain, key))        # checked on its own
-        written = _inherited(bpath, load_toml(bpath), (*chain, key))[0]
+        written = _load(bpath, None, (*chain, key))[1]        # checked on its own
         written = {k: v for k, v in _anchored(written, bpath.parent).items()
                    if k not in _NOT_INHERITED}
         here = _merged(written, here)
@@ -536,8 +535,7 @@ def _overridden(d: dict, overrides: dict[str, Any], file) -> dict:
 
 
 def load_scenario(path: str | Path | None = None,
-                  overrides: dict[str, Any] | None = None, *,
-                  _chain: tuple[Path, ...] = ()) -> Scenario:
+                  overrides: dict[str, Any] | None = None) -> Scenario:
     """Read and check a scenario file (the built-in default when ``path`` is None), with
     every key it leaves out from its ``base`` or the built-in default (module docstring).
 
@@ -545,13 +543,16 @@ def load_scenario(path: str | Path | None = None,
     file before it is checked, as if the file said so (``{"schedule.dwell_s": 60.0}``).
     """
     path = default_scenario_path() if path is None else Path(path)
+    return _load(path, overrides, (path.resolve(),))[0]
+
+
+def _load(path: Path, overrides, chain: tuple[Path, ...]) -> tuple[Scenario, dict]:
+    """The checked scenario of ``path`` and its keys over its bases' as written (what a file
+    naming it as ``base`` inherits): each base is loaded and checked once."""
     f = path
     d = load_toml(path)
-    if not isinstance(d.get("base", ""), str):
-        raise ScenarioError(f"must be the path of a scenario file, got {d['base']!r}",
-                            file=f, key="base")
     check_keys(d, _TOP, "", f)
-    d = _inherited(path, d, _chain or (path.resolve(),))[1]
+    written, d = _inherited(path, d, chain)
     if overrides:
         d = _overridden(d, overrides, f)
     check_keys(d, _TOP, "", f, required=("start_temperatures_c", "schedule"))
@@ -661,7 +662,7 @@ def load_scenario(path: str | Path | None = None,
                             "every north-finding cycle: [schedule] positions_deg needs three "
                             "distinct positions or more", file=f,
                             key="compensation.protocol")
-    return Scenario(
+    scenario = Scenario(
         name=string(d, "name", "", f, path.stem), instrument=inst,
         start_temperatures_c=temps, schedule=schedule, seed=seed, repeats=repeats,
         duration_s=duration, sample_rate_hz=fs,
@@ -671,3 +672,4 @@ def load_scenario(path: str | Path | None = None,
         compensation=comp,
         description=string(d, "description", "", f, ""), path=path, units=units,
         variability=variability)
+    return scenario, written
