@@ -58,8 +58,7 @@ from ..errors import NfsError
 from ..experiment import simulate_runs
 from ..scenario_runs import northfind_runs
 from ..io.measurement import Run
-from ..northfind.known_bias import dwell_means, north_find_known_bias
-from ..northfind.level import gravity_and_biases
+from ..northfind.known_bias import north_find_known_bias
 from ..northfind.solve import _distinct_angles
 from ..report.intervals import MIN_REPLICATES, bc_interval, block_counts
 from .compensator import prediction_plan
@@ -182,8 +181,7 @@ def calibrate_cycles(run: Run, result) -> CycleParameters:
                        "only on a rotating schedule of three distinct positions or more "
                        f"(this one: {', '.join(f'{v:g}' for v in _schedule_angles(result))} "
                        "deg)")
-    fx, fy = dwell_means(run, result, "acc_x_g"), dwell_means(run, result, "acc_y_g")
-    _, bx, by = gravity_and_biases(theta, fx, fy)
+    bx, by = np.asarray(result.acc_bias_g, dtype=float).T   # fitted with the up vector
     omega_h, omega_v = earth_rate_components_dph(result.latitude_deg)
     values = {"gyro_bias_dph": np.asarray(result.bias_dph) + omega_v * bx,
               "gyro_scale_ppm": 1e6 * (np.asarray(result.horizontal_rate_dph) / omega_h - 1.0),
@@ -328,20 +326,20 @@ def run_parameter_study(scenario, settings=None, *, n_boot: int = 2000,
         for j, comp, preds in parallel(delayed(train_and_predict)(
                 j, spec.key, data, s, s.random_state, plans) for j, spec in enumerate(order)):
             runs = [comp.compensate(r, drift_dph=p) for r, p in zip(test_runs, preds)]
-            sample_nf[order[j].name] = (runs, northfind_runs(runs, scenario.northfind))
+            sample_nf[order[j].name] = northfind_runs(runs, scenario.northfind)
             tick(f"compensated by {order[j].name} sample by sample")
 
     tick("north-finding with the biases known")
-    headings = _heading_rows(scenario, test_runs, test_nf, test, predicted, sample_nf, specs,
-                             block, n_blocks, counts)
+    headings = _heading_rows(scenario, test_nf, test, predicted, sample_nf, specs, block,
+                             n_blocks, counts)
     tick("done")
     return ParameterStudy(scenario=scenario, settings=s, train=train, test=test,
                           parameters=tuple(rows), headings=tuple(headings), models=models,
                           n_boot=n_boot)
 
 
-def _heading_rows(scenario, test_runs, test_nf, test, predicted, sample_nf, specs, block,
-                  n_blocks, counts) -> list[HeadingRow]:
+def _heading_rows(scenario, test_nf, test, predicted, sample_nf, specs, block, n_blocks,
+                  counts) -> list[HeadingRow]:
     startup_end = scenario.northfind.startup_end_s
     up = np.concatenate([c.t_end_s <= startup_end for c in test])
     rows, reps_of = [], {}
@@ -374,23 +372,20 @@ def _heading_rows(scenario, test_runs, test_nf, test, predicted, sample_nf, spec
         if positions is None:
             add(schedule, positions, BIAS_FITTED, [np.asarray(nf.error_deg) for nf in test_nf])
 
-        def solve(run, nf, **kw):
-            return north_find_known_bias(run, nf, positions_deg=positions,
-                                         heading_hint_deg=run.meta.true_heading_deg,
-                                         **kw).error_deg
+        def solve(nf, **kw):
+            return north_find_known_bias(nf, positions_deg=positions,
+                                         heading_hint_deg=nf.true_heading_deg, **kw).error_deg
 
         for name in [CONSTANT] + [sp.name for sp in specs]:
             label = name if name == CONSTANT else f"{name} (parameters)"
             add(schedule, positions, label,
-                [solve(r, nf, **biases(name, i)) for i, (r, nf)
-                 in enumerate(zip(test_runs, test_nf))])
+                [solve(nf, **biases(name, i)) for i, nf in enumerate(test_nf)])
+        const = biases(CONSTANT, 0)
         for spec in specs:
-            runs, nfs_ = sample_nf[spec.name]
-            const = biases(CONSTANT, 0)
             add(schedule, positions, f"{spec.name} (samples)",
-                [solve(r, nf, gyro_bias_dph=0.0, scale_factor=const["scale_factor"][0],
+                [solve(nf, gyro_bias_dph=0.0, scale_factor=const["scale_factor"][0],
                        acc_x_bias_g=const["acc_x_bias_g"][0],
-                       acc_y_bias_g=const["acc_y_bias_g"][0]) for r, nf in zip(runs, nfs_)])
+                       acc_y_bias_g=const["acc_y_bias_g"][0]) for nf in sample_nf[spec.name]])
     for schedule in dict.fromkeys(r.schedule for r in rows):
         idx = [i for i, r in enumerate(rows) if r.schedule == schedule]
         best = min(idx, key=lambda i: rows[i].rmse_deg)

@@ -16,7 +16,7 @@ from nfs.docfields import document_fields
 from nfs.errors import MeasurementError, NfsError
 from nfs.io.measurement import Run
 from nfs.northfind.segment import Cycle, dwell_samples, find_dwells, segment_cycles
-from nfs.northfind.level import LEVEL_UP, gravity_in_table_frame, level_heading, level_two_position
+from nfs.northfind.level import LEVEL_UP, gravity_and_biases, level_heading, level_two_position
 from nfs.northfind.solve import (_distinct_angles, _solve_stack, _vertical_rate_removed,
                                  solve_heading, wrap_deg_180, wrap_deg_360)
 
@@ -73,6 +73,12 @@ class NorthFindResult:
     """U_T, the up unit vector in the table frame (x_T, y_T at theta = 0, z_T down) of each
     cycle, (n_cycles, 3), fitted from both accelerometers (:mod:`nfs.northfind.level`);
     (0, 0, -1) when tilt correction is off."""
+    acc_y_g: np.ndarray | None = None
+    """Mean y specific force of each dwell, (n_cycles, n_positions) [g] (NaN when tilt
+    correction is off and the run has no acc_y_g)."""
+    acc_bias_g: np.ndarray | None = None
+    """Accelerometer biases (b_x, b_y) fitted with U_T in each cycle, (n_cycles, 2) [g]
+    (NaN when tilt correction is off)."""
 
     @property
     def n_cycles(self) -> int:
@@ -172,10 +178,15 @@ def north_find(run: Run, *, tilt_correction: bool = True, settle_s: float = 0.0,
     else:
         acc_x = np.full(shape, np.nan)
 
-    theta_rad = np.radians(theta)
-    if tilt_correction:
+    if tilt_correction or "acc_y_g" in run.columns:
         acc_y = _dwell_means(_column(run, "acc_y_g"), idx, owner, len(dwells)).reshape(shape)
-        up = gravity_in_table_frame(theta_rad, acc_x, acc_y)
+    else:
+        acc_y = np.full(shape, np.nan)
+
+    theta_rad = np.radians(theta)
+    bias = np.full((n_cyc, 2), np.nan)
+    if tilt_correction:
+        up, bias[:, 0], bias[:, 1] = gravity_and_biases(theta_rad, acc_x, acc_y)
         y, _ = _vertical_rate_removed(rate, acc_x, meta.latitude_deg)
     else:
         up, y = np.tile(LEVEL_UP, (n_cyc, 1)), rate
@@ -212,7 +223,7 @@ def north_find(run: Run, *, tilt_correction: bool = True, settle_s: float = 0.0,
         theta_deg=_frozen(theta), rate_dph=_frozen(rate), acc_x_g=_frozen(acc_x),
         true_heading_deg=true, latitude_deg=float(meta.latitude_deg),
         tilt_correction=bool(tilt_correction), ambiguous=bool(ambiguous),
-        up_table=_frozen(up))
+        up_table=_frozen(up), acc_y_g=_frozen(acc_y), acc_bias_g=_frozen(bias))
 
 
 @document_fields

@@ -32,13 +32,11 @@ import numpy as np
 
 from nfs.constants import earth_rate_components_dph
 from nfs.errors import NfsError
-from nfs.io.measurement import Run
-from nfs.northfind.heading import NorthFindResult, _column, _dwell_means
+from nfs.northfind.heading import NorthFindResult
 from nfs.northfind.level import branch_heading, gravity_and_biases, level_heading
-from nfs.northfind.segment import dwell_samples
 from nfs.northfind.solve import _distinct_angles, _omega_h, wrap_deg_180, wrap_deg_360
 
-__all__ = ["KnownBiasHeading", "dwell_means", "level_known_bias", "north_find_known_bias"]
+__all__ = ["KnownBiasHeading", "level_known_bias", "north_find_known_bias"]
 
 
 @dataclass(frozen=True)
@@ -54,14 +52,6 @@ class KnownBiasHeading:
     ambiguous: bool
     """True when the sign of psi + theta_a was taken without a hint (one position, or only
     positions 180 deg apart)."""
-
-
-def dwell_means(run: Run, result: NorthFindResult, column: str) -> np.ndarray:
-    """Mean of ``column`` over every dwell of ``result``'s cycles, (n_cycles, n_positions)."""
-    dwells = [d for c in result.cycles for d in c.dwells]
-    idx, owner = dwell_samples([d.start for d in dwells], [d.stop for d in dwells])
-    return _dwell_means(_column(run, column), idx, owner, len(dwells)).reshape(
-        result.n_cycles, -1)
 
 
 def _per_cycle(value, n: int, name: str) -> np.ndarray:
@@ -107,13 +97,13 @@ def level_known_bias(theta_rad, rate_dph, acc_x_g, acc_y_g, latitude_deg: float,
     return branch_heading(a, theta_a[:, 0], up, _omega_h(latitude_deg), heading_hint_deg)
 
 
-def north_find_known_bias(run: Run, result: NorthFindResult, *, positions_deg=None,
+def north_find_known_bias(result: NorthFindResult, *, positions_deg=None,
                           gyro_bias_dph=0.0, acc_x_bias_g=0.0, acc_y_bias_g=0.0,
-                          scale_factor=0.0, gyro_column: str = "gyro_dph",
-                          heading_hint_deg: float | None = None,
+                          scale_factor=0.0, heading_hint_deg: float | None = None,
                           angle_tol_deg: float = 0.5) -> KnownBiasHeading:
-    """Heading of every cycle of ``result`` (a :func:`~nfs.northfind.north_find` of ``run``)
-    with the biases known, using only the dwells at ``positions_deg`` (default: all).
+    """Heading of every cycle of ``result`` (a :func:`~nfs.northfind.north_find`, whose dwell
+    means of the gyro and both accelerometers it uses) with the biases known, using only the
+    dwells at ``positions_deg`` (default: all).
 
     Using a subset of a multiposition run's dwells (0 and 90 deg of a four-position cycle,
     or 0 deg alone) solves the two-position and one-position schedules on the same samples,
@@ -127,11 +117,14 @@ def north_find_known_bias(run: Run, result: NorthFindResult, *, positions_deg=No
                          if any(abs(wrap_deg_180(theta[0, j] - p)) <= angle_tol_deg
                                 for p in want)], dtype=int)
         if len(cols) != len(want):
-            raise NfsError(f"run '{run.name}': positions {want} deg are not all dwells of its "
-                           f"cycles ({', '.join(f'{v:g}' for v in theta[0])} deg)")
-    rate = dwell_means(run, result, gyro_column)[:, cols]
-    fx = dwell_means(run, result, "acc_x_g")[:, cols]
-    fy = dwell_means(run, result, "acc_y_g")[:, cols]
+            raise NfsError(f"run '{result.run_name}': positions {want} deg are not all dwells "
+                           f"of its cycles ({', '.join(f'{v:g}' for v in theta[0])} deg)")
+    if result.acc_y_g is None:
+        raise NfsError(f"run '{result.run_name}': the north-finding result holds no y "
+                       "accelerometer means; north-find it again with this version")
+    rate = np.asarray(result.rate_dph)[:, cols]
+    fx = np.asarray(result.acc_x_g)[:, cols]
+    fy = np.asarray(result.acc_y_g)[:, cols]
     psi, amb = level_known_bias(np.radians(theta[:, cols]), rate, fx, fy, result.latitude_deg,
                                 gyro_bias_dph=gyro_bias_dph, acc_x_bias_g=acc_x_bias_g,
                                 acc_y_bias_g=acc_y_bias_g, scale_factor=scale_factor,

@@ -36,30 +36,24 @@ import numpy as np
 from nfs.errors import NfsError
 from nfs.northfind.solve import _omega_h
 
-__all__ = ["LEVEL_UP", "gravity_in_table_frame", "gravity_and_biases", "level_heading",
+__all__ = ["LEVEL_UP", "gravity_and_biases", "level_heading",
            "level_two_position", "branch_heading"]
 
 #: U_T of a level table (z_T down): the up vector when tilt correction is off.
 LEVEL_UP = np.array([0.0, 0.0, -1.0])
 
 
-def gravity_in_table_frame(theta_rad, acc_x_g, acc_y_g) -> np.ndarray:
-    """U_T, the up unit vector in the table frame, per cycle, from both accelerometers.
+def gravity_and_biases(theta_rad, acc_x_g, acc_y_g, *, biases_known: bool = False):
+    """U_T, the up unit vector in the table frame, and the accelerometer biases b_x, b_y [g],
+    per cycle, from both accelerometers.
 
     ``theta_rad``, ``acc_x_g``, ``acc_y_g``: (n_cycles, n_positions) dwell means.  Least
     squares of the module's f_x, f_y model in (U_x, U_y, b_x, b_y) per cycle; U_z =
-    -sqrt(1 - U_x^2 - U_y^2).  Returns U_T (n_cycles, 3); a cycle with a non-finite
-    reading gives NaN.  Raises NfsError when the fitted tilt reaches 90 deg.
-    """
-    return gravity_and_biases(theta_rad, acc_x_g, acc_y_g)[0]
-
-
-def gravity_and_biases(theta_rad, acc_x_g, acc_y_g, *, biases_known: bool = False):
-    """U_T and the accelerometer biases b_x, b_y [g] per cycle (:func:`gravity_in_table_frame`).
-
-    With ``biases_known`` the readings are taken as bias-free (already corrected) and only
-    (U_x, U_y) are fitted, which one position determines; the biases returned are then 0.
-    Otherwise the positions must determine all four (two distinct angles at least).
+    -sqrt(1 - U_x^2 - U_y^2); a cycle with a non-finite reading gives NaN; NfsError when the
+    fitted tilt reaches 90 deg.  With ``biases_known`` the readings are taken as bias-free
+    (already corrected) and only (U_x, U_y) are fitted, which one position determines; the
+    biases returned are then 0.  Otherwise the positions must determine all four (two
+    distinct angles at least).
     Returns (U_T (n_cycles, 3), b_x (n_cycles,), b_y (n_cycles,)).
     """
     th = np.asarray(theta_rad, dtype=float)

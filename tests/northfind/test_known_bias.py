@@ -8,7 +8,7 @@ import pytest
 
 from nfs.errors import NfsError
 from nfs.northfind import north_find, synthetic_run
-from nfs.northfind.known_bias import dwell_means, north_find_known_bias
+from nfs.northfind.known_bias import north_find_known_bias
 from nfs.northfind.level import gravity_and_biases
 
 HEADING = 212.7
@@ -31,7 +31,7 @@ def _run(tilt=(1.5, -2.0)):
 def test_noiseless_heading_with_the_true_biases_to_1e9_deg(positions):
     run = _run()
     nf = north_find(run)
-    out = north_find_known_bias(run, nf, positions_deg=positions, gyro_bias_dph=BIAS,
+    out = north_find_known_bias(nf, positions_deg=positions, gyro_bias_dph=BIAS,
                                 acc_x_bias_g=BX, acc_y_bias_g=BY, heading_hint_deg=200.0)
     assert np.max(np.abs(out.error_deg)) < 1e-9
     assert not out.ambiguous
@@ -39,7 +39,7 @@ def test_noiseless_heading_with_the_true_biases_to_1e9_deg(positions):
 
 def test_one_position_without_a_hint_is_flagged_ambiguous():
     run = _run()
-    out = north_find_known_bias(run, north_find(run), positions_deg=(0.0,), gyro_bias_dph=BIAS,
+    out = north_find_known_bias(north_find(run), positions_deg=(0.0,), gyro_bias_dph=BIAS,
                                 acc_x_bias_g=BX, acc_y_bias_g=BY)
     assert out.ambiguous
 
@@ -49,7 +49,7 @@ def test_a_bias_error_moves_a_one_position_heading_by_db_over_omega_h_sin():
     run = _run(tilt=(0.0, 0.0))
     nf = north_find(run)
     db = 0.01
-    out = north_find_known_bias(run, nf, positions_deg=(0.0,), gyro_bias_dph=BIAS + db,
+    out = north_find_known_bias(nf, positions_deg=(0.0,), gyro_bias_dph=BIAS + db,
                                 acc_x_bias_g=BX, acc_y_bias_g=BY, heading_hint_deg=200.0)
     omega_h = 15.041067 * np.cos(np.radians(LAT))
     want = np.degrees(db / (omega_h * np.sin(np.radians(HEADING))))
@@ -59,9 +59,9 @@ def test_a_bias_error_moves_a_one_position_heading_by_db_over_omega_h_sin():
 def test_a_four_position_cycle_is_insensitive_to_a_wrong_constant_bias_no_more_than_2_positions():
     run = _run()
     nf = north_find(run)
-    full = north_find_known_bias(run, nf, gyro_bias_dph=BIAS + 0.01, acc_x_bias_g=BX,
+    full = north_find_known_bias(nf, gyro_bias_dph=BIAS + 0.01, acc_x_bias_g=BX,
                                  acc_y_bias_g=BY)
-    two = north_find_known_bias(run, nf, positions_deg=(0.0, 90.0), gyro_bias_dph=BIAS + 0.01,
+    two = north_find_known_bias(nf, positions_deg=(0.0, 90.0), gyro_bias_dph=BIAS + 0.01,
                                 acc_x_bias_g=BX, acc_y_bias_g=BY)
     assert np.max(np.abs(full.error_deg)) < 1e-9          # the bias cancels over 0..270
     assert np.min(np.abs(two.error_deg)) > 1e-2           # and not over 0, 90
@@ -70,13 +70,13 @@ def test_a_four_position_cycle_is_insensitive_to_a_wrong_constant_bias_no_more_t
 def test_the_accelerometer_biases_come_back_from_a_four_position_cycle():
     run = _run()
     nf = north_find(run)
-    fx, fy = dwell_means(run, nf, "acc_x_g"), dwell_means(run, nf, "acc_y_g")
-    _, bx, by = gravity_and_biases(np.radians(nf.theta_deg), fx, fy)
-    np.testing.assert_allclose(bx, BX, atol=1e-12)
-    np.testing.assert_allclose(by, BY, atol=1e-12)
+    np.testing.assert_allclose(nf.acc_bias_g[:, 0], BX, atol=1e-12)
+    np.testing.assert_allclose(nf.acc_bias_g[:, 1], BY, atol=1e-12)
+    _, bx, by = gravity_and_biases(np.radians(nf.theta_deg), nf.acc_x_g, nf.acc_y_g)
+    np.testing.assert_array_equal(bx, nf.acc_bias_g[:, 0])
 
 
 def test_positions_not_in_the_schedule_are_refused():
     run = _run()
     with pytest.raises(NfsError, match="45"):
-        north_find_known_bias(run, north_find(run), positions_deg=(45.0,))
+        north_find_known_bias(north_find(run), positions_deg=(45.0,))
