@@ -67,81 +67,59 @@ def _cmd_table(args) -> int:
     from .report import write_table
     if args.features_mode is not None:
         check_features_mode(args.features_mode, "--features-mode")
-    from .io.provenance import scenario_provenance
     from .compensate.study import table_provenance
+    from .compensate.study import CompensationSettings
     scenario = _with_overrides(load_scenario(args.scenario), args)
     _file(args.json, "--json")
-    baseline = _baseline(args, scenario)
+    settings = _table_settings(args, scenario.compensation or CompensationSettings())
+    baseline = _baseline(args, scenario, settings)
     folder = _folder(args, "table")
     title = f"{scenario.name}: heading RMSE by start temperature"
     progress = Progress("", args.quiet)
+    provenance = table_provenance(scenario, settings, compensated=not args.no_compensation)
+    table = None
     if args.no_compensation:
         # the start-ups of the full table's before row: its test start-ups
-        from .compensate.study import CompensationSettings, test_scenario
-        settings = scenario.compensation or CompensationSettings()
-        if args.repeats is not None:
-            settings = dataclasses.replace(settings, test_repeats=args.repeats)
+        from .compensate.study import test_scenario
         progress.what = "simulating"
         res = run_scenario(test_scenario(scenario, settings), progress=progress)
         table = uncompensated_table(res).with_intervals(
             {"before": errors_by_temperature(res), "stable": errors_by_temperature(res, stage=1)},
             random_state=scenario.seed)
-        table = dataclasses.replace(table, provenance=table_provenance(
-            scenario, settings, compensated=False))
+        table = dataclasses.replace(table, provenance=provenance)
         paths = write_table(table, args.output, json_path=args.json, title=title)
         text = table.to_markdown()
+    elif settings.protocol in ("cycles", "runs"):   # the drift table, trained once
+        from .compensate.cycles import run_cycle_study, run_runs_study
+        from .report.cycles import cycle_table_markdown, write_cycle_study
+        run = run_cycle_study if settings.protocol == "cycles" else run_runs_study
+        cycles = run(scenario, settings, progress=progress)
+        text = cycle_table_markdown(cycles)
+        paths = write_cycle_study(cycles, args.output, json_path=args.json,
+                                  title=f"{scenario.name}: drift table of the "
+                                        f"{settings.protocol}", provenance=provenance)
+    elif settings.protocol == "parameters":   # every cycle calibrates the biases
+        from .compensate.parameters import run_parameter_study
+        from .report.parameters import parameter_table_markdown, write_parameter_study
+        pstudy = run_parameter_study(scenario, settings, progress=progress)
+        text = parameter_table_markdown(pstudy)
+        paths = write_parameter_study(
+            pstudy, args.output, json_path=args.json,
+            title=f"{scenario.name}: parameter-level compensation", provenance=provenance)
     else:
-        from .compensate.study import CompensationSettings, run_study
+        from .compensate.study import run_study
         from .report.compensation import write_study
-        settings = scenario.compensation or CompensationSettings()
-        if args.budget is not None:
-            if args.budget < 1:
-                raise NfsError(f"--budget must be >= 1, got {args.budget}")
-            settings = dataclasses.replace(settings, budget=args.budget)
-        if args.repeats is not None:
-            settings = dataclasses.replace(settings, test_repeats=args.repeats)
-        if args.n_jobs is not None:
-            settings = dataclasses.replace(settings, n_jobs=args.n_jobs)
-        if args.tuner_seeds is not None:
-            if args.tuner_seeds < 1:
-                raise NfsError(f"--tuner-seeds must be >= 1, got {args.tuner_seeds}")
-            settings = dataclasses.replace(settings, tuner_seeds=args.tuner_seeds)
-        if args.features_mode is not None:
-            settings = dataclasses.replace(settings, features_mode=args.features_mode)
-        if settings.protocol in ("cycles", "runs"):   # the drift table, trained once
-            from .compensate.cycles import run_cycle_study, run_runs_study
-            from .report.cycles import cycle_table_markdown, write_cycle_study
-            run = run_cycle_study if settings.protocol == "cycles" else run_runs_study
-            cycles = run(scenario, settings, progress=progress)
-            text = cycle_table_markdown(cycles)
-            paths = write_cycle_study(cycles, args.output, json_path=args.json,
-                                      title=f"{scenario.name}: drift table of the "
-                                            f"{settings.protocol}",
-                                      provenance=table_provenance(scenario, settings))
-            table = None
-        elif settings.protocol == "parameters":   # every cycle calibrates the biases
-            from .compensate.parameters import run_parameter_study
-            from .report.parameters import parameter_table_markdown, write_parameter_study
-            pstudy = run_parameter_study(scenario, settings, progress=progress)
-            text = parameter_table_markdown(pstudy)
-            paths = write_parameter_study(
-                pstudy, args.output, json_path=args.json,
-                title=f"{scenario.name}: parameter-level compensation",
-                provenance=table_provenance(scenario, settings))
-            table = None
-        else:
-            study = run_study(scenario, settings, progress=progress)
-            table = dataclasses.replace(study.heading_table(),
-                                        provenance=table_provenance(scenario, settings))
-            paths = write_study(study, args.output, json_path=args.json, title=title,
-                                table=table)
-            text = table.to_markdown()
+        study = run_study(scenario, settings, progress=progress)
+        table = dataclasses.replace(study.heading_table(), provenance=provenance)
+        paths = write_study(study, args.output, json_path=args.json, title=title,
+                            table=table)
+        text = table.to_markdown()
     comparison = None
     if baseline is not None:
         from .report.baseline import compare_tables, write_baseline_comparison
         comparison = compare_tables(table, baseline, tolerance=args.tolerance)
         paths += write_baseline_comparison(comparison, args.output)
-    inputs = {"scenario": scenario_provenance(scenario), "compensation": not args.no_compensation}
+    inputs = {"scenario": provenance["scenario"], "compensation": not args.no_compensation}
     if baseline is not None:
         inputs["baseline"] = {"file": str(args.baseline), "sha256": args.baseline_sha256}
     _finish(folder, args, inputs)
@@ -154,7 +132,26 @@ def _cmd_table(args) -> int:
     return 0 if comparison is None else comparison.exit_code
 
 
-def _baseline(args, scenario):
+def _table_settings(args, settings):
+    """The scenario's ``[compensation]`` with the command line's overrides, checked."""
+    if args.budget is not None:
+        if args.budget < 1:
+            raise NfsError(f"--budget must be >= 1, got {args.budget}")
+        settings = dataclasses.replace(settings, budget=args.budget)
+    if args.repeats is not None:
+        settings = dataclasses.replace(settings, test_repeats=args.repeats)
+    if args.n_jobs is not None:
+        settings = dataclasses.replace(settings, n_jobs=args.n_jobs)
+    if args.tuner_seeds is not None:
+        if args.tuner_seeds < 1:
+            raise NfsError(f"--tuner-seeds must be >= 1, got {args.tuner_seeds}")
+        settings = dataclasses.replace(settings, tuner_seeds=args.tuner_seeds)
+    if args.features_mode is not None:
+        settings = dataclasses.replace(settings, features_mode=args.features_mode)
+    return settings
+
+
+def _baseline(args, scenario, settings):
     """The --baseline table, read and checked against the table to come before any work
     (None without --baseline)."""
     if args.baseline is None:
@@ -162,7 +159,6 @@ def _baseline(args, scenario):
             raise NfsError("--tolerance needs --baseline OLD.json")
         return None
     from .compensate import get_method
-    from .compensate.study import CompensationSettings
     from .io.provenance import sha256_of_file
     from .report.baseline import TOLERANCE, check_common, read_table
     from .report.table import REFERENCE_ROWS
@@ -176,7 +172,6 @@ def _baseline(args, scenario):
     args.baseline_sha256 = sha256_of_file(args.baseline)
     methods = list(REFERENCE_ROWS)
     if not args.no_compensation:
-        settings = scenario.compensation or CompensationSettings()
         if settings.protocol != "start-ups":
             raise NfsError(f"--baseline compares heading tables; scenario '{scenario.name}' "
                            f"has compensation.protocol = \"{settings.protocol}\", which writes "
