@@ -79,9 +79,8 @@ __all__ = [
 _PREDICT_BATCH = 2048
 
 #: Floor of the Hampel weight beyond c2 (Suykens et al. 2002, Neurocomputing 48, the
-#: weighted LS-SVM weights).  Tao et al. (2019) writes 0 there, which makes 1/(gamma v_k) infinite
-# in
-#: the KKT system; LS-SVMlab's weightingscheme.m uses 1e-7.
+#: weighted LS-SVM weights).  Tao et al. (2019) writes 0 there, which makes 1/(gamma v_k)
+#: infinite in the KKT system; LS-SVMlab's weightingscheme.m uses 1e-7.
 HAMPEL_FLOOR = 1e-4
 
 

@@ -13,8 +13,7 @@ equal terms.
 | BP | back-propagation network | - | the FOG start-up paper |
 | RBF | radial-basis-function network | - | Cheng et al. (2015) |
 | LSSVM | least-squares SVM | - | Tao et al. (2019) |
-| IR-LSSVM | iteratively reweighted LSSVM (myriad weights, Tao et al.'s (2019) best) | - | Tao et
-al. (2019) |
+| IR-LSSVM | iteratively reweighted LSSVM (myriad weights, the best there) | - | Tao et al. (2019) |
 | SVR (grid) | epsilon-SVR, Gaussian kernel | grid search | the FOG start-up paper |
 | PSO-SVR | epsilon-SVR | particle swarm | the FOG start-up paper |
 | GWO-SVR | epsilon-SVR | grey wolf | the FOG start-up paper |

@@ -79,8 +79,6 @@ class ChamberStep:
     """Length of a hold or of a ramp given ``over_s`` [s]; None otherwise."""
     rate_c_per_s: float | None = None
     """Ramp rate magnitude [K/s] (``rate_c_per_min`` / 60); None otherwise."""
-    key: str = ""
-    """Where the step is written (``chamber.program[3]``), for messages."""
 
     def length_s(self, from_c: float, sample_s: float) -> float:
         """Time the step takes from the chamber temperature ``from_c`` [s]."""
@@ -196,12 +194,11 @@ def _one(step: Any, where: str, file: Any, top: bool) -> list[ChamberStep] | str
                                 f"{', '.join(_KEYS[kind])}", file=file, key=f"{where}.{k}")
     if kind == "hold":
         return [ChamberStep("hold", duration_s=_positive(step, "hold_s", where, file,
-                                                         "a hold lasts some time"),
-                            key=where)]
+                                                         "a hold lasts some time"))]
     if kind == "step":
         target = _finite(step, "step_to_c", where, file)
         check_temperature(target, file, f"{where}.step_to_c")
-        return [ChamberStep("step", target_c=target, key=where)]
+        return [ChamberStep("step", target_c=target)]
     if kind == "ramp":
         target = _finite(step, "ramp_to_c", where, file)
         check_temperature(target, file, f"{where}.ramp_to_c")
@@ -210,13 +207,13 @@ def _one(step: Any, where: str, file: Any, top: bool) -> list[ChamberStep] | str
             raise ScenarioError("a ramp takes exactly one of rate_c_per_min and over_s",
                                 file=file, key=where)
         if has_over:
-            return [ChamberStep("ramp", target_c=target, key=where,
+            return [ChamberStep("ramp", target_c=target,
                                 duration_s=_positive(step, "over_s", where, file,
                                                      "a ramp over no time never ramps"))]
         rate = _positive(step, "rate_c_per_min", where, file,
                          "the rate is a magnitude (the ramp goes towards ramp_to_c); a "
                          "ramp at a rate <= 0 never reaches its target")
-        return [ChamberStep("ramp", target_c=target, rate_c_per_s=rate / 60.0, key=where)]
+        return [ChamberStep("ramp", target_c=target, rate_c_per_s=rate / 60.0)]
     if kind == "power_on":
         if step["power_on"] is not True:
             raise ScenarioError(f"must be true (the unit is powered on here), got "
