@@ -78,15 +78,26 @@ def _writable_place(path: Path, option: str) -> None:
         probe = probe.parent
     if probe.exists() and not probe.is_dir():
         raise NfsError(f"{option} {path}: '{probe}' is a file, so no folder can be made there")
-    if not os.access(probe, os.W_OK | os.X_OK):
-        raise NfsError(f"{option} {path}: '{probe}' is not writable")
-    # os.access answers yes to root on a read-only or virtual file system (/proc): make and
-    # remove a folder there to be sure, before any work
+    _can_write_in(probe, f"{option} {path}", "folder")
+
+
+def _can_write_in(folder: Path, what: str, kind: str) -> None:
+    """Raise a located NfsError unless a ``kind`` ("file" or "folder") can be made in
+    *folder*: its permissions, then a probe made and removed (os.access answers yes to
+    root on a read-only or virtual file system such as /proc)."""
+    if not os.access(folder, os.W_OK | os.X_OK):
+        raise NfsError(f"{what}: folder '{folder}' is not writable")
     try:
-        os.rmdir(tempfile.mkdtemp(prefix=".nfs-probe-", dir=probe))
+        if kind == "folder":
+            os.rmdir(tempfile.mkdtemp(prefix=".nfs-probe-", dir=folder))
+        else:
+            fd, probe = tempfile.mkstemp(prefix=".nfs-probe-", dir=folder)
+            os.close(fd)
+            os.remove(probe)
     except OSError as exc:
-        raise NfsError(f"{option} {path}: no folder can be made in '{probe}' "
-                       f"({exc.strerror})") from None
+        verb = "made" if kind == "folder" else "written"
+        raise NfsError(f"{what}: no {kind} can be {verb} in '{folder}' ({exc.strerror})") \
+            from None
 
 
 def check_output_file(path: str | os.PathLike, option: str = "-o") -> Path:
@@ -100,15 +111,7 @@ def check_output_file(path: str | os.PathLike, option: str = "-o") -> Path:
         raise NfsError(f"{option} {p}: is a folder; give a file name")
     if not p.parent.is_dir():
         raise NfsError(f"{option} {p}: folder '{p.parent}' does not exist")
-    if not os.access(p.parent, os.W_OK | os.X_OK):
-        raise NfsError(f"{option} {p}: folder '{p.parent}' is not writable")
-    try:   # as in _writable_place: os.access trusts root everywhere
-        fd, probe = tempfile.mkstemp(prefix=".nfs-probe-", dir=p.parent)
-        os.close(fd)
-        os.remove(probe)
-    except OSError as exc:
-        raise NfsError(f"{option} {p}: no file can be written in '{p.parent}' "
-                       f"({exc.strerror})") from None
+    _can_write_in(p.parent, f"{option} {p}", "file")
     return p
 
 
