@@ -162,8 +162,10 @@ def plot_drift_vs_compensated(study, run_index: int | None = None, methods=None,
     from matplotlib.figure import Figure
 
     sims = study.test.simulations
+    which = "the test start-up asked for"
     if run_index is None:
         run_index = int(np.argmin([s.conditions.start_temperature_c for s in sims]))
+        which = "the coldest test start-up: largest drift"
     why = {}
     if methods is None:
         for m in ("BP", "SSA-SVR"):
@@ -194,8 +196,8 @@ def plot_drift_vs_compensated(study, run_index: int | None = None, methods=None,
     ax1.legend(fontsize=8)
     shown = "; ".join(f"{m} ({why[m]})" if m in why else m for m in methods
                       if m in study.results)
-    ax1.set_title(f"{run.name} (T0 = {run.meta.start_temperature_c:g} C, the coldest test "
-                  "start-up: largest drift)\nrows shown: " + (shown or "none"), fontsize=9)
+    ax1.set_title(f"{run.name} (T0 = {run.meta.start_temperature_c:g} C, {which})"
+                  "\nrows shown: " + (shown or "none"), fontsize=9)
     ax2.axhline(0.0, color="k", lw=0.5)
     ax2.set_ylabel("residual drift [deg/h]")
     ax2.set_xlabel("time since power-on [min]")
