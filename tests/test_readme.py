@@ -41,6 +41,9 @@ def test_the_check_fails_on_a_changed_number():
         vals = [float(v) for v in rows[name][:n_t]]
         return TableRow(name, tuple(v + bump for v in vals))
     ok = [row(n) for n in rows if n in readme_numbers.EXACT_ROWS]
-    bad = HeadingTable(temps, tuple([row("before", 1e-4)] + ok[1:]))
+    far = TableRow("SSA-SVR", (1.0,) * n_t)          # a mean of 1 deg: outside any interval
+    bad = HeadingTable(temps, tuple([row("before", 1e-4)] + ok[1:] + [far]))
     problems = readme_numbers.differences("default-table", text, bad)
     assert any(p.startswith("default-table: before: README") for p in problems)
+    assert any(p.startswith("default-table: SSA-SVR: mean 1.0000 outside the README's "
+                            "interval") for p in problems)
