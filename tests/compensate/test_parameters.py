@@ -75,10 +75,14 @@ def test_rows_and_metrics_are_their_definitions(study):
     assert const.values["rmse"] == pytest.approx(np.sqrt(np.mean((y - ytr.mean()) ** 2)))
     assert const.values["r2"] == pytest.approx(
         1 - np.sum((y - ytr.mean()) ** 2) / np.sum((y - y.mean()) ** 2))
+    n_finite = 0
     for r in study.parameters:
         for k in PARAMETER_METRICS:
             lo, hi = r.intervals[k]
             assert lo <= r.values[k] <= hi or not np.isfinite(lo)
+            n_finite += np.isfinite(lo) and np.isfinite(hi)
+    # every interval is drawn (a constant model's R^2 may sit on its bound, none is NaN)
+    assert n_finite == len(study.parameters) * len(PARAMETER_METRICS)
 
 
 def test_the_bias_models_follow_temperature(study):
