@@ -97,8 +97,9 @@ def tilt_correct(rate_dph, acc_x_g, latitude_deg: float):
     Returns
     -------
     numpy.ndarray
-        w_k' [deg/h]. A gyro bias b becomes b / cos e_k here; :func:`north_find` avoids
-        that second-order effect by solving with ``cos_elevation`` instead (same model).
+        w_k' [deg/h]. A gyro bias b becomes b / cos e_k here (the first-order tilt model
+        of :func:`solve_heading`); :func:`north_find` levels exactly with both
+        accelerometers instead (:mod:`nfs.northfind.level`).
     """
     rate_v, cos_e = _vertical_rate_removed(rate_dph, acc_x_g, latitude_deg)
     return rate_v / cos_e
