@@ -106,8 +106,11 @@ def cycle_table_markdown(study) -> str:
     if best is not None:
         improved = [r.method for r in study.rows[1:]
                     if r.intervals["improvement_pct"][0] > 0]
+        paper = {m: v[1] for m, v in TAO2019_BIAS_STABILITY.items() if m != study.rows[0].method}
+        top = max(paper, key=paper.get)
         shape = [f"Shape beside Tao et al. 2019: every method there improves the bias "
-                 f"stability (40.5-61.2 %, IR-LSSVM best); here {len(improved)} of "
+                 f"stability ({min(paper.values()):.1f}-{paper[top]:.1f} %, {top} best); "
+                 f"here {len(improved)} of "
                  f"{len(study.rows) - 1} improve it beyond the uncertainty "
                  f"({', '.join(improved) or 'none'}), {best.method} best "
                  f"({best.values['improvement_pct']:.1f} %). Their gyro is a laser gyro, ours "
