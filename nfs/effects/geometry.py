@@ -32,6 +32,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ..errors import EffectError
+from ..sensors.turntable import axis_elevation_deg
 from .registry import EffectInstance, Parameter, register_effect
 
 __all__ = ["Geometry", "tilt_matrix", "table_axes_ned", "azimuth_elevation_deg",
@@ -98,9 +99,8 @@ def azimuth_elevation_deg(u_ned: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _first_order_axis(azimuth_deg, tilt_north_deg, tilt_east_deg):
-    """Azimuth and elevation e = alpha_N cos A + alpha_E sin A (docs/physics.md section 4) [deg]."""
-    a = np.radians(azimuth_deg)
-    return azimuth_deg, tilt_north_deg * np.cos(a) + tilt_east_deg * np.sin(a)
+    """Azimuth and the first-order elevation of :func:`~nfs.sensors.axis_elevation_deg` [deg]."""
+    return azimuth_deg, axis_elevation_deg(azimuth_deg, tilt_north_deg, tilt_east_deg)
 
 
 def _unit_ned(azimuth_deg, elevation_deg) -> np.ndarray:
