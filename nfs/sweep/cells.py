@@ -34,6 +34,7 @@ import nfs
 from ..compensate.study import CompensationSettings, run_study
 from ..errors import NfsError
 from ..scenario_runs import floor_deg, run_scenario, run_scenarios
+from ..io.provenance import sha256_of_text
 from ..io.scenario import load_scenario
 from ..northfind import heading_rmse
 from ..parameters import set_params
@@ -91,8 +92,7 @@ def canonical(obj: Any) -> Any:
 
 def digest(obj: Any) -> str:
     """SHA-256 (hex) of :func:`canonical` ``(obj)``."""
-    text = json.dumps(canonical(obj), sort_keys=True, separators=(",", ":"))
-    return hashlib.sha256(text.encode("utf-8")).hexdigest()
+    return sha256_of_text(json.dumps(canonical(obj), sort_keys=True, separators=(",", ":")))
 
 
 def scenario_digest(spec: SweepSpec) -> str:
