@@ -76,7 +76,8 @@ def run_sweep(spec: SweepSpec, output: str | Path, *, executor=None, quiet: bool
     store.prepare()
     base = scenario_digest(spec)
     atomic_write_text(store.folder / "sweep.json", _manifest(spec, base))
-    n_missing = sum(1 for t in cell_tasks(spec, base) if not store.has(t.key))
+    missing = [t for t in cell_tasks(spec, base) if not store.has(t.key)]
+    n_missing = len(missing)
     executor = executor or LocalExecutor()
     if log is not None:
         log(f"{spec.n_cells} cells, {spec.n_cells - n_missing} already stored, "
@@ -85,7 +86,6 @@ def run_sweep(spec: SweepSpec, output: str | Path, *, executor=None, quiet: bool
     n_done = 0
     try:
         if n_missing:
-            missing = (t for t in cell_tasks(spec, base) if not store.has(t.key))
             for records in executor.map_unordered(run_cells, cell_batches(missing)):
                 for record in records:
                     store.write(record)
