@@ -27,7 +27,7 @@ import warnings
 from pathlib import Path
 
 from nfs.cli import main as nfs_main
-from nfs.experiment import simulate_run
+from nfs.experiment import simulate_runs
 from nfs.io.scenario import load_scenario
 
 TARGET_S = 60.0
@@ -50,7 +50,7 @@ def best_of(f, n=3):
 def per_sample_us(scenario) -> tuple[float, int]:
     conds = scenario.conditions()
     n = sum(int(round(c.duration_s * c.sample_rate_hz)) for c in conds)
-    t = best_of(lambda: [simulate_run(scenario.instrument, c) for c in conds])
+    t = best_of(lambda: simulate_runs(scenario.instrument, conds))
     return 1e6 * t / n, n
 
 

@@ -2,7 +2,8 @@
 
 Run as ``python benchmarks/bench_simulate.py``.  Simulates the 7 default runs (2.5 h each at
 1 Hz: thermal network with the per-sample TEC law, effects, noise, sensors, thermometers) and
-north-finds them, in one process, best of 5.  Targets (simulator issue): simulation of the 7
+north-finds them, in one process, best of 5: run by run (:func:`nfs.experiment.simulate_run`)
+and stacked (:func:`nfs.experiment.simulate_runs`, as ``nfs table`` does).  Targets (simulator issue): simulation of the 7
 runs under 1 s in total; north-finding the 7 runs under 0.1 s.  The thermal solver alone is
 compared with scipy.integrate.solve_ivp in benchmarks/bench_thermal.py.
 """
@@ -11,7 +12,7 @@ from __future__ import annotations
 
 import time
 
-from nfs.experiment import simulate_run
+from nfs.experiment import simulate_run, simulate_runs
 from nfs.scenario_runs import northfind_runs
 from nfs.io.scenario import load_scenario
 
@@ -34,8 +35,11 @@ def main() -> None:
     t_nf, _ = best_of(lambda: northfind_runs(runs, sc.northfind))
     n = len(conds)
     samples = sum(len(r["time_s"]) for r in runs)
-    print(f"simulate {n} default runs ({samples} samples): {t_sim:.3f} s "
+    t_stack, _ = best_of(lambda: simulate_runs(sc.instrument, conds))
+    print(f"simulate {n} default runs ({samples} samples) run by run: {t_sim:.3f} s "
           f"(target < 1 s; {1.0 / t_sim:.1f}x under target)")
+    print(f"the same runs stacked (simulate_runs): {t_stack:.3f} s; "
+          f"{t_sim / t_stack:.2f}x the run-by-run time")
     print(f"north-find {n} runs: {t_nf:.4f} s (target < 0.1 s; {0.1 / t_nf:.1f}x under target)")
 
 
