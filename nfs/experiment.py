@@ -209,23 +209,23 @@ def thermal_power(inst: Instrument, time_s: np.ndarray, moving: np.ndarray):
     moving_list = moving.tolist()
     calls = [(e.spec.function, j, params) for e, j, params in stateful]
 
-    def one(k: int, t_s: float, temperature_c: np.ndarray) -> np.ndarray:
-        p = fixed[k].copy()
-        for f, j, params in calls:
-            p[j] += f(t_s, float(temperature_c[j]), moving_list[k], **params)
-        return p
-
     def law(t_s: float, temperature_c: np.ndarray) -> np.ndarray:
         k = index[t_s]
         if temperature_c.ndim == 1:
-            return one(k, t_s, temperature_c)
+            p = fixed[k].copy()
+            for f, j, params in calls:
+                p[j] += f(t_s, float(temperature_c[j]), moving_list[k], **params)
+            return p
         # runs stacked (thermal.simulate_many): the law gets every run's node temperature;
         # a few runs row by row (float arithmetic, cheaper than ufuncs on tiny arrays), more
         # at once.  An effect gives the same value for a float and an array element (the
         # registry's contract for state-dependent effects), so the bits do not depend on R.
-        if temperature_c.shape[0] <= _ROW_BY_ROW:
-            return np.array([one(k, t_s, row) for row in temperature_c])
         p = np.repeat(fixed[k][None, :], temperature_c.shape[0], axis=0)
+        if temperature_c.shape[0] <= _ROW_BY_ROW:
+            m = moving_list[k]
+            for f, j, params in calls:
+                p[:, j] += [f(t_s, v, m, **params) for v in temperature_c[:, j].tolist()]
+            return p
         for f, j, params in calls:
             p[:, j] += f(t_s, temperature_c[:, j], moving_list[k], **params)
         return p
@@ -372,9 +372,8 @@ def simulate_runs(inst: Instrument, conds, *,
     Runs of one unit on one time grid and schedule share the network and the heat input law:
     their thermal networks are solved together (:func:`thermal.simulate_many`, one loop over
     the samples for all of them, in batches of at most :data:`STACK_BYTES` of state), the
-    rest run by run.  The results equal :func:`simulate_run`'s to the last bits of the
-    temperatures (the sums of a step run in another order); the same conditions give the
-    same bytes whatever else is simulated beside them.
+    rest run by run.  Each result is :func:`simulate_run`'s, bit for bit, whatever else is
+    simulated beside it.
     ``progress(i, n, name)`` is called before each run's preparation.
     """
     conds = list(conds)

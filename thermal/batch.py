@@ -23,10 +23,9 @@ def _march_many(steps: list[StepMatrices], cls: list[int], x: np.ndarray, time_s
     """:func:`_march` for R runs at once: ``x`` is (n_t, R, m), the rows of every run at a
     sample side by side, so that one product per step advances every run, and the power law
     is called once per step with the temperatures of every run, shape (R, n), returning
-    (R, n).  The step's arithmetic is that of :func:`_march`, its rounding may differ in the
-    last bit (another order of the sums), the same for every R."""
+    (R, n).  The step's arithmetic is that of :func:`_march`, bit for bit."""
     n = node_power_w.size
-    maps = [m.T.copy() for m in _step_maps(steps, node_power_w)]
+    dots = [m.dot for m in _step_maps(steps, node_power_w)]
     frozen = x.view()
     frozen.flags.writeable = False
     times = time_s.tolist()
@@ -37,14 +36,17 @@ def _march_many(steps: list[StepMatrices], cls: list[int], x: np.ndarray, time_s
                            f"{r} runs, got shape {first.shape}")
     x[0, :, n:2 * n] = first
     step = np.empty((r, n))
-    # einsum, not matmul: its sum over m runs in one order for every row whatever R is (a
-    # matrix product switches kernels with R), so a run's bits do not depend on the runs
-    # stacked beside it.
+    # Each run's product is the matrix-vector product of _march (one BLAS gemv per run): a
+    # run's bits are those simulate() gives it, whatever is stacked beside it, while the
+    # loop's Python cost and the heat law's call are paid once per step for all runs.
     rows, temps, new_temps = list(x[:-1]), list(x[:-1, :, :n]), list(x[1:, :, :n])
     new_powers, seen = list(x[1:, :, n:2 * n]), list(frozen[1:, :, :n])
+    lanes = range(r)
     for c, row, temp, new_temp, new_power, t_s, view in zip(
             cls, rows, temps, new_temps, new_powers, times[1:], seen):
-        np.einsum("rm,mn->rn", row, maps[c], out=step)
+        dot = dots[c]
+        for i in lanes:
+            dot(row[i], out=step[i])
         np.add(temp, step, out=new_temp)
         new_power[...] = power(t_s, view)
 
@@ -57,10 +59,9 @@ def simulate_many(network: Network, time_s: np.ndarray, *, ambient_c, initial_c,
 
     Many start-ups of one instrument differ only in where they start and what the chamber
     does: the step matrices (5), (8) are computed once, and a temperature-dependent power law
-    is marched for every run in one loop over the samples (one matrix product per step for
-    all runs instead of one matrix-vector product per run and step, the loop's Python cost
-    paid once).  Without a law each run is solved in closed form as by :func:`simulate`,
-    bit for bit.
+    is marched for every run in one loop over the samples (the loop's Python cost and the
+    law's call paid once per step for all runs).  Every run gets the bits :func:`simulate` gives it alone (without a law, each
+    run is solved in closed form by it).
 
     Parameters
     ----------
@@ -122,9 +123,14 @@ def simulate_many(network: Network, time_s: np.ndarray, *, ambient_c, initial_c,
     out = []
     for b0 in range(0, r, per):
         batch = range(b0, min(r, b0 + per))
+        if len(batch) == 1:        # the same bits as the march of many, at less cost
+            i = batch[0]
+            out.append(simulate(network, t, ambient_c=amb_all[i], initial_c=t0_all[i],
+                                power_w=law, ambient_hold=ambient_hold))
+            continue
         x = np.zeros((n_t, len(batch), width))
-        x[0, :, :n] = t0_all[b0:b0 + len(batch)]
         for k, i in enumerate(batch):
+            x[0, k, :n] = t0_all[i]
             x[:, k, 2 * n] = ambs[i]
             x[:, k, 2 * n + 1] = 1.0
             if linear:
