@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
-from scipy.signal import lfilter, lfilter_zi
+from scipy.signal import lfilter
 
 __all__ = ["first_order_lag"]
 
@@ -29,10 +29,13 @@ def first_order_lag(x: np.ndarray, time_s: np.ndarray, tau_s: float) -> np.ndarr
     if tau_s == 0 or x.size < 2:
         return x.copy()
     dt = np.diff(np.asarray(time_s, dtype=float))
-    if np.allclose(dt, dt[0], rtol=1e-9, atol=0.0):
+    # uniform within 1e-9 of the first step (np.allclose's test, without its overhead: this
+    # runs for every thermometer of every residual evaluation of a fit)
+    if np.abs(dt - dt[0]).max() <= 1e-9 * abs(dt[0]):
         a = np.exp(-dt[0] / tau_s)
-        b_coef, a_coef = [0.0, 1.0 - a], [1.0, -a]
-        y, _ = lfilter(b_coef, a_coef, x, zi=lfilter_zi(b_coef, a_coef) * x[0])
+        # the filter's state in equilibrium at x[0] is x[0] itself (y = z, z' = (1-a) x + a y;
+        # scipy.signal.lfilter_zi gives exactly 1 for this filter, at 20x the cost)
+        y, _ = lfilter([0.0, 1.0 - a], [1.0, -a], x, zi=x[:1])
         return y
     # Non-uniform sampling: lfilter has no time-varying coefficients, so step by hand.
     a = np.exp(-dt / tau_s)

@@ -51,5 +51,7 @@ def thermometer_reading(sensed_c: np.ndarray, time_s: np.ndarray, model: Thermom
     y = first_order_lag(sensed_c, time_s, model.lag_s)
     for f in transforms:
         y = f(y)
-    y = y + model.offset_c + model.noise_c * rng.standard_normal(y.shape)
+    y = y + model.offset_c
+    if model.noise_c:  # a noise-free reading (the fits' model readings) draws nothing
+        y = y + model.noise_c * rng.standard_normal(y.shape)
     return quantize(y, model.quantum_c)
