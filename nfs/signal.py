@@ -17,7 +17,8 @@ def first_order_lag(x: np.ndarray, time_s: np.ndarray, tau_s: float) -> np.ndarr
     Parameters
     ----------
     x : ndarray
-        Input samples (e.g. a node temperature [degC]).
+        Input samples (e.g. a node temperature [degC]), along the last axis (a stack of
+        records is filtered row by row).
     time_s : ndarray
         Sample times [s], strictly increasing.
     tau_s : float
@@ -26,7 +27,7 @@ def first_order_lag(x: np.ndarray, time_s: np.ndarray, tau_s: float) -> np.ndarr
     x = np.asarray(x, dtype=float)
     if tau_s < 0:
         raise ValueError(f"lag time constant must be >= 0, got {tau_s}")
-    if tau_s == 0 or x.size < 2:
+    if tau_s == 0 or x.shape[-1] < 2:
         return x.copy()
     dt = np.diff(np.asarray(time_s, dtype=float))
     # uniform within 1e-9 of the first step (np.allclose's test, without its overhead: this
@@ -35,12 +36,12 @@ def first_order_lag(x: np.ndarray, time_s: np.ndarray, tau_s: float) -> np.ndarr
         a = np.exp(-dt[0] / tau_s)
         # the filter's state in equilibrium at x[0] is x[0] itself (y = z, z' = (1-a) x + a y;
         # scipy.signal.lfilter_zi gives exactly 1 for this filter, at 20x the cost)
-        y, _ = lfilter([0.0, 1.0 - a], [1.0, -a], x, zi=x[:1])
+        y, _ = lfilter([0.0, 1.0 - a], [1.0, -a], x, axis=-1, zi=x[..., :1])
         return y
     # Non-uniform sampling: lfilter has no time-varying coefficients, so step by hand.
     a = np.exp(-dt / tau_s)
     y = np.empty_like(x)
-    y[0] = x[0]
+    y[..., 0] = x[..., 0]
     for k in range(len(dt)):
-        y[k + 1] = a[k] * y[k] + (1.0 - a[k]) * x[k]
+        y[..., k + 1] = a[k] * y[..., k] + (1.0 - a[k]) * x[..., k]
     return y

@@ -3,7 +3,7 @@
 
 Scoring (:func:`thermal_adequacy`).  The thermometer residual is that of the thermal stage
 of :func:`nfs.diagnose.fit.fit_model` (model readings minus ``temp_fog_c``, ``temp_acc_x_c``,
-``temp_acc_y_c`` at knots every ``decimate_s``), evaluated by ``_thermal_residual_parts``.
+``temp_acc_y_c`` at knots every ``decimate_s``), evaluated by :func:`nfs.diagnose.thermal_residual.thermal_residual_parts`.
 
 1. The model's own thermal stage (:func:`~nfs.diagnose.fit.default_free`, 20 parameters
    for the default instrument) is refined from the given values by Gauss-Newton steps with
@@ -73,7 +73,8 @@ from ..effects.thermometer import THERMOMETERS
 from ..errors import NfsError
 from ..instrument import Instrument
 from ..io.measurement import Run
-from .fit import _prepare_thermal, _thermal_residual_parts, default_free
+from .fit import default_free
+from .thermal_residual import prepare_thermal, thermal_residual_parts
 from .params import fit_bounds, get_param, set_params
 from .structure import StructuralAlternative, structural_alternatives
 
@@ -239,7 +240,7 @@ class _Problem:
     """The prepared runs, the label of every residual (thermometer, stage) and their groups."""
 
     def __init__(self, runs: Sequence[Run], decimate_s: float, startup_s: float):
-        self.data = [_prepare_thermal(r, decimate_s) for r in runs]
+        self.data = [prepare_thermal(r, decimate_s) for r in runs]
         self.cols = tuple(THERMOMETERS.values())
         self.names = tuple(THERMOMETERS)
         self.labels: list[tuple[np.ndarray, np.ndarray]] = []
@@ -257,9 +258,13 @@ class _Problem:
 
     def resid(self, inst: Instrument) -> list[np.ndarray]:
         """Model minus measured, the three thermometers stacked, per run [K]."""
-        self.n_eval += 1
-        parts = _thermal_residual_parts(inst, self.data)
-        return [np.concatenate([parts[c][i] for c in self.cols]) for i in range(len(self.data))]
+        return self.resid_many([inst])[0]
+
+    def resid_many(self, insts: Sequence[Instrument]) -> list[list[np.ndarray]]:
+        """:meth:`resid` of instruments of one structure, solved as one stack."""
+        self.n_eval += len(insts)
+        return [[np.concatenate([parts[c][i] for c in self.cols]) for i in range(len(self.data))]
+                for parts in thermal_residual_parts(insts, self.data)]
 
     def rms(self, r: list[np.ndarray]) -> dict[str, dict[str, float]]:
         """RMS [K] per thermometer and stage."""
@@ -337,12 +342,14 @@ def _bounded_solve(G: np.ndarray, h: np.ndarray, lo: np.ndarray, hi: np.ndarray
 
 def _jacobian(prob: _Problem, build: Callable[[np.ndarray], Instrument], x: np.ndarray,
               r0: list[np.ndarray], steps: np.ndarray) -> list[np.ndarray]:
-    """Forward differences d r / d x per run, one evaluation per column."""
+    """Forward differences d r / d x per run, the moved instruments solved as one stack."""
     cols: list[list[np.ndarray]] = [[] for _ in r0]
+    moved_all = []
     for j, hj in enumerate(steps):
         xj = x.copy()
         xj[j] += hj
-        moved = prob.resid(build(xj))
+        moved_all.append(build(xj))
+    for hj, moved in zip(steps, prob.resid_many(moved_all) if moved_all else []):
         for i, (m, b) in enumerate(zip(moved, r0)):
             cols[i].append((m - b) / hj)
     return [np.column_stack(c) if c else np.zeros((b.size, 0)) for c, b in zip(cols, r0)]

@@ -35,8 +35,8 @@ from ..instrument import Instrument
 from ..io.measurement import Run
 from ..northfind import heading_rmse, north_find
 from .candidates import Candidate, SHAPE_GRID, effect_of, shape_grid, split_parameters
-from .fit import (_block, _drift_context, _prepare_drift, _prepare_thermal,
-                  _thermal_residual_parts, default_free, model_drift_dph)
+from .fit import _block, _drift_context, _prepare_drift, default_free, model_drift_dph
+from .thermal_residual import prepare_thermal, thermal_residual_parts
 from .params import fit_bounds, get_param, set_params
 from .stats import run_grams, solve
 
@@ -246,7 +246,7 @@ class ThermalDesign:
     """The thermometer channel of every run, linearised at the model's thermal parameters."""
 
     data: list[Any]
-    """:func:`nfs.diagnose.fit._prepare_thermal` of each run."""
+    """:func:`nfs.diagnose.thermal_residual.prepare_thermal` of each run."""
     paths: list[str]
     """The model's free thermal parameters."""
     values: np.ndarray
@@ -257,22 +257,24 @@ class ThermalDesign:
     """d model / d parameter, per run."""
 
 
-def _thermal_resid(model: Instrument, data) -> list[np.ndarray]:
-    parts = _thermal_residual_parts(model, data)
-    return [np.concatenate([parts[c][i] for c in parts]) for i in range(len(data))]
+def _thermal_resid(models: Sequence[Instrument], data) -> list[list[np.ndarray]]:
+    """Per model, per run: model minus measured, the three thermometers stacked [K] (the
+    models solved as one stack)."""
+    return [[np.concatenate([parts[c][i] for c in parts]) for i in range(len(data))]
+            for parts in thermal_residual_parts(models, data)]
 
 
 def thermal_design(inst: Instrument, runs: Sequence[Run], decimate_s: float) -> ThermalDesign:
     """The thermometer residual of the model and its Jacobian in the free thermal parameters
     (:func:`~nfs.diagnose.fit.default_free`, thermal stage), by forward differences."""
-    data = [_prepare_thermal(r, decimate_s) for r in runs]
+    data = [prepare_thermal(r, decimate_s) for r in runs]
     paths = default_free(inst, ("thermal",))
     values = np.array([get_param(inst, p) for p in paths])
-    base = _thermal_resid(inst, data)
+    steps = [1e-3 * abs(v) if v else 1e-2 for v in values]
+    base, *moved_all = _thermal_resid(
+        [inst] + [set_params(inst, {p: v + h}) for p, v, h in zip(paths, values, steps)], data)
     cols: list[list[np.ndarray]] = [[] for _ in runs]
-    for p, v in zip(paths, values):
-        h = 1e-3 * abs(v) if v else 1e-2
-        moved = _thermal_resid(set_params(inst, {p: v + h}), data)
+    for h, moved in zip(steps, moved_all):
         for i, (m, b0) in enumerate(zip(moved, base)):
             cols[i].append((m - b0) / h)
     X = [np.column_stack(c) if c else np.zeros((b0.size, 0)) for c, b0 in zip(cols, base)]
@@ -284,10 +286,11 @@ def thermal_candidate_columns(c: Candidate, inst: Instrument, ts: ThermalDesign
     """d model / d coefficient at 0 of a thermal or thermometer candidate, per run."""
     spec = get_effect(c.effect)
     cols: list[list[np.ndarray]] = [[] for _ in ts.data]
-    for name in c.coefficients:
-        h = _THERMAL_STEP.get(spec.parameter(name).unit, 1e-3)
-        e = effect_of(c, {k: (h if k == name else 0.0) for k in c.coefficients})
-        moved = _thermal_resid(inst.with_effects(list(inst.effects) + [e]), ts.data)
+    steps = [_THERMAL_STEP.get(spec.parameter(name).unit, 1e-3) for name in c.coefficients]
+    models = [inst.with_effects(list(inst.effects) + [effect_of(
+        c, {k: (h if k == name else 0.0) for k in c.coefficients})])
+        for name, h in zip(c.coefficients, steps)]
+    for h, moved in zip(steps, _thermal_resid(models, ts.data)):
         for i, (m, b0) in enumerate(zip(moved, ts.base)):
             cols[i].append((m - b0) / h)
     return [np.column_stack(cc) for cc in cols]

@@ -75,18 +75,17 @@ from typing import Any, Iterable, Mapping, Sequence
 import numpy as np
 
 import thermal
-from thermal.solve import step_matrices
 
 from ..docfields import document_fields
 from ..constants import OMEGA_IE_DPH
 from ..denoise import earth_rate_projection_dph, separate_drift
 from ..effects.thermometer import THERMOMETERS
 from ..errors import InputError, NfsError
-from ..experiment import conditions_from_run, effect_context, thermal_effects, thermal_power
+from ..experiment import conditions_from_run, effect_context, thermal_power
 from ..instrument import Instrument
 from ..io.atomic import atomic_write_text
 from ..io.measurement import Run
-from ..sensors import axis_elevation_deg, thermometer_reading
+from ..sensors import axis_elevation_deg
 from .bound_advice import bound_advice, perturbed_starts
 from .noise_fit import GyroNoiseEstimate, gyro_noise_from_residual
 from .params import (_all_paths, expand_paths, fit_bounds, get_param,
@@ -95,6 +94,8 @@ from .prior import build_prior
 from .sensor_fit import LEVEL_PATHS, LevelData, level_from_means
 from .soak import SoakAnchor, anchor_offsets, soak_offsets
 from .stage import StageReport, solve_stage
+from .thermal_residual import (ThermalRun, decimation_step, prepare_thermal, require_columns,
+                               simulate_knots, thermal_residual_parts)
 
 __all__ = ["StageReport", "FitResult", "fit_model", "fitted_name", "default_free",
            "write_fitted_model",
@@ -110,8 +111,6 @@ _THERMAL_KINDS = ("thermal", "thermometer")
 _NOT_FREE_UNITS = ("s", "K", "degC", "channel unit")
 """Effect parameters left out of the default free set: time constants [s], temperature
 periods [K], set points [degC] and channel references (collinear with the bias)."""
-
-_ZERO_RNG = np.random.default_rng(0)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -251,213 +250,6 @@ def _stage_of(kind: str, stages: Sequence[str]) -> str:
 # ---------------------------------------------------------------------------------------------
 # Per-run data
 
-_THERMAL_COLUMNS = ("time_s", "position_deg", "moving") + tuple(THERMOMETERS.values())
-
-
-def _require(run: Run, columns: Iterable[str], stage: str) -> None:
-    for c in columns:
-        if c not in run.columns:
-            raise InputError(f"run '{run.name}' has no column '{c}', which the {stage} stage "
-                             "of the fit needs", file=run.path, column=c)
-
-
-def _step(t: np.ndarray, decimate_s: float) -> int:
-    dt = float(np.median(np.diff(t))) if t.size > 1 else 1.0
-    return max(1, int(round(decimate_s / dt)))
-
-
-def _window_mean(x: np.ndarray, k: int) -> np.ndarray:
-    """Mean of x over consecutive windows of k samples (the last one may be shorter)."""
-    n = x.size
-    w = np.arange(n) // k
-    return np.bincount(w, weights=x) / np.bincount(w)
-
-
-@dataclass
-class _ThermalRun:
-    """A run prepared for the thermal stage: decimated grid, measured readings."""
-
-    run: Run
-    t0_c: float
-    time_s: np.ndarray          # full time base (up to the last knot)
-    knots: np.ndarray           # indices of the knots into time_s
-    t_knot: np.ndarray
-    moving_knot: np.ndarray     # moving fraction over each decimated step
-    ambient_knot: np.ndarray    # chamber temperature averaged over each step
-    measured: dict[str, np.ndarray]
-    mask: dict[str, np.ndarray]
-    interval: np.ndarray        # Hermite interpolation: knot interval of every sample
-    basis: tuple[np.ndarray, ...]
-
-
-def _prepare_thermal(run: Run, decimate_s: float) -> _ThermalRun:
-    _require(run, _THERMAL_COLUMNS, "thermal")
-    cond = conditions_from_run(run)
-    t_all = np.asarray(run["time_s"], dtype=float)
-    if t_all.size < 3:
-        raise InputError(f"run '{run.name}' has {t_all.size} samples; the fit needs a record",
-                         file=run.path)
-    k = _step(t_all, decimate_s)
-    knots = np.arange(0, t_all.size, k)
-    t = t_all[: knots[-1] + 1]
-    moving = np.asarray(run["moving"], dtype=float)[: t.size]
-    if cond.chamber_c is None:
-        amb = np.full(t.size, cond.start_temperature_c)
-    else:
-        amb = np.asarray(run["temp_chamber_c"], dtype=float)[: t.size]
-    t_knot = t[knots]
-    interval = np.minimum(np.searchsorted(t_knot, t, side="right") - 1, knots.size - 2)
-    h = np.diff(t_knot)[interval]
-    s = (t - t_knot[interval]) / h
-    basis = (2 * s**3 - 3 * s**2 + 1, (s**3 - 2 * s**2 + s) * h, -2 * s**3 + 3 * s**2,
-             (s**3 - s**2) * h)
-    measured, mask = {}, {}
-    for col in THERMOMETERS.values():
-        y = np.asarray(run[col], dtype=float)[knots]
-        measured[col] = y
-        mask[col] = np.isfinite(y)
-    return _ThermalRun(run=run, t0_c=cond.start_temperature_c, time_s=t, knots=knots,
-                       t_knot=t_knot, moving_knot=_window_mean(moving, k),
-                       ambient_knot=_window_mean(amb, k), measured=measured, mask=mask,
-                       interval=interval, basis=basis)
-
-
-@dataclass
-class _Knots:
-    """Node temperatures and exact rates at the knots of one run (what _readings needs)."""
-
-    node_names: tuple[str, ...]
-    temperature_c: np.ndarray
-    rate_c_per_s: np.ndarray
-
-
-def _state_power(f, params: dict, t_s: float, temp: np.ndarray, moving: np.ndarray,
-                 vector: list[bool]) -> np.ndarray:
-    """A state-dependent thermal law for every run at once (per run when it needs scalars)."""
-    if vector[0]:
-        try:
-            p = np.asarray(f(t_s, temp, moving, **params), dtype=float)
-            if p.shape == temp.shape:
-                return p
-        except Exception:  # a user's law written for scalars only
-            pass
-        vector[0] = False
-    return np.array([float(f(t_s, float(x), float(m), **params)) for x, m in zip(temp, moving)])
-
-
-def _simulate_knots(inst: Instrument, data: list[_ThermalRun]) -> list[_Knots]:
-    """Solve the network of ``inst`` on the knots of every run, all runs in one march.
-
-    The same exact step as :func:`thermal.simulate` (zero-order hold of the inputs over each
-    knot interval, :func:`thermal.solve.step_matrices` computed once for all runs), with the
-    state-dependent thermal effects evaluated for all runs at each knot.  Runs whose knots
-    are not uniform (or whose step differs) are solved one by one with
-    :func:`thermal.simulate`.
-    """
-    net = inst.network
-    names = net.node_names
-    n = len(names)
-    out: list[_Knots | None] = [None] * len(data)
-    groups: dict[float, list[int]] = {}
-    for i, rd in enumerate(data):
-        dt = np.diff(rd.t_knot)
-        h = float(dt[0])
-        if np.allclose(dt, h, rtol=1e-9, atol=0.0):
-            groups.setdefault(round(h, 9), []).append(i)
-        else:
-            power, _, _ = thermal_power(inst, rd.t_knot, rd.moving_knot)
-            th = thermal.simulate(net, rd.t_knot, ambient_c=rd.ambient_knot,
-                                  initial_c=rd.t0_c, power_w=power)
-            out[i] = _Knots(names, th.temperature_c, th.rate_c_per_s)
-    if not groups:
-        return out  # type: ignore[return-value]
-    a, b = net.matrices()
-    p_const = net.node_power_w
-    effects = thermal_effects(inst)
-    for h, members in groups.items():
-        mats = step_matrices(a, b, h)
-        step = mats.phi_minus_i.T
-        g_amb = mats.gamma[:, 0]
-        g_pow = mats.gamma[:, 1:].T
-        n_k = max(data[i].t_knot.size for i in members)
-        r = len(members)
-        t_knot = np.zeros(n_k)
-        amb = np.empty((r, n_k))
-        moving = np.zeros((r, n_k))
-        fixed = np.zeros((r, n_k, n)) + p_const
-        t0 = np.empty(r)
-        for q, i in enumerate(members):
-            rd = data[i]
-            m = rd.t_knot.size
-            if m == n_k:
-                t_knot = rd.t_knot
-            amb[q, :m], amb[q, m:] = rd.ambient_knot, rd.ambient_knot[-1]
-            moving[q, :m], moving[q, m:] = rd.moving_knot, rd.moving_knot[-1]
-            t0[q] = rd.t0_c
-        stateful = []
-        for e, j, params in effects:
-            if e.spec.state_dependent:
-                stateful.append((e.spec.function, j, params, [True]))
-                continue
-            for q, i in enumerate(members):
-                rd = data[i]
-                m = rd.t_knot.size
-                p = np.broadcast_to(np.asarray(e.spec.function(rd.t_knot, None, rd.moving_knot,
-                                                               **params), dtype=float), (m,))
-                fixed[q, :m, j] += p
-                fixed[q, m:, j] += p[-1]
-        drive = amb[:, :, None] * g_amb + fixed @ g_pow      # (r, n_k, n)
-        temp = np.empty((r, n_k, n))
-        extra = np.zeros((r, n_k, n))
-        temp[:, 0, :] = t0[:, None]
-        times = t_knot.tolist()
-        for k in range(n_k):
-            tk = temp[:, k, :]
-            if stateful:
-                pk = extra[:, k, :]
-                for f, j, params, vector in stateful:
-                    pk[:, j] += _state_power(f, params, times[k], tk[:, j], moving[:, k], vector)
-            if k + 1 < n_k:
-                nxt = tk + tk @ step + drive[:, k]
-                if stateful:
-                    nxt += extra[:, k, :] @ g_pow
-                temp[:, k + 1, :] = nxt
-        power = fixed + extra
-        rate = temp @ a.T + amb[:, :, None] * b[:, 0] + power @ b[:, 1:].T
-        for q, i in enumerate(members):
-            m = data[i].t_knot.size
-            out[i] = _Knots(names, temp[q, :m], rate[q, :m])
-    return out  # type: ignore[return-value]
-
-
-def _readings(inst: Instrument, rd: _ThermalRun, th: _Knots) -> dict[str, np.ndarray]:
-    """Noise-free thermometer readings at the knots."""
-    out = {}
-    names = tuple(th.node_names)
-    j, (b0, b1, b2, b3) = rd.interval, rd.basis
-    for name, col in THERMOMETERS.items():
-        model = inst.thermometers[name]
-        y = model.sensed(th.temperature_c, names)
-        m = model.sensed(th.rate_c_per_s, names)
-        full = b0 * y[j] + b1 * m[j] + b2 * y[j + 1] + b3 * m[j + 1]
-        transforms = [(lambda v, e=e: e.spec.function(v, rd.time_s, **e.params))
-                      for e in inst.effects
-                      if e.spec.kind == "thermometer" and e.params.get("thermometer") == name]
-        quiet = replace(model, noise_c=0.0, quantum_c=0.0)
-        out[col] = thermometer_reading(full, rd.time_s, quiet, _ZERO_RNG, transforms)[rd.knots]
-    return out
-
-
-def _thermal_residual_parts(inst: Instrument, data: list[_ThermalRun]
-                            ) -> dict[str, list[np.ndarray]]:
-    parts: dict[str, list[np.ndarray]] = {c: [] for c in THERMOMETERS.values()}
-    for rd, th in zip(data, _simulate_knots(inst, data)):
-        model = _readings(inst, rd, th)
-        for col, y in model.items():
-            parts[col].append((y - rd.measured[col])[rd.mask[col]])
-    return parts
-
-
 @dataclass
 class _DriftRun:
     """A run prepared for the drift stage."""
@@ -479,16 +271,16 @@ class _DriftRun:
 
 def _prepare_drift(run: Run, decimate_s: float, acc_channels: bool,
                    drift_signal: str) -> _DriftRun:
-    _require(run, ("time_s", "position_deg", "moving", "gyro_dph", "acc_x_g"), "drift")
+    require_columns(run, ("time_s", "position_deg", "moving", "gyro_dph", "acc_x_g"), "drift")
     if acc_channels:
-        _require(run, ("acc_y_g",), "drift")
+        require_columns(run, ("acc_y_g",), "drift")
     if run.meta.true_heading_deg is None:
         raise InputError(f"run '{run.name}' has no true_heading_deg: the drift stage needs the "
                          "Earth-rate projection, which needs the true heading",
                          file=run.path, key="true_heading_deg")
     cond = conditions_from_run(run)
     t = np.asarray(run["time_s"], dtype=float)
-    k = _step(t, decimate_s)
+    k = decimation_step(t, decimate_s)
     proj = earth_rate_projection_dph(run)
     if drift_signal == "denoised":
         drift = separate_drift(run).drift_dph
@@ -605,7 +397,7 @@ def _rms(parts: dict[str, list[np.ndarray]]) -> dict[str, float]:
 # ---------------------------------------------------------------------------------------------
 # The fit
 
-def _tec_identifiability(inst: Instrument, data: list[_ThermalRun], free: Sequence[str]
+def _tec_identifiability(inst: Instrument, data: list[ThermalRun], free: Sequence[str]
                          ) -> dict[str, str]:
     """c_h (c_c) of a TEC law needs samples with the source below (above) T_set."""
     out = {}
@@ -614,7 +406,7 @@ def _tec_identifiability(inst: Instrument, data: list[_ThermalRun], free: Sequen
             continue
         node = e.params.get("node") or inst.gyro.source
         below = above = 0
-        for th in _simulate_knots(inst, data):
+        for th in simulate_knots([inst], data)[0]:
             src = th.temperature_c[:, list(th.node_names).index(node)]
             below += int(np.sum(src < e.params["T_set"]))
             above += int(np.sum(src > e.params["T_set"]))
@@ -626,6 +418,10 @@ def _tec_identifiability(inst: Instrument, data: list[_ThermalRun], free: Sequen
                              f"in these runs: it needs runs starting {side} T_set")
     return out
 
+
+#: Parameter vectors solved in one stack by the thermal stage's Jacobian (about 2.5 MB of
+#: state per vector for 7 runs of 2.5 h at 10 s knots).
+_BATCH = 32
 
 _NOISE_FIELDS = ("arw_deg_per_rth_h", "bias_instability_dph", "rrw_deg_per_h_per_rth_h")
 
@@ -772,13 +568,14 @@ def fit_model(inst: Instrument, runs: Sequence[Run], free: Iterable[str] | None 
     rms_after: dict[str, float] = {}
     warnings: list[str] = []
 
-    def stage(name: str, fun, base: Instrument, sp: list[str]) -> Instrument:
+    def stage(name: str, fun, base: Instrument, sp: list[str], batch=None) -> Instrument:
         """Solve one stage from ``base`` over the free paths ``sp``; record its report."""
         lb, ub = (np.array([bounds[p][i] for p in sp]) for i in (0, 1))
         x0 = np.array([start[p] for p in sp])
         extra = perturbed_starts(sp, x0, lb, ub)[:n_starts - 1] if name == "thermal" else []
         res, rep, se, un, at = solve_stage(name, fun, x0, lb, ub, max_nfev, sp,
-                                           None if pr is None else pr.subset(sp), extra)
+                                           None if pr is None else pr.subset(sp), extra,
+                                           batch=batch)
         stage_reports[name] = rep
         stderr.update(se)
         unident.update(un)
@@ -786,9 +583,9 @@ def fit_model(inst: Instrument, runs: Sequence[Run], free: Iterable[str] | None 
         return set_params(base, dict(zip(sp, res.x)))
 
     if "thermal" in stages:
-        data = [_prepare_thermal(r, decimate_s) for r in runs]
+        data = [prepare_thermal(r, decimate_s) for r in runs]
         sp = by_stage["thermal"]
-        rms_before.update(_rms(_thermal_residual_parts(current, data)))
+        rms_before.update(_rms(thermal_residual_parts([current], data)[0]))
         if sp:
             base = current
             # each thermometer's rows divided by its noise and rounding level, so the cost is
@@ -797,14 +594,20 @@ def fit_model(inst: Instrument, runs: Sequence[Run], free: Iterable[str] | None 
                                      base.thermometers[nm].quantum_c / math.sqrt(12.0)) or 1.0
                      for nm, col in THERMOMETERS.items()}
 
-            def fun(x):
-                model = set_params(base, dict(zip(sp, x)))
-                parts = _thermal_residual_parts(model, data)
-                return np.concatenate([a / floor[c] for c, arrs in parts.items() for a in arrs])
+            def fun_many(xs) -> list[np.ndarray]:
+                # the parameter vectors of a Jacobian solved as one stack (thermal_residual),
+                # at most _BATCH at a time to bound the stack's memory
+                out = []
+                for i in range(0, len(xs), _BATCH):
+                    models = [set_params(base, dict(zip(sp, x))) for x in xs[i:i + _BATCH]]
+                    out += [np.concatenate([a / floor[c] for c, arrs in parts.items()
+                                            for a in arrs])
+                            for parts in thermal_residual_parts(models, data)]
+                return out
 
-            current = stage("thermal", fun, base, sp)
+            current = stage("thermal", lambda x: fun_many([x])[0], base, sp, batch=fun_many)
             unident.update(_tec_identifiability(current, data, sp))
-        rms_after.update(_rms(_thermal_residual_parts(current, data)))
+        rms_after.update(_rms(thermal_residual_parts([current], data)[0]))
 
     if "drift" in stages and by_stage["drift"]:
         sp = by_stage["drift"]

@@ -21,7 +21,7 @@ from scipy.optimize import least_squares
 from ..docfields import document_fields
 from .prior import Prior
 
-__all__ = ["StageReport", "solve_stage", "CHI2_SETTLED"]
+__all__ = ["StageReport", "solve_stage", "forward_jacobian", "CHI2_SETTLED"]
 
 #: A stage whose data rows have a reduced chi-square at most this fits to its noise: no other
 #: start is tried, and the data rows keep their stated noise level beside the prior.
@@ -66,11 +66,37 @@ class StageReport:
     noise); 1: the stated noise levels held."""
 
 
+def forward_jacobian(batch, x: np.ndarray, lb: np.ndarray, ub: np.ndarray) -> np.ndarray:
+    """d r / d x by forward differences, the n + 1 evaluations in one call of ``batch``.
+
+    ``batch(xs)`` returns the residual at each of the parameter vectors ``xs``.  The steps
+    are those of :func:`scipy.optimize.least_squares`' ``jac="2-point"`` (relative step
+    sqrt(eps) max(1, |x|), sign of x; turned back where it would leave the bounds; the step
+    taken as the difference actually represented), so the Jacobian is the one scipy would
+    make, computed from one stacked evaluation instead of n + 1 separate ones.
+    """
+    x = np.asarray(x, dtype=float)
+    h = np.sqrt(np.finfo(float).eps) * np.where(x >= 0, 1.0, -1.0) * np.maximum(1.0, np.abs(x))
+    lower, upper = x - lb, ub - x
+    violated = (x + h < lb) | (x + h > ub)
+    fitting = np.abs(h) <= np.maximum(lower, upper)
+    h = np.where(violated & fitting, -h, h)
+    h = np.where(~fitting & (upper >= lower), upper, h)
+    h = np.where(~fitting & (upper < lower), -lower, h)
+    xs = [x] + [x + np.where(np.arange(x.size) == i, h[i], 0.0) for i in range(x.size)]
+    rows = batch(xs)
+    dx = np.array([xs[i + 1][i] - x[i] for i in range(x.size)])
+    return (np.column_stack(rows[1:]) - rows[0][:, None]) / dx
+
+
 def solve_stage(name: str, fun, x0: np.ndarray, lb: np.ndarray, ub: np.ndarray,
                 max_nfev: int | None, paths: Sequence[str], prior: Prior | None = None,
-                extra_starts: Sequence[np.ndarray] = ()):
+                extra_starts: Sequence[np.ndarray] = (), batch=None):
     """Minimise 0.5 |r|^2 over the box [lb, ub], r = ``fun(x)`` (the data rows, divided by
     their noise level) followed by the rows of ``prior``.
+
+    ``batch(xs)``, when given, evaluates ``fun`` at several parameter vectors at once; the
+    Jacobian is then :func:`forward_jacobian` (scipy's own forward differences otherwise).
 
     From ``x0``, then from each of ``extra_starts`` while the best solution is not settled
     (:func:`_settled`), each extra start with a third of ``max_nfev``; the solution of
@@ -94,6 +120,16 @@ def solve_stage(name: str, fun, x0: np.ndarray, lb: np.ndarray, ub: np.ndarray,
         r = fun(x)
         return np.concatenate([r, prior.rows(x)]) if use_prior else r
 
+    def jacobian(scale: float):
+        """The Jacobian of the data rows divided by ``scale`` and of the prior rows."""
+        if batch is None:
+            return "2-point"
+
+        def jac(x):
+            j = forward_jacobian(batch, x, lb, ub) / scale
+            return np.vstack([j, prior.jacobian()]) if use_prior else j
+        return jac
+
     best, nfev, tried = None, 0, 0
     r_start = total(x0)
     for xs in [x0, *[np.clip(x, lb, ub) for x in extra_starts]]:
@@ -101,8 +137,8 @@ def solve_stage(name: str, fun, x0: np.ndarray, lb: np.ndarray, ub: np.ndarray,
             break
         # an extra start only has to show a lower basin: a third of the evaluations
         budget = max_nfev if best is None or max_nfev is None else max(10, max_nfev // 3)
-        res = least_squares(total, xs, bounds=(lb, ub), method="trf", x_scale="jac",
-                            max_nfev=budget)
+        res = least_squares(total, xs, jac=jacobian(1.0), bounds=(lb, ub), method="trf",
+                            x_scale="jac", max_nfev=budget)
         nfev, tried = nfev + int(res.nfev), tried + 1
         if best is None or res.cost < best.cost:
             best = res
@@ -118,8 +154,8 @@ def solve_stage(name: str, fun, x0: np.ndarray, lb: np.ndarray, ub: np.ndarray,
         def scaled(x):
             return np.concatenate([fun(x) / noise_scale, prior.rows(x)])
 
-        res = least_squares(scaled, res.x, bounds=(lb, ub), method="trf", x_scale="jac",
-                            max_nfev=max_nfev)
+        res = least_squares(scaled, res.x, jac=jacobian(noise_scale), bounds=(lb, ub),
+                            method="trf", x_scale="jac", max_nfev=max_nfev)
         nfev += int(res.nfev)
     cost_prior = float(0.5 * np.sum(res.fun[m:] ** 2))
     report = StageReport(name=name, free=tuple(paths), converged=bool(res.status > 0),

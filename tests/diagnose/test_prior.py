@@ -17,7 +17,8 @@ from scipy.optimize import least_squares
 
 from thermal import Link, Network, Node
 
-from nfs.diagnose.fit import _prepare_thermal, _thermal_residual_parts, fit_model
+from nfs.diagnose.fit import fit_model
+from nfs.diagnose.thermal_residual import prepare_thermal, thermal_residual_parts
 from nfs.diagnose.params import get_param, set_params
 from nfs.diagnose.prior import PRIOR_WIDTHS, build_prior
 from nfs.errors import NfsError
@@ -86,10 +87,10 @@ def test_no_prior_is_plain_least_squares(scenario):
     assert off.params == none.params and off.stderr == none.stderr
     assert off.prior_shift == {} and off.stages["thermal"].n_prior == 0
     # the unregularised objective, solved directly
-    data = [_prepare_thermal(r, 10.0) for r in runs]
+    data = [prepare_thermal(r, 10.0) for r in runs]
 
     def fun(x):
-        parts = _thermal_residual_parts(set_params(inst, dict(zip(free, x))), data)
+        parts = thermal_residual_parts([set_params(inst, dict(zip(free, x)))], data)[0]
         return np.concatenate([a for arrs in parts.values() for a in arrs])
 
     x0 = np.array([get_param(inst, p) for p in free])

@@ -20,7 +20,8 @@ from nfs.diagnose.adequacy import ADEQUACY_FACTOR, beats_structure, one_sided, t
 from nfs.diagnose.structure import (effect_alternative, free_link, insert_node, physical_lower,
                                     set_thermometer_fraction, split_node,
                                     structural_alternatives, thermometer_weight)
-from nfs.diagnose.fit import _prepare_thermal, _thermal_residual_parts, default_free, fit_model
+from nfs.diagnose.fit import default_free, fit_model
+from nfs.diagnose.thermal_residual import prepare_thermal, thermal_residual_parts
 from nfs.errors import NfsError
 from nfs.experiment import simulate_run
 from nfs.io.scenario import load_scenario
@@ -157,7 +158,7 @@ def _exact_cv_k(model, runs, extra):
         train = runs[:i] + runs[i + 1:]
         fit = fit_model(model, train, free=default_free(model, ("thermal",)) + extra,
                         stages=("thermal",), decimate_s=30.0)
-        parts = _thermal_residual_parts(fit.instrument, [_prepare_thermal(held, 30.0)])
+        parts = thermal_residual_parts([fit.instrument], [prepare_thermal(held, 30.0)])[0]
         x = np.concatenate([v[0] for v in parts.values()])
         sse, n = sse + float(x @ x), n + x.size
     return math.sqrt(sse / n)
