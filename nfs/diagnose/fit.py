@@ -22,7 +22,10 @@ parameter the runs do not determine stays near its preset instead of running to 
     rates at the knots), and the thermometer chain of the simulator
     (:func:`nfs.sensors.thermometer_reading`: lag, thermometer effects, offset) runs there
     with its noise and quantisation switched off; the residual is taken at the knots and
-    divided by the thermometer's noise and rounding level sqrt(noise_c^2 + quantum_c^2 / 12).
+    divided by the thermometer's noise and rounding level sqrt(noise_c^2 + quantum_c^2 / 12)
+    (:mod:`nfs.diagnose.thermal_residual`).  The Jacobian is scipy's forward differences
+    with all n + 1 parameter vectors solved as one stack
+    (:func:`nfs.diagnose.stage.forward_jacobian`).
     With a prior, each free thermometer offset is centred on its soak anchor (the readings of
     the first minute after power-on minus T0, :mod:`nfs.diagnose.soak`).  When the solution
     from the preset stays above the noise (reduced chi-square > 1.5) or ends on a bound, the
