@@ -18,6 +18,7 @@ compensator must remove.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -158,7 +159,8 @@ def separate_drift(run: Run, *, cutoff_period_s: float | None = DEFAULT_CUTOFF_P
                    level: int | None = None, wavelet: str = "db4",
                    rule: str | ThresholdRule = "visu", mode: str = "soft",
                    boundary: str = "smooth-extend", sigma_per_level: bool = False,
-                   scale_factor: float = 1.0) -> DriftSeparation:
+                   scale_factor: float = 1.0,
+                   thresholds: Sequence[float] | None = None) -> DriftSeparation:
     """The thermal drift of a run: output minus Earth rate, moves bridged, wavelet-denoised.
 
         raw = gyro_dph - earth_rate_projection_dph(run)                      [deg/h]
@@ -184,6 +186,10 @@ def separate_drift(run: Run, *, cutoff_period_s: float | None = DEFAULT_CUTOFF_P
         As :func:`nfs.denoise.wavelet.wavelet_denoise`.
     scale_factor : float
         K of the Earth-rate projection (:func:`earth_rate_projection_dph`).
+    thresholds : sequence of float, optional
+        The thresholds of another separation (``other.denoise.thresholds``) instead of the
+        rule's: a noise-free model's drift shrunk as the measured one was
+        (:func:`nfs.denoise.wavelet.wavelet_denoise`).
 
     Returns
     -------
@@ -209,7 +215,8 @@ def separate_drift(run: Run, *, cutoff_period_s: float | None = DEFAULT_CUTOFF_P
     result = wavelet_denoise(
         filled, sample_rate_hz=fs, cutoff_period_s=None if level is not None else
         cutoff_period_s, level=level, wavelet=wavelet, rule=rule, mode=mode,
-        boundary=boundary, sigma_per_level=sigma_per_level, trusted=~untrusted)
+        boundary=boundary, sigma_per_level=sigma_per_level, trusted=~untrusted,
+        thresholds=thresholds)
     return DriftSeparation(
         run_name=run.name, time_s=t, projection_dph=projection, raw_drift_dph=raw,
         filled_drift_dph=filled, drift_dph=result.signal, noise_dph=result.noise,

@@ -38,7 +38,7 @@ from __future__ import annotations
 
 import functools
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -438,7 +438,7 @@ class DenoiseResult:
     wavelet: str
     """Wavelet name (PyWavelets)."""
     rule: str
-    """Name of the threshold rule."""
+    """Name of the threshold rule ("fixed": thresholds given by the caller)."""
     mode: str
     """Thresholding function: soft, hard or garrote."""
     boundary: str
@@ -505,7 +505,7 @@ def _clean_coefficients(excluded: np.ndarray, filter_length: int, level: int,
 def _transform_and_shrink(xp: np.ndarray, wav: pywt.Wavelet, ext_mode: str, level: int,
                           outside: np.ndarray, untrusted: np.ndarray, n: int,
                           rule: ThresholdRule, thr_mode: str, keep_approximation: bool,
-                          per_level: bool):
+                          per_level: bool, fixed: Sequence[float] | None = None):
     """DWT, noise level, thresholds, shrinkage, inverse DWT of the (padded) record.
 
     The noise level and the rules see the coefficients computed from neither ``outside``
@@ -532,7 +532,7 @@ def _transform_and_shrink(xp: np.ndarray, wav: pywt.Wavelet, ext_mode: str, leve
     for j in range(1, level + 1):
         d_use = usable(j)
         s_j = mad_sigma(d_use) if per_level else sigma
-        t_j = float(rule(d_use, s_j, n))
+        t_j = float(rule(d_use, s_j, n)) if fixed is None else float(fixed[j - 1])
         if not math.isfinite(t_j) or t_j < 0.0:
             raise InputError(f"threshold rule returned {t_j!r} at level {j}; "
                              "a threshold must be finite and >= 0")
@@ -551,7 +551,8 @@ def wavelet_denoise(x: np.ndarray, *, sample_rate_hz: float = 1.0,
                     mode: str = "soft", keep_approximation: bool = True,
                     boundary: str = "smooth-extend", sigma_per_level: bool = False,
                     edge_fit_samples: int | None = None, edge_fit_degree: int | str = "auto",
-                    trusted: np.ndarray | None = None) -> DenoiseResult:
+                    trusted: np.ndarray | None = None,
+                    thresholds: Sequence[float] | None = None) -> DenoiseResult:
     """Denoise a uniformly sampled record by wavelet shrinkage (Donoho & Johnstone 1994).
 
         x -> DWT to level J -> d_j shrunk with T_j (rule) -> IDWT -> s_hat;  noise = x - s_hat
@@ -600,6 +601,11 @@ def wavelet_denoise(x: np.ndarray, *, sample_rate_hz: float = 1.0,
         level and the threshold rules then use only coefficients computed from trusted
         samples (a bridged gap would otherwise pull the median of |d_1| down). Every sample
         is still denoised. Default: all trusted.
+    thresholds : sequence of float, optional
+        T_j of every level, finest first (as :attr:`DenoiseResult.thresholds`), used instead
+        of the rule's: puts a second record through the same shrinkage as a first one (a
+        noise-free model beside a measurement: soft thresholding is not linear, and a noise-free
+        record's own thresholds would shrink it less than the measurement was shrunk).
 
     Returns
     -------
@@ -630,6 +636,12 @@ def wavelet_denoise(x: np.ndarray, *, sample_rate_hz: float = 1.0,
     level = int(level)
     wav = _wavelet(wavelet)
     rule_name, rule_fn = _resolve_rule(rule)
+    if thresholds is not None:
+        thresholds = [float(v) for v in thresholds]
+        if len(thresholds) != level or not all(math.isfinite(v) and v >= 0 for v in thresholds):
+            raise InputError(f"thresholds must be {level} finite values >= 0 (one per level, "
+                             f"finest first), got {thresholds}")
+        rule_name = "fixed"
     if mode not in THRESHOLD_MODES:
         raise InputError(f"unknown thresholding mode {mode!r}; valid modes: "
                          f"{', '.join(THRESHOLD_MODES)}")
@@ -679,7 +691,8 @@ def wavelet_denoise(x: np.ndarray, *, sample_rate_hz: float = 1.0,
         untrusted_p = np.concatenate((np.zeros(p, bool), untrusted, np.zeros(p, bool)))
         y, s, s_lv, t_lv = _transform_and_shrink(xp, wav, ext_mode, level, outside,
                                                  untrusted_p, n, rule_fn, mode,
-                                                 keep_approximation, sigma_per_level)
+                                                 keep_approximation, sigma_per_level,
+                                                 thresholds)
         return y[p:p + n], s, s_lv, t_lv
 
     signal, sigma, sigmas, thresholds = run(boundary)

@@ -13,7 +13,7 @@ channel             residual r = measured - model
 ``temp_acc_y_c``    quantisation) [degC], every sample at rest
 ``gyro_drift_dph``  separate_drift(measured).drift_dph - separate_drift(noise-free model
                     run).drift_dph [deg/h]: the model's deterministic prediction through the
-                    same wavelet separation
+                    same wavelet separation, with the measured run's thresholds
 ``acc_x_g``,        dwell mean of the measured specific force minus the dwell mean of the
 ``acc_y_g``         model's noise-free one [g], one point per dwell
 ==================  ==========================================================================
@@ -529,7 +529,11 @@ def _compare_run(inst: Instrument, clean: Instrument, run: Run, k: int, cfg) -> 
             d_meas = separate_drift(run)
             d_a = separate_drift(sim_a.run).drift_dph
             d_b = separate_drift(sim_b.run).drift_dph
-            meas, mod = d_meas.drift_dph, separate_drift(expect).drift_dph
+            # the noise-free model shrunk with the measurement's thresholds: its own (near
+            # zero) would keep what the measurement's shrinkage took off a position-
+            # dependent term, and the residual would show it (wavelet_denoise, thresholds)
+            meas = d_meas.drift_dph
+            mod = separate_drift(expect, thresholds=d_meas.denoise.thresholds).drift_dph
             ok = ~d_meas.interpolated
             out[spec.key] = _channel_run(spec, run, t, pos, meas, mod, 0.5 * (d_a - d_b) ** 2,
                                          ok, cycles, np.where(ok, meas - mod, np.nan), cfg)

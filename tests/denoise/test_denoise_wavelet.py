@@ -100,6 +100,31 @@ def test_zero_threshold_reconstructs_the_record(boundary, wavelet):
     assert res.thresholds == (0.0,) * 6
 
 
+def test_given_thresholds_shrink_a_second_record_like_the_first():
+    # Invariants: a record's own thresholds given back reproduce its denoising exactly;
+    # zeros keep every coefficient (the record back); a noise-free record shrunk with a
+    # noisy record's thresholds loses what the noisy one lost of the signal, not nothing
+    # (soft thresholding is not linear: with its own, near-zero thresholds it keeps it all).
+    x = noisy(3)
+    res = wavelet_denoise(x, level=8)
+    again = wavelet_denoise(x, level=8, thresholds=res.thresholds)
+    np.testing.assert_array_equal(again.signal, res.signal)
+    assert again.rule == "fixed" and again.thresholds == res.thresholds
+    zero = wavelet_denoise(x, level=8, thresholds=[0.0] * 8)
+    assert np.max(np.abs(zero.signal - x)) < 1e-10
+    square = 0.012 * np.sign(np.sin(2 * np.pi * T_S / 640.0))    # a position-following term
+    clean_own = wavelet_denoise(TRUTH + square, level=8).signal
+    clean_theirs = wavelet_denoise(TRUTH + square, level=8, thresholds=res.thresholds).signal
+    noisy_sq = np.mean([wavelet_denoise(noisy(s) + square, level=8).signal
+                        for s in range(4, 12)], axis=0)
+    mid = slice(1000, N - 1000)
+    assert rms((clean_theirs - noisy_sq)[mid]) < 0.5 * rms((clean_own - noisy_sq)[mid])
+    with pytest.raises(InputError, match="thresholds must be 8"):
+        wavelet_denoise(x, level=8, thresholds=[0.1] * 7)
+    with pytest.raises(InputError, match="thresholds must be 8"):
+        wavelet_denoise(x, level=8, thresholds=[0.1] * 7 + [math.nan])
+
+
 # --------------------------------------------------------------------------------------------
 # the known drift
 
