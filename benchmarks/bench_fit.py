@@ -26,12 +26,14 @@ import time
 import warnings
 from pathlib import Path
 
+from timing import best_of
+
 from nfs.diagnose.fit import default_free, fit_model
+from nfs.diagnose.params import get_param, set_params
 from nfs.diagnose.thermal_residual import prepare_thermal, thermal_residual_parts
+from nfs.experiment import simulate_run
 from nfs.instrument import load_instrument
 from nfs.io.measurement import read_runs
-from nfs.diagnose.params import get_param, set_params
-from nfs.experiment import simulate_run
 from nfs.io.scenario import load_scenario
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests" / "independent"))
@@ -80,15 +82,6 @@ def main() -> None:
     independent()
 
 
-def _best(f, n: int = 3) -> float:
-    best = float("inf")
-    for _ in range(n):
-        t0 = time.perf_counter()
-        f()
-        best = min(best, time.perf_counter() - t0)
-    return best
-
-
 def independent() -> None:
     """The fit on the independent generator's runs; one thermal Jacobian stacked vs not."""
     warnings.simplefilter("ignore")
@@ -109,8 +102,8 @@ def independent() -> None:
     data = [prepare_thermal(r, 10.0) for r in runs]
     free = default_free(inst, ("thermal",))
     models = [inst] + [set_params(inst, {p: get_param(inst, p) * (1 + 1.5e-8)}) for p in free]
-    stacked = _best(lambda: thermal_residual_parts(models, data))
-    alone = _best(lambda: [thermal_residual_parts([m], data) for m in models])
+    stacked = best_of(lambda: thermal_residual_parts(models, data))
+    alone = best_of(lambda: [thermal_residual_parts([m], data) for m in models])
     print(f"  one thermal Jacobian ({len(models)} residuals): stacked {stacked * 1e3:.0f} ms, "
           f"one by one {alone * 1e3:.0f} ms (stacked {alone / stacked:.1f}x faster)")
 

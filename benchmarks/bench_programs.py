@@ -26,6 +26,8 @@ import time
 import warnings
 from pathlib import Path
 
+from timing import best_of
+
 from nfs.cli import main as nfs_main
 from nfs.experiment import simulate_runs
 from nfs.io.scenario import load_scenario
@@ -36,15 +38,6 @@ CYCLE = SCENARIOS / "seed000_temperature_cycle.toml"
 OTHERS = {"Cheng et al. 2015 ramps (drift table over runs)": SCENARIOS / "seed001_ramps.toml",
           "Liang et al. 2021 ramp calibration (parameter level)":
               SCENARIOS / "seed003_ramp_calibration.toml"}
-
-
-def best_of(f, n=3):
-    best = float("inf")
-    for _ in range(n):
-        t0 = time.perf_counter()
-        f()
-        best = min(best, time.perf_counter() - t0)
-    return best
 
 
 def per_sample_us(scenario) -> tuple[float, int]:
