@@ -1,7 +1,7 @@
 """False alarms of ``nfs diagnose`` on runs made by the model itself (calibration).
 
-Run as ``python benchmarks/bench_false_alarm.py [n_sets]`` (default 20 sets; 6.5 min on
-the shared 2-core machine under a load of about 6, roughly 2 min idle).  Each set is the default scenario's 7 start temperatures x 2.5 h at
+Run as ``python benchmarks/bench_false_alarm.py [n_sets]`` (default 20 sets; about 1 min
+on an idle 2-core machine).  Each set is the default scenario's 7 start temperatures x 2.5 h at
 1 Hz simulated with the default instrument (nfs.experiment.simulate_run with the
 load_scenario().nominal() conditions -- the default experiment without run-to-run or
 unit-to-unit variability, so the model is exactly the unit -- the scenario seed varied:
