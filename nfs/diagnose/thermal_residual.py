@@ -139,18 +139,18 @@ class _StatefulLaw:
 
     def __init__(self, f, params: Sequence[dict], r: int):
         self.f, self.r = f, r
-        keys = params[0].keys()
-        same = all(p == params[0] for p in params[1:])
-        if same:
-            self.joint = dict(params[0])
-        else:
-            self.joint = {}
-            for key in keys:
-                vals = [p[key] for p in params]
-                self.joint[key] = (vals[0] if all(v == vals[0] for v in vals[1:])
-                                   else np.repeat(np.asarray(vals, dtype=float), r))
         self.params = list(params)
         self.mode = "joint"
+        self.joint: dict = {}
+        for key in params[0]:
+            vals = [p[key] for p in params]
+            if all(v == vals[0] for v in vals[1:]):
+                self.joint[key] = vals[0]
+                continue
+            try:
+                self.joint[key] = np.repeat(np.asarray(vals, dtype=float), r)
+            except (TypeError, ValueError):  # a parameter that is no number differs
+                self.mode = "per instrument"
 
     def __call__(self, t_s: float, temp: np.ndarray, moving: np.ndarray,
                  moving_rows: np.ndarray) -> np.ndarray:

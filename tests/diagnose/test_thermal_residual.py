@@ -123,6 +123,14 @@ def test_state_law_for_scalars_only():
         np.testing.assert_allclose(law(0.0, temp, mv, np.tile(mv, 2)), want, rtol=1e-15)
         assert law.mode == mode
 
+    def named_law(t, temperature, moving, *, c, curve):  # a parameter that is no number
+        return (c if curve == "linear" else 2 * c) * np.maximum(0.0, temperature - 25.0)
+
+    law = _StatefulLaw(named_law, [{"c": 1.0, "curve": "linear"},
+                                   {"c": 0.1, "curve": "double"}], 3)
+    assert law.mode == "per instrument"
+    np.testing.assert_allclose(law(0.0, temp, mv, np.tile(mv, 2)), want, rtol=1e-15)
+
 
 def test_forward_jacobian_is_scipys_two_point():
     """Oracle: scipy.optimize._numdiff.approx_derivative('2-point') with the same bounds,
