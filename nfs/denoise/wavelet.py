@@ -636,11 +636,11 @@ def wavelet_denoise(x: np.ndarray, *, sample_rate_hz: float = 1.0,
     level = int(level)
     wav = _wavelet(wavelet)
     rule_name, rule_fn = _resolve_rule(rule)
-    if thresholds is not None:
-        thresholds = [float(v) for v in thresholds]
-        if len(thresholds) != level or not all(math.isfinite(v) and v >= 0 for v in thresholds):
+    fixed = None if thresholds is None else [float(v) for v in thresholds]
+    if fixed is not None:
+        if len(fixed) != level or not all(math.isfinite(v) and v >= 0 for v in fixed):
             raise InputError(f"thresholds must be {level} finite values >= 0 (one per level, "
-                             f"finest first), got {thresholds}")
+                             f"finest first), got {fixed}")
         rule_name = "fixed"
     if mode not in THRESHOLD_MODES:
         raise InputError(f"unknown thresholding mode {mode!r}; valid modes: "
@@ -692,10 +692,10 @@ def wavelet_denoise(x: np.ndarray, *, sample_rate_hz: float = 1.0,
         y, s, s_lv, t_lv = _transform_and_shrink(xp, wav, ext_mode, level, outside,
                                                  untrusted_p, n, rule_fn, mode,
                                                  keep_approximation, sigma_per_level,
-                                                 thresholds)
+                                                 fixed)
         return y[p:p + n], s, s_lv, t_lv
 
-    signal, sigma, sigmas, thresholds = run(boundary)
+    signal, sigma, sigmas, used = run(boundary)
     # A second guess of what lies beyond the ends: mirror padding for "smooth-extend",
     # "smooth-extend" for a PyWavelets mode.
     alt = run("mirror" if boundary == "smooth-extend" else "smooth-extend")[0]
@@ -706,5 +706,5 @@ def wavelet_denoise(x: np.ndarray, *, sample_rate_hz: float = 1.0,
     return DenoiseResult(
         signal=signal, noise=x - signal, sigma=sigma, sigma_per_level=sigmas, level=level,
         cutoff_period_s=cutoff_for_level(level, fs), wavelet=wav.name, rule=rule_name, mode=mode,
-        boundary=boundary, thresholds=thresholds, edge_samples=edge, edge_s=edge / fs,
+        boundary=boundary, thresholds=used, edge_samples=edge, edge_s=edge / fs,
         edge_error_estimate=est, sample_rate_hz=fs)

@@ -119,6 +119,15 @@ def test_given_thresholds_shrink_a_second_record_like_the_first():
                         for s in range(4, 12)], axis=0)
     mid = slice(1000, N - 1000)
     assert rms((clean_theirs - noisy_sq)[mid]) < 0.5 * rms((clean_own - noisy_sq)[mid])
+    # the second guess behind edge_error_estimate (the other boundary) takes its own
+    # thresholds from the rule, not the first pass's
+    kw = dict(level=8, rule="sure", sigma_per_level=True, boundary="periodization")
+    res = wavelet_denoise(x[:3000], **kw)
+    alt = wavelet_denoise(x[:3000], **{**kw, "boundary": "smooth-extend"}).signal
+    floor = res.sigma / math.sqrt(2.0 ** 8)
+    e = res.edge_samples
+    want = math.sqrt(floor ** 2 + np.mean((res.signal - alt)[:e] ** 2))
+    assert res.edge_error_estimate[0] == pytest.approx(want, rel=1e-12)
     with pytest.raises(InputError, match="thresholds must be 8"):
         wavelet_denoise(x, level=8, thresholds=[0.1] * 7)
     with pytest.raises(InputError, match="thresholds must be 8"):
