@@ -51,16 +51,10 @@ def main() -> None:
     inst = sc.instrument
     truth = set_params(inst, {p: 1.2 * get_param(inst, p) for p in PERTURBED})
     runs = [simulate_run(truth, c).run for c in sc.conditions()]
-    best, result = float("inf"), None
-    for _ in range(3):
-        t0 = time.perf_counter()
-        result = fit_model(inst, runs)
-        best = min(best, time.perf_counter() - t0)
-    plain = float("inf")
-    for _ in range(3):
-        t0 = time.perf_counter()
-        fit_model(inst, runs, prior=None, n_starts=1, fit_noise=False)
-        plain = min(plain, time.perf_counter() - t0)
+    results = []
+    best = best_of(lambda: results.append(fit_model(inst, runs)))
+    result = results[-1]
+    plain = best_of(lambda: fit_model(inst, runs, prior=None, n_starts=1, fit_noise=False))
     samples = sum(r.n_samples for r in runs)
     n_free = len(default_free(inst))
     print(f"fit_model: {len(runs)} runs ({samples} samples), {n_free} free parameters, "

@@ -26,7 +26,7 @@ kind (``tec_power``, ``bias_temperature``, ``shupe_gradient``, ``shupe_rate``), 
 hidden one is missing from it.
 
 Run: ``python benchmarks/bench_independent.py [--seeds 3] [--effects magnetic,none]
-[--jobs 2]``.
+[--jobs 2] [--param heat_source.node=coil_outer --param heat_source.power=3]``.
 """
 
 from __future__ import annotations
@@ -78,12 +78,13 @@ def _absorbed(hidden: str | None, fit) -> str:
     return ""
 
 
-def one_set(hidden: str | None, seed: int) -> dict:
-    """Generate one set, fit, diagnose; the outcome."""
+def one_set(hidden: str | None, seed: int, params: dict | None = None) -> dict:
+    """Generate one set (the hidden effect's ``params`` over its defaults), fit, diagnose;
+    the outcome."""
     warnings.simplefilter("ignore")
     t0 = time.perf_counter()
     with tempfile.TemporaryDirectory() as tmp:
-        generate_set(tmp, hidden=hidden, seed=seed)
+        generate_set(tmp, hidden=hidden, seed=seed, params=params)
         runs = read_runs(tmp)
     t_gen = time.perf_counter() - t0
     fit = fit_model(independent_model(), runs)
@@ -120,7 +121,21 @@ def main(argv=None) -> None:
     ap.add_argument("--effects", default="",
                     help="comma-separated hidden effects (default: all, 'none' for clean)")
     ap.add_argument("--jobs", type=int, default=2, help="parallel sets (joblib)")
+    ap.add_argument("--param", action="append", default=[], metavar="EFFECT.KEY=VALUE",
+                    help="override a hidden effect's parameter, e.g. heat_source.power=3 "
+                         "(repeatable)")
     args = ap.parse_args(argv)
+    overrides: dict[str, dict] = {}
+    for item in args.param:
+        key, _, value = item.partition("=")
+        effect, _, name = key.partition(".")
+        if not (effect and name and value) or effect not in HIDDEN_EFFECTS:
+            ap.error(f"--param {item!r}: expected EFFECT.KEY=VALUE with EFFECT one of "
+                     + ", ".join(HIDDEN_EFFECTS))
+        try:
+            overrides.setdefault(effect, {})[name] = float(value)
+        except ValueError:
+            overrides.setdefault(effect, {})[name] = value
     effects = ([e.strip() for e in args.effects.split(",") if e.strip()] if args.effects
                else ["none", *HIDDEN_EFFECTS])
     cases = [(None if e == "none" else e, s) for e in effects for s in range(1, args.seeds + 1)]
@@ -131,7 +146,7 @@ def main(argv=None) -> None:
     # Each set is printed as it finishes (a run of ~1.5 h shows its progress as it goes);
     # the summary below is in the order of the cases.
     for r in Parallel(n_jobs=args.jobs, return_as="generator_unordered")(
-            delayed(one_set)(h, s) for h, s in cases):
+            delayed(one_set)(h, s, overrides.get(h)) for h, s in cases):
         rows.append(r)
         print(f"{r['hidden']:26s} {r['seed']:4d}  {'yes' if r['ok'] else 'NO ':3s} "
               f"{r['structure']:13s} {r['top']}{' (tied)' if r['tied'] else ''} "

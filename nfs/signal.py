@@ -5,7 +5,14 @@ from __future__ import annotations
 import numpy as np
 from scipy.signal import lfilter
 
-__all__ = ["first_order_lag"]
+__all__ = ["first_order_lag", "uniform_steps"]
+
+
+def uniform_steps(dt: np.ndarray) -> bool:
+    """True when every step of ``dt`` is within 1e-9 of the first (np.allclose's relative test
+    without its overhead: it runs for every thermometer of every residual evaluation of a
+    fit)."""
+    return bool(np.abs(dt - dt[0]).max() <= 1e-9 * abs(dt[0]))
 
 
 def first_order_lag(x: np.ndarray, time_s: np.ndarray, tau_s: float) -> np.ndarray:
@@ -30,9 +37,7 @@ def first_order_lag(x: np.ndarray, time_s: np.ndarray, tau_s: float) -> np.ndarr
     if tau_s == 0 or x.shape[-1] < 2:
         return x.copy()
     dt = np.diff(np.asarray(time_s, dtype=float))
-    # uniform within 1e-9 of the first step (np.allclose's test, without its overhead: this
-    # runs for every thermometer of every residual evaluation of a fit)
-    if np.abs(dt - dt[0]).max() <= 1e-9 * abs(dt[0]):
+    if uniform_steps(dt):
         a = np.exp(-dt[0] / tau_s)
         # the filter's state in equilibrium at x[0] is x[0] itself (y = z, z' = (1-a) x + a y;
         # scipy.signal.lfilter_zi gives exactly 1 for this filter, at 20x the cost)

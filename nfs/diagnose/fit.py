@@ -422,10 +422,6 @@ def _tec_identifiability(inst: Instrument, data: list[ThermalRun], free: Sequenc
     return out
 
 
-#: Parameter vectors solved in one stack by the thermal stage's Jacobian (about 2.5 MB of
-#: state per vector for 7 runs of 2.5 h at 10 s knots).
-_BATCH = 32
-
 _NOISE_FIELDS = ("arw_deg_per_rth_h", "bias_instability_dph", "rrw_deg_per_h_per_rth_h")
 
 
@@ -598,15 +594,11 @@ def fit_model(inst: Instrument, runs: Sequence[Run], free: Iterable[str] | None 
                      for nm, col in THERMOMETERS.items()}
 
             def fun_many(xs) -> list[np.ndarray]:
-                # the parameter vectors of a Jacobian solved as one stack (thermal_residual),
-                # at most _BATCH at a time to bound the stack's memory
-                out = []
-                for i in range(0, len(xs), _BATCH):
-                    models = [set_params(base, dict(zip(sp, x))) for x in xs[i:i + _BATCH]]
-                    out += [np.concatenate([a / floor[c] for c, arrs in parts.items()
-                                            for a in arrs])
-                            for parts in thermal_residual_parts(models, data)]
-                return out
+                # the parameter vectors of a Jacobian solved as one stack (thermal_residual)
+                models = [set_params(base, dict(zip(sp, x))) for x in xs]
+                return [np.concatenate([a / floor[c] for c, arrs in parts.items()
+                                        for a in arrs])
+                        for parts in thermal_residual_parts(models, data)]
 
             current = stage("thermal", lambda x: fun_many([x])[0], base, sp, batch=fun_many)
             unident.update(_tec_identifiability(current, data, sp))

@@ -66,10 +66,12 @@ class StageReport:
     noise); 1: the stated noise levels held."""
 
 
-def forward_jacobian(batch, x: np.ndarray, lb: np.ndarray, ub: np.ndarray) -> np.ndarray:
-    """d r / d x by forward differences, the n + 1 evaluations in one call of ``batch``.
+def forward_jacobian(batch, x: np.ndarray, lb: np.ndarray, ub: np.ndarray,
+                     f0: np.ndarray | None = None) -> np.ndarray:
+    """d r / d x by forward differences, the n (+ 1) evaluations in one call of ``batch``.
 
-    ``batch(xs)`` returns the residual at each of the parameter vectors ``xs``.  The steps
+    ``batch(xs)`` returns the residual at each of the parameter vectors ``xs``; ``f0``, the
+    residual at ``x`` when the caller has it (then only the n moved vectors are solved).  The steps
     are those of :func:`scipy.optimize.least_squares`' ``jac="2-point"`` (relative step
     sqrt(eps) max(1, |x|), sign of x; turned back where it would leave the bounds; the step
     taken as the difference actually represented), so the Jacobian is the one scipy would
@@ -83,10 +85,13 @@ def forward_jacobian(batch, x: np.ndarray, lb: np.ndarray, ub: np.ndarray) -> np
     h = np.where(violated & fitting, -h, h)
     h = np.where(~fitting & (upper >= lower), upper, h)
     h = np.where(~fitting & (upper < lower), -lower, h)
-    xs = [x] + [x + np.where(np.arange(x.size) == i, h[i], 0.0) for i in range(x.size)]
-    rows = batch(xs)
-    dx = np.array([xs[i + 1][i] - x[i] for i in range(x.size)])
-    return (np.column_stack(rows[1:]) - rows[0][:, None]) / dx
+    xs = [x + np.where(np.arange(x.size) == i, h[i], 0.0) for i in range(x.size)]
+    if f0 is None:
+        f0, *moved = batch([x] + xs)
+    else:
+        moved = batch(xs)
+    dx = np.array([xs[i][i] - x[i] for i in range(x.size)])
+    return (np.column_stack(moved) - np.asarray(f0)[:, None]) / dx
 
 
 def solve_stage(name: str, fun, x0: np.ndarray, lb: np.ndarray, ub: np.ndarray,
@@ -116,8 +121,15 @@ def solve_stage(name: str, fun, x0: np.ndarray, lb: np.ndarray, ub: np.ndarray,
     m = r0.size
     use_prior = prior is not None and bool(prior.active.any())
 
-    def total(x):
+    last: list = [None, None]   # the last data rows least_squares asked for, at x
+
+    def data_rows(x):
         r = fun(x)
+        last[:] = [np.array(x, dtype=float), r]
+        return r
+
+    def total(x):
+        r = data_rows(x)
         return np.concatenate([r, prior.rows(x)]) if use_prior else r
 
     def jacobian(scale: float):
@@ -126,7 +138,9 @@ def solve_stage(name: str, fun, x0: np.ndarray, lb: np.ndarray, ub: np.ndarray,
             return "2-point"
 
         def jac(x):
-            j = forward_jacobian(batch, x, lb, ub) / scale
+            # least_squares asks for the Jacobian where it has just evaluated the residual
+            f0 = last[1] if last[0] is not None and np.array_equal(last[0], x) else None
+            j = forward_jacobian(batch, x, lb, ub, f0) / scale
             return np.vstack([j, prior.jacobian()]) if use_prior else j
         return jac
 
@@ -152,7 +166,7 @@ def solve_stage(name: str, fun, x0: np.ndarray, lb: np.ndarray, ub: np.ndarray,
         noise_scale = math.sqrt(_chi2(res, m))
 
         def scaled(x):
-            return np.concatenate([fun(x) / noise_scale, prior.rows(x)])
+            return np.concatenate([data_rows(x) / noise_scale, prior.rows(x)])
 
         res = least_squares(scaled, res.x, jac=jacobian(noise_scale), bounds=(lb, ub),
                             method="trf", x_scale="jac", max_nfev=max_nfev)

@@ -36,12 +36,18 @@ from ..experiment import conditions_from_run, thermal_effects, thermal_power
 from ..instrument import Instrument
 from ..io.measurement import Run
 from ..sensors import thermometer_reading
+from ..signal import uniform_steps
 
-__all__ = ["THERMAL_COLUMNS", "ThermalRun", "Knots", "prepare_thermal", "simulate_knots",
+__all__ = ["MAX_STACK", "THERMAL_COLUMNS", "ThermalRun", "Knots", "prepare_thermal", "simulate_knots",
            "readings", "thermal_residual_parts", "require_columns", "decimation_step",
            "window_mean"]
 
 _ZERO_RNG = np.random.default_rng(0)   # never drawn from: the readings are noise-free
+
+#: Instruments solved in one stack by :func:`thermal_residual_parts` (more go in turns): the
+#: stack holds node temperatures, drives and rates of every knot, run and instrument, 3 x 8 B
+#: x knots x runs x nodes per instrument, 1.1 MB for 7 runs of 2.5 h at 10 s knots and 7 nodes.
+MAX_STACK = 32
 
 THERMAL_COLUMNS = ("time_s", "position_deg", "moving") + tuple(THERMOMETERS.values())
 
@@ -112,7 +118,7 @@ def prepare_thermal(run: Run, decimate_s: float) -> ThermalRun:
         measured[col] = y
         mask[col] = np.isfinite(y)
     dt = np.diff(t)
-    uniform = knots.size > 2 and bool(np.abs(dt - dt[0]).max() <= 1e-9 * abs(dt[0]))
+    uniform = knots.size > 2 and uniform_steps(dt)
     return ThermalRun(run=run, t0_c=cond.start_temperature_c, time_s=t, knots=knots,
                        t_knot=t_knot, moving_knot=window_mean(moving, k),
                        ambient_knot=window_mean(amb, k), measured=measured, mask=mask,
@@ -212,7 +218,7 @@ def simulate_knots(insts: Sequence[Instrument], data: Sequence[ThermalRun]
     for i, rd in enumerate(data):
         dt = np.diff(rd.t_knot)
         h = float(dt[0])
-        if np.abs(dt - h).max() <= 1e-9 * abs(h):
+        if uniform_steps(dt):
             groups.setdefault(round(h, 9), []).append(i)
             continue
         for s, inst in enumerate(insts):
@@ -228,8 +234,10 @@ def simulate_knots(insts: Sequence[Instrument], data: Sequence[ThermalRun]
     b_pow_t = np.stack([b[:, 1:].T for _, b in ab])              # (S, n, n)
     p_const = np.stack([inst.network.node_power_w for inst in insts])
     effects = [thermal_effects(inst) for inst in insts]
-    if any(len(e) != len(effects[0]) for e in effects[1:]):
-        raise NfsError("simulate_knots: the instruments must share their thermal effects")
+    kinds = [[(e.name, j) for e, j, _ in eff] for eff in effects]
+    if any(k != kinds[0] for k in kinds[1:]):
+        raise NfsError("simulate_knots: the instruments must share their thermal effects, "
+                       "each on the same node")
     for h, members in groups.items():
         mats = [step_matrices(a, b, h) for a, b in ab]
         step = np.stack([m.phi_minus_i.T for m in mats])         # (S, n, n)
@@ -264,15 +272,20 @@ def simulate_knots(insts: Sequence[Instrument], data: Sequence[ThermalRun]
                 continue
             if varying is None:
                 varying = np.zeros((n_k, n_s, r, n))
+            contrib: dict[str, np.ndarray] = {}   # parameters -> the effect's power (knot, run)
             for s in range(n_s):
                 params = effects[s][k_e][2]
-                for q, i in enumerate(members):
-                    rd = data[i]
-                    m = rd.t_knot.size
-                    p = np.broadcast_to(np.asarray(e.spec.function(
-                        rd.t_knot, None, rd.moving_knot, **params), dtype=float), (m,))
-                    varying[:m, s, q, j] += p
-                    varying[m:, s, q, j] += p[-1]
+                key = repr(sorted(params.items()))
+                if key not in contrib:   # (in a fit's stack: once, the same in every instrument)
+                    c = np.empty((n_k, r))
+                    for q, i in enumerate(members):
+                        rd = data[i]
+                        m = rd.t_knot.size
+                        c[:m, q] = np.broadcast_to(np.asarray(e.spec.function(
+                            rd.t_knot, None, rd.moving_knot, **params), dtype=float), (m,))
+                        c[m:, q] = c[m - 1, q]
+                    contrib[key] = c
+                varying[:, s, :, j] += contrib[key]
         drive = (amb[:, None, :, None] * g_amb[None, :, None, :]
                  + (p_const[:, None, :] @ g_pow)[None, :, :, :])
         if varying is not None:
@@ -385,9 +398,11 @@ def thermal_residual_parts(insts: Sequence[Instrument], data: Sequence[ThermalRu
     ``out[s][column][run]`` [K]."""
     insts = list(insts)
     parts = [{c: [] for c in THERMOMETERS.values()} for _ in insts]
-    knots = simulate_knots(insts, data)
-    for i, rd in enumerate(data):
-        for s, model in enumerate(readings(insts, rd, [k[i] for k in knots])):
-            for col, y in model.items():
-                parts[s][col].append((y - rd.measured[col])[rd.mask[col]])
+    for lo in range(0, len(insts), MAX_STACK):
+        chunk = insts[lo:lo + MAX_STACK]
+        knots = simulate_knots(chunk, data)
+        for i, rd in enumerate(data):
+            for s, model in enumerate(readings(chunk, rd, [k[i] for k in knots])):
+                for col, y in model.items():
+                    parts[lo + s][col].append((y - rd.measured[col])[rd.mask[col]])
     return parts

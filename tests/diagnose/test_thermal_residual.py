@@ -17,6 +17,7 @@ import pytest
 from scipy.optimize import least_squares
 from scipy.optimize._numdiff import approx_derivative
 
+import thermal
 from independent import generator as g
 from nfs.diagnose.fit import default_free
 from nfs.diagnose.params import get_param, set_params
@@ -24,6 +25,8 @@ from nfs.diagnose.stage import forward_jacobian, solve_stage
 from nfs.diagnose.thermal_residual import (_StatefulLaw, prepare_thermal, simulate_knots,
                                            thermal_residual_parts)
 from nfs.effects import make_effect
+from nfs.errors import NfsError
+from nfs.experiment import thermal_power
 from nfs.instrument import load_instrument
 from nfs.io.measurement import read_runs
 
@@ -57,6 +60,30 @@ def test_a_stack_gives_each_instrument_its_own_bits(runs, models):
         _same(parts, thermal_residual_parts([m], data)[0])
     # and the models differ: the stack did not hand one answer to all
     assert not np.array_equal(stacked[0]["temp_fog_c"][0], stacked[1]["temp_fog_c"][0])
+
+
+def test_stacked_march_is_thermal_simulate(runs, models):
+    """Oracle: thermal.simulate of each instrument on the knots (the TEC law through
+    nfs.experiment.thermal_power), to 1e-9 K."""
+    data = [prepare_thermal(r, 10.0) for r in runs]
+    knots = simulate_knots(models[:4], data)
+    for s, m in enumerate(models[:4]):
+        for rd, k in zip(data, knots[s]):
+            power, _, _ = thermal_power(m, rd.t_knot, rd.moving_knot)
+            ref = thermal.simulate(m.network, rd.t_knot, ambient_c=rd.ambient_knot,
+                                   initial_c=rd.t0_c, power_w=power)
+            assert np.max(np.abs(k.temperature_c - ref.temperature_c)) < 1e-9
+            assert np.max(np.abs(k.rate_c_per_s - ref.rate_c_per_s)) < 1e-9
+
+
+def test_a_stack_must_share_its_effects_nodes(runs, models):
+    """Instruments whose thermal effects sit on other nodes cannot share a march."""
+    data = [prepare_thermal(r, 10.0) for r in runs]
+    inst = models[0]
+    a, b = (inst.with_effects(list(inst.effects) + [make_effect(
+        "heat_source", {"node": node, "power": 1.0})]) for node in ("board", "housing"))
+    with pytest.raises(NfsError, match="same node"):
+        simulate_knots([a, b], data)
 
 
 def test_non_uniform_knots_are_solved_run_by_run(runs, models):
@@ -146,6 +173,7 @@ def test_forward_jacobian_is_scipys_two_point():
     lb, ub = np.array([0.0, 0.1, -1.0, 0.0]), np.array([5.0, 0.7, 1.0, 10.0])
     want = approx_derivative(fun, x, method="2-point", bounds=(lb, ub))
     np.testing.assert_array_equal(forward_jacobian(batch, x, lb, ub), want)
+    np.testing.assert_array_equal(forward_jacobian(batch, x, lb, ub, f0=fun(x)), want)
 
 
 def test_solve_stage_with_a_batch_lands_where_scipy_lands():
