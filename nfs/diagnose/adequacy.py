@@ -52,8 +52,9 @@ so a difference-based estimate comes out far below the true per-sample error.  T
 structure is adequate when every channel is within :data:`ADEQUACY_FACTOR` (1.5x) of its
 floor and no structural alternative beats the model.
 
-:func:`beats_structure` says whether a thermal candidate's CV RMS beats the best
-structural alternative (the diagnosis names a thermal candidate only then), and
+:func:`beats_structure` says whether a thermal candidate beats the model and the best
+structural alternative, pooled and run by run (the diagnosis names a thermal candidate only
+then), and
 :func:`one_sided` tests a physically one-sided coefficient (heat power >= 0 W, lag >= 0 s).
 """
 
@@ -66,7 +67,7 @@ from typing import Any, Callable, Sequence
 
 import numpy as np
 from scipy.optimize import least_squares, lsq_linear
-from scipy.stats import norm
+from scipy.stats import norm, ttest_1samp
 
 from ..docfields import document_fields
 from ..effects.thermometer import THERMOMETERS
@@ -79,13 +80,16 @@ from .params import fit_bounds, get_param, set_params
 from .structure import StructuralAlternative, structural_alternatives
 
 __all__ = ["AlternativeScore", "ChannelFit", "ThermalAdequacy", "OneSided", "thermal_adequacy",
-           "beats_structure", "one_sided", "ADEQUACY_FACTOR", "CV_DROP", "STARTUP_S",
+           "beats_structure", "structure_rival", "MODEL_RIVAL", "one_sided", "ADEQUACY_FACTOR", "BEATS_ALPHA", "CV_DROP",
+           "STARTUP_S",
            "DEFAULT_DECIMATE_S", "REFINE_TOP", "STAGES"]
 
 #: A channel is adequate when its residual RMS is within this factor of its noise floor.
 ADEQUACY_FACTOR = 1.5
 #: Relative drop of the CV RMS an alternative must exceed to beat the model.
 CV_DROP = 0.05
+#: Level of the one-sided paired test by which a thermal candidate beats the structure.
+BEATS_ALPHA = 0.05
 #: End of the start-up stage [s] after power-on (docs/physics.md section 1: 30-90 min).
 STARTUP_S = 3600.0
 #: Default spacing of the residual grid [s].
@@ -163,6 +167,9 @@ class AlternativeScore:
     are those of the linearised residual)."""
     instrument: Instrument = field(repr=False, compare=False)
     """The fitted alternative instrument (the model's parameters moved with it)."""
+    cv_sse_by_run: tuple[float, ...] = ()
+    """Held-out squared residual summed over each run's knots, with the alternative [K^2]
+    (the pairs :func:`beats_structure` tests)."""
 
     @property
     def cv_drop(self) -> float:
@@ -213,6 +220,8 @@ class ThermalAdequacy:
     """Wall time [s]."""
     n_evaluations: int = 0
     """Thermometer residual evaluations (network solves of all runs) it took."""
+    cv_sse_by_run: tuple[float, ...] = ()
+    """The model's held-out squared residual summed over each run's knots [K^2]."""
 
     @property
     def worst(self) -> ChannelFit:
@@ -513,7 +522,8 @@ def _score(prob: _Problem, model: _Model, alt: StructuralAlternative, refine: bo
         name=alt.name, kind=alt.kind, description=alt.description, params=params,
         cv_rms_before_k=cv_model, cv_rms_after_k=cv, rms_before_k=rms_model[0],
         rms_after_k=prob.rms(r_f), cv_channels_before_k=rms_model[1],
-        cv_channels_after_k=prob.rms(held), refined=refine, instrument=final)
+        cv_channels_after_k=prob.rms(held), refined=refine, instrument=final,
+        cv_sse_by_run=tuple(_sse([h]) for h in held))
     return score, u_fit
 
 
@@ -661,22 +671,49 @@ def thermal_adequacy(inst: Instrument, runs: Sequence[Run],
     return ThermalAdequacy(channels=channels, factor=factor, adequate=adequate,
                            cv_rms_k=cv_model, alternatives=tuple(scores), best=best,
                            model=model.inst, message=message,
-                           time_s=time.perf_counter() - t_start, n_evaluations=prob.n_eval)
+                           time_s=time.perf_counter() - t_start, n_evaluations=prob.n_eval,
+                           cv_sse_by_run=tuple(_sse([h]) for h in held))
 
 
-def beats_structure(cv_rms_k: float, adequacy: ThermalAdequacy, margin: float = 0.0) -> bool:
-    """Does a thermal candidate with CV RMS ``cv_rms_k`` [K] beat every structural alternative?
+#: The name :func:`structure_rival` gives the model itself.
+MODEL_RIVAL = "the model"
 
-    True when ``cv_rms_k < (1 - margin) * min(CV RMS of the model, of every structural
-    alternative)``: the diagnosis names a thermal candidate only then.  The candidate's CV
-    RMS must be on the same residual (the three thermometers at the knots, pooled,
-    leave-one-start-temperature-out); :func:`effect_alternative` scores a candidate that way.
+
+def structure_rival(candidate: AlternativeScore, adequacy: ThermalAdequacy,
+                    margin: float = 0.0, alpha: float = BEATS_ALPHA) -> str | None:
+    """The rival a thermal candidate does not beat, or None when it beats them all.
+
+    The rival is whichever of the model (:data:`MODEL_RIVAL`) and its structural
+    alternatives has the lowest CV RMS.  The candidate beats it when (a) its CV RMS is below
+    ``(1 - margin)`` times the rival's and (b) its held-out squared residual is smaller run
+    by run: the paired per-run differences are tested one-sided against zero with a t test
+    at ``alpha``, runs being the independent units (as the drift candidates' run-level
+    statistics; a rank test would need 5 runs to reach 5 % at all).  A pooled CV RMS a
+    fraction of a percent lower, won on some runs and lost on others, is a tie, not a named
+    effect.  The candidate's residual must be the same as the alternatives' (the three
+    thermometers at the knots, leave-one-start-temperature-out); :func:`effect_alternative`
+    scores a candidate that way.
     """
-    if not math.isfinite(cv_rms_k):
-        return False
-    ref = min([adequacy.cv_rms_k] + [s.cv_rms_after_k for s in adequacy.alternatives
-                                     if s.kind != "effect"])
-    return cv_rms_k < (1.0 - margin) * ref
+    refs = [(adequacy.cv_rms_k, adequacy.cv_sse_by_run, MODEL_RIVAL)] + [
+        (s.cv_rms_after_k, s.cv_sse_by_run, s.name) for s in adequacy.alternatives
+        if s.kind != "effect"]
+    ref_cv, ref_sse, rival = min(refs, key=lambda r: r[0])
+    if not (math.isfinite(candidate.cv_rms_after_k)
+            and candidate.cv_rms_after_k < (1.0 - margin) * ref_cv):
+        return rival
+    d = np.asarray(ref_sse, dtype=float) - np.asarray(candidate.cv_sse_by_run, dtype=float)
+    if d.size != len(candidate.cv_sse_by_run) or d.size < 2 or not np.any(d > 0):
+        return rival
+    if np.all(d > 0) and np.ptp(d) == 0:   # no spread: the t statistic is undefined
+        return None
+    return None if ttest_1samp(d, 0.0, alternative="greater").pvalue < alpha else rival
+
+
+def beats_structure(candidate: AlternativeScore, adequacy: ThermalAdequacy,
+                    margin: float = 0.0, alpha: float = BEATS_ALPHA) -> bool:
+    """Does a thermal candidate beat the model and every structural alternative, pooled and
+    run by run? (:func:`structure_rival` is None)."""
+    return structure_rival(candidate, adequacy, margin, alpha) is None
 
 
 # ---------------------------------------------------------------------------------------------

@@ -68,7 +68,8 @@ is listed under ``not_tried`` with the model parameter it duplicates.  A thermal
 must also beat the generic structural alternatives of the network (one more node, a free
 link, a thermometer that sits elsewhere; :mod:`nfs.diagnose.structure`), scored with it on
 the same leave-one-start-temperature-out thermometer residual within its physical bounds
-(a power >= 0 W, a lag >= 0 s; :func:`nfs.diagnose.adequacy.thermal_adequacy`): a named
+(a power >= 0 W, a lag >= 0 s; :func:`nfs.diagnose.adequacy.thermal_adequacy`), pooled and
+run by run (:func:`nfs.diagnose.adequacy.beats_structure`): a named
 heat source that only fits because the network is wrong is then not significant, and the
 verdict says the thermal structure does not fit, where, and what to change.
 
@@ -106,7 +107,7 @@ import numpy as np
 from ..errors import NfsError
 from ..instrument import Instrument
 from ..io.measurement import Run
-from .adequacy import beats_structure, thermal_adequacy
+from .adequacy import MODEL_RIVAL, structure_rival, thermal_adequacy
 from .acc_design import AccRun, acc_grid_columns, model_acc_paths, prepare_acc
 from .apply import apply_candidate
 from .candidates import SHAPE_GRID, Candidate, candidates
@@ -423,7 +424,7 @@ def diagnose(inst: Instrument, runs: Sequence[Run], *, n_boot: int = 20, alpha: 
                 model, c.effect, c.target) for c in thermal_cands]
 
         adequacy = thermal_adequacy(inst, runs, alternatives)
-        effect_cv = {a.name: a.cv_rms_after_k for a in adequacy.alternatives
+        effect_alt = {a.name: a for a in adequacy.alternatives
                      if a.kind == "effect"}
     ts = thermal_design(inst, runs, decimate_s) if thermal_cands else None
     if ts is not None:
@@ -459,10 +460,14 @@ def diagnose(inst: Instrument, runs: Sequence[Run], *, n_boot: int = 20, alpha: 
                 s.score, beyond_structure_p=float(holm_beyond[s.candidate.label])))
                 if s.candidate.label in beyond else s for s in scored]
         if adequacy is not None:  # a thermal candidate must also beat the structure's rivals
-            scored = [s if s.candidate.channel != "thermometers" or not s.score.significant
-                      else replace(s, score=replace(s.score, significant=beats_structure(
-                          effect_cv.get(s.candidate.label, math.nan), adequacy)))
-                      for s in scored]
+            for i, s in enumerate(scored):
+                if s.candidate.channel != "thermometers" or not s.score.significant:
+                    continue
+                alt = effect_alt.get(s.candidate.label)
+                r = MODEL_RIVAL if alt is None else structure_rival(alt, adequacy)
+                scored[i] = replace(s, score=replace(
+                    s.score, significant=r is None,
+                    structure_tie=None if r in (None, MODEL_RIVAL) else r))
     # Thermometers are upstream of the drift: significant thermometer candidates rank first;
     # within each group, by the relative drop of the CV RMS.
     scored.sort(key=lambda s: (not (s.score.significant and s.score.channel == "thermometers"),

@@ -63,6 +63,10 @@ class CandidateScore:
     """A drift candidate's p-value with a rate term on every node in the model, Holm over the
     drift candidates (:mod:`nfs.diagnose.drift_structure`); above alpha the candidate is
     tied with that alternative; None when not checked."""
+    structure_tie: str | None = None
+    """A thermal candidate significant against the model that does not beat this structural
+    alternative pooled and run by run (:func:`nfs.diagnose.adequacy.structure_rival`): the
+    runs cannot tell the two apart, and the candidate is not significant; None otherwise."""
 
     @property
     def cv_drop(self) -> float:
@@ -81,7 +85,8 @@ class CandidateScore:
                 "n_grid": self.n_grid, "inclusion_frequency": self.inclusion_frequency,
                 "heading_rmse_before_deg": self.heading_rmse_before_deg,
                 "heading_rmse_after_deg": self.heading_rmse_after_deg,
-                "beyond_structure_p": self.beyond_structure_p}
+                "beyond_structure_p": self.beyond_structure_p,
+                "structure_tie": self.structure_tie}
 
 
 @document_fields
@@ -131,17 +136,27 @@ class Diagnosis:
         if ts is not None and not ts.adequate and not any(
                 s.channel == "thermometers" for s in sig):
             parts.append("thermal structure: " + ts.message)
-        if not sig:
-            parts.append("no candidate is significant: the missing effect (if any) is not in "
-                         "the library; see 'unexplained'")
-            return "; ".join(parts)
-
         def name(s):
             return s.effect if s.target is None else f"{s.effect}:{s.target}"
 
         def coef(s):
             return ", ".join(f"{k} = {v:.3g} [{s.interval[k][0]:.3g}, {s.interval[k][1]:.3g}]"
                              for k, v in s.coefficient.items() if k in s.interval)
+
+        # thermal candidates the runs cannot tell from a change of the network's structure
+        ties = [s for s in self.ranking if s.structure_tie]
+        tie_text = ("tie: " + "; ".join(
+            f"{name(s)} ({coef(s)}; Holm p {s.holm_p:.2g} against the model) fits the "
+            f"thermometers no better, run by run, than {s.structure_tie}" for s in ties)
+            + ": these runs cannot tell " + ("it" if len(ties) == 1 else "them")
+            + " from that change of the thermal structure") if ties else ""
+        if not sig:
+            if tie_text:
+                parts.append(tie_text)
+            parts.append("no candidate is significant: the missing effect (if any) is not in "
+                         "the library" + (" or is tied with a structural alternative"
+                                          if ties else "") + "; see 'unexplained'")
+            return "; ".join(parts)
 
         own = [s for s in sig if s.explained_by is None]
         parts.append("add " + "; ".join(f"{name(s)} ({coef(s)}; Holm p {s.holm_p:.2g}, CV "
@@ -151,6 +166,8 @@ class Diagnosis:
         tied = [name(s) for s in own if ds is not None and name(s) in ds.tied]
         if tied:
             parts.append("tie: " + ds.tie_message(tied))
+        if tie_text:
+            parts.append(tie_text)
         by = [s for s in sig if s.explained_by is not None]
         if by:
             parts.append(f"also significant alone but explained by {by[0].explained_by}: "

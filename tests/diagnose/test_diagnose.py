@@ -28,7 +28,12 @@ divided by the floor, measured with seed 11:
 - polarization_ripple A_p = 0.005 deg/h, T_p = 5 K: 0.52x
 - heat_source 1 W at coil_inner (a thermal effect), after the model's own thermal fit:
   0.38x on the FOG thermometer (floor 0.0206 K: noise 0.01 K and the 0.0625 K quantum),
-  0.15x on the accelerometers' thermometers, 0.3x on the drift
+  0.15x on the accelerometers' thermometers, 0.3x on the drift.  Significant against the
+  model, but a structural alternative (a node inserted between coil_outer and housing, in
+  effect a weaker coil-to-housing path) fits the thermometers as well: held-out CV RMS
+  0.020591 against 0.020601 K on seed 11, won on 6 runs of 7, run-level paired t test
+  p = 0.076.  The diagnosis reports the tie instead of naming it (it did name it, on that
+  0.05 % margin, before the run-by-run comparison).
 
 Significance is run-level (nfs.diagnose.diagnose: a test clustered by run with run-level
 degrees of freedom, the shape grid paid for by Bonferroni, Holm over all candidates at 5 %,
@@ -192,10 +197,30 @@ def _check_top(d, name):
     return top
 
 
+def _check_thermal_tie(d, name):
+    """A hidden thermal effect: significant against the model (Holm), its coefficient's
+    interval holds the truth, and tied with a structural alternative that fits the
+    thermometers as well run by run, which the verdict says (so it is not named)."""
+    params, target = HIDDEN[name]
+    label = f"{name}:{target}"
+    hidden = next(s for s in d.ranking if (s.effect, s.target) == (name, target))
+    assert hidden.holm_p <= 0.05 and hidden.cv_rms_after < (1 - CV_DROP) * hidden.cv_rms_before
+    assert hidden.structure_tie and not hidden.significant, hidden
+    for p, v in params.items():
+        if p in hidden.interval:
+            lo, hi = hidden.interval[p]
+            assert lo - 0.1 * abs(v) <= v <= hi + 0.1 * abs(v), (p, v, hidden.interval[p])
+    assert f"tie: {label} (" in d.verdict and hidden.structure_tie in d.verdict
+    assert not any(s.channel == "thermometers" for s in d.significant), d.verdict
+
+
 @pytest.mark.parametrize("name", list(HIDDEN))
 @pytest.mark.parametrize("seed", SEEDS)
 def test_hidden_effect_is_top_significant_candidate(name, seed):
-    _check_top(_diagnosed(name, seed)[3], name)
+    if name in THERMAL:
+        _check_thermal_tie(_diagnosed(name, seed)[3], name)
+    else:
+        _check_top(_diagnosed(name, seed)[3], name)
 
 
 @pytest.mark.slow
@@ -211,7 +236,7 @@ def test_turn_on_transient_coefficients(diagnoses):
 
 def test_thermal_candidate_scored_on_thermometers(diagnoses):
     d = diagnoses["heat_source"]
-    top = d.ranking[0]
+    top = next(s for s in d.ranking if (s.effect, s.target) == ("heat_source", "coil_inner"))
     assert top.channel == "thermometers"
     assert abs(top.coefficient["power"] - 1.0) < 0.15
     # a heat source at a node whose power the model already fits has the same signature

@@ -121,7 +121,7 @@ def test_heat_source_candidate_is_physical_and_not_named(own):
     assert hs.params["effects.heat_source:coil_outer.power"] >= 0.0
     assert own.best.kind != "effect"
     assert not hs.beats_model
-    assert not beats_structure(hs.cv_rms_after_k, own, margin=0.05)
+    assert not beats_structure(hs, own, margin=0.05)
 
 
 def test_hidden_link_is_found(hidden_link):
@@ -146,9 +146,20 @@ def test_hidden_link_is_found(hidden_link):
         assert after < 0.8 * c.cv_rms_k, stage
     assert ad.best.cv_rms_after_k < 1.5 * FLOOR_K
     assert "FOG thermometer" in ad.message and "link coil_inner-electronics" in ad.message
-    # a thermal candidate is named only when it beats the best alternative
-    assert not beats_structure(ad.cv_rms_k * 0.9, ad)
-    assert beats_structure(0.9 * ad.best.cv_rms_after_k, ad)
+    # a thermal candidate is named only when it beats the best alternative, pooled and run
+    # by run (a paired one-sided t test over the runs)
+    best, runs_sse = ad.best, np.asarray(ad.best.cv_sse_by_run)
+    assert len(runs_sse) == len(ad.cv_sse_by_run) >= 4
+    better = dataclasses.replace(best, cv_rms_after_k=0.9 * best.cv_rms_after_k,
+                                 cv_sse_by_run=tuple(0.81 * runs_sse))
+    assert beats_structure(better, ad)
+    assert not beats_structure(dataclasses.replace(better, cv_rms_after_k=0.9 * ad.cv_rms_k),
+                               ad)
+    # lower pooled, but won on one run and lost on the others: a tie
+    mixed = runs_sse * 1.01
+    mixed[int(np.argmax(runs_sse))] *= 0.5
+    tie = dataclasses.replace(better, cv_sse_by_run=tuple(mixed))
+    assert not beats_structure(tie, ad)
 
 
 def _exact_cv_k(model, runs, extra):
