@@ -134,20 +134,17 @@ def _cmd_table(args) -> int:
 
 def _table_settings(args, settings):
     """The scenario's ``[compensation]`` with the command line's overrides, checked."""
-    if args.budget is not None:
-        if args.budget < 1:
-            raise NfsError(f"--budget must be >= 1, got {args.budget}")
-        settings = dataclasses.replace(settings, budget=args.budget)
-    if args.repeats is not None:
-        settings = dataclasses.replace(settings, test_repeats=args.repeats)
-    if args.n_jobs is not None:
-        settings = dataclasses.replace(settings, n_jobs=args.n_jobs)
-    if args.tuner_seeds is not None:
-        if args.tuner_seeds < 1:
-            raise NfsError(f"--tuner-seeds must be >= 1, got {args.tuner_seeds}")
-        settings = dataclasses.replace(settings, tuner_seeds=args.tuner_seeds)
-    if args.features_mode is not None:
-        settings = dataclasses.replace(settings, features_mode=args.features_mode)
+    # option -> (field of the settings, smallest value allowed or None)
+    overrides = {"budget": ("budget", 1), "repeats": ("test_repeats", None),
+                 "n_jobs": ("n_jobs", None), "tuner_seeds": ("tuner_seeds", 1),
+                 "features_mode": ("features_mode", None)}
+    for option, (name, least) in overrides.items():
+        value = getattr(args, option)
+        if value is None:
+            continue
+        if least is not None and value < least:
+            raise NfsError(f"--{option.replace('_', '-')} must be >= {least}, got {value}")
+        settings = dataclasses.replace(settings, **{name: value})
     return settings
 
 
