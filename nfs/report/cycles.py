@@ -20,7 +20,8 @@ from ..io.atomic import atomic_write_text
 from .intervals import json_number
 from .reference import CHENG2015_TABLE2_MSD, TAO2019_BIAS_STABILITY
 
-__all__ = ["cycle_table_markdown", "cycle_table_json", "write_cycle_study", "intervals_csv"]
+__all__ = ["cycle_table_markdown", "cycle_table_json", "write_cycle_study", "intervals_csv",
+           "write_table_files"]
 
 _METRICS = (("mae_dph", "MAE [deg/h]", 4), ("std_dph", "STD [deg/h]", 4),
             ("rmse_dph", "RMSE [deg/h]", 4), ("bias_stability_dph", "bias stability [deg/h]", 5),
@@ -193,22 +194,28 @@ def intervals_csv(rows: list[dict], skip=()) -> str:
     return buf.getvalue()
 
 
-def write_cycle_study(study, out_dir, *, json_path=None, title: str = "",
-                      provenance: dict | None = None) -> list[Path]:
-    """Write drift_table.md, .csv, .json and report.md into ``out_dir`` (and the JSON also
-    to ``json_path``), each atomically.  Returns the paths written."""
+def write_table_files(out_dir, files: dict[str, str], js: str, json_path=None) -> list[Path]:
+    """Write ``files`` {name: text} into ``out_dir`` (made if missing) and the JSON ``js``
+    also to ``json_path``, each atomically.  Returns the paths written, in order."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    md = cycle_table_markdown(study)
-    js = cycle_table_json(study, title, provenance)
-    paths = [out / "drift_table.md", out / "drift_table.csv", out / "drift_table.json",
-             out / "report.md"]
-    atomic_write_text(paths[0], md)
-    atomic_write_text(paths[1], intervals_csv(json.loads(js)["rows"],
-                                              skip=("msd_by_part_dph2",)))
-    atomic_write_text(paths[2], js)
-    atomic_write_text(paths[3], f"# {title or 'Drift table of a temperature cycle'}\n\n" + md)
+    paths = [out / name for name in files]
+    for path, text in zip(paths, files.values()):
+        atomic_write_text(path, text)
     if json_path is not None:
         atomic_write_text(json_path, js)
         paths.append(Path(json_path))
     return paths
+
+
+def write_cycle_study(study, out_dir, *, json_path=None, title: str = "",
+                      provenance: dict | None = None) -> list[Path]:
+    """Write drift_table.md, .csv, .json and report.md into ``out_dir`` (and the JSON also
+    to ``json_path``), each atomically.  Returns the paths written."""
+    md = cycle_table_markdown(study)
+    js = cycle_table_json(study, title, provenance)
+    return write_table_files(out_dir, {
+        "drift_table.md": md,
+        "drift_table.csv": intervals_csv(json.loads(js)["rows"], skip=("msd_by_part_dph2",)),
+        "drift_table.json": js,
+        "report.md": f"# {title or 'Drift table of a temperature cycle'}\n\n" + md}, js, json_path)

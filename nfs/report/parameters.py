@@ -14,9 +14,8 @@ import json
 import math
 from pathlib import Path
 
-from ..io.atomic import atomic_write_text
 from .intervals import json_number
-from .cycles import intervals_csv
+from .cycles import intervals_csv, write_table_files
 from .reference import LIANG2021_RVR_OVER_LS_PCT
 
 __all__ = ["parameter_table_markdown", "parameter_table_json", "write_parameter_study"]
@@ -141,19 +140,12 @@ def write_parameter_study(study, out_dir, *, json_path=None, title: str = "",
     """Write parameter_table.md, parameter_table.csv, heading_by_schedule.csv,
     parameter_table.json and report.md into ``out_dir`` (and the JSON also to
     ``json_path``), each atomically.  Returns the paths written."""
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
     md = parameter_table_markdown(study)
     js = parameter_table_json(study, title, provenance)
     doc = json.loads(js)
-    paths = [out / "parameter_table.md", out / "parameter_table.csv",
-             out / "heading_by_schedule.csv", out / "parameter_table.json", out / "report.md"]
-    atomic_write_text(paths[0], md)
-    atomic_write_text(paths[1], intervals_csv(doc["parameters"]))
-    atomic_write_text(paths[2], intervals_csv(doc["headings"], skip=("positions_deg",)))
-    atomic_write_text(paths[3], js)
-    atomic_write_text(paths[4], f"# {title or 'Parameter-level compensation'}\n\n" + md)
-    if json_path is not None:
-        atomic_write_text(json_path, js)
-        paths.append(Path(json_path))
-    return paths
+    return write_table_files(out_dir, {
+        "parameter_table.md": md,
+        "parameter_table.csv": intervals_csv(doc["parameters"]),
+        "heading_by_schedule.csv": intervals_csv(doc["headings"], skip=("positions_deg",)),
+        "parameter_table.json": js,
+        "report.md": f"# {title or 'Parameter-level compensation'}\n\n" + md}, js, json_path)
