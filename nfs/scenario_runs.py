@@ -12,8 +12,9 @@ from .docfields import document_fields
 from .experiment import SimulationResult, simulate_runs
 from .variability import describe_units
 
-__all__ = ["ScenarioResult", "run_scenario", "run_scenarios", "northfind_runs", "stage_errors", "floor_deg",
-           "uncompensated_table"]
+__all__ = ["ScenarioResult", "run_scenario", "run_scenarios", "northfind_runs", "stage_errors",
+           "floor_deg", "uncompensated_table"]
+
 
 @document_fields
 @dataclass(frozen=True)

@@ -71,8 +71,8 @@ def forward_jacobian(batch, x: np.ndarray, lb: np.ndarray, ub: np.ndarray,
     """d r / d x by forward differences, the n (+ 1) evaluations in one call of ``batch``.
 
     ``batch(xs)`` returns the residual at each of the parameter vectors ``xs``; ``f0``, the
-    residual at ``x`` when the caller has it (then only the n moved vectors are solved).  The steps
-    are those of :func:`scipy.optimize.least_squares`' ``jac="2-point"`` (relative step
+    residual at ``x`` when the caller has it (then only the n moved vectors are solved).  The
+    steps are those of :func:`scipy.optimize.least_squares`' ``jac="2-point"`` (relative step
     sqrt(eps) max(1, |x|), sign of x; turned back where it would leave the bounds; the step
     taken as the difference actually represented), so the Jacobian is the one scipy would
     make, computed from one stacked evaluation instead of n + 1 separate ones.
@@ -145,7 +145,7 @@ def solve_stage(name: str, fun, x0: np.ndarray, lb: np.ndarray, ub: np.ndarray,
         return jac
 
     best, nfev, tried = None, 0, 0
-    r_start = total(x0)
+    r_start = np.concatenate([r0, prior.rows(x0)]) if use_prior else r0
     for xs in [x0, *[np.clip(x, lb, ub) for x in extra_starts]]:
         if best is not None and _settled(best, m, lb, ub):
             break

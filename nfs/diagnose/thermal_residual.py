@@ -144,7 +144,7 @@ class _StatefulLaw:
     """
 
     def __init__(self, f, params: Sequence[dict], r: int):
-        self.f, self.r = f, r
+        self.f = f
         self.params = list(params)
         self.mode = "joint"
         self.joint: dict = {}
@@ -350,17 +350,11 @@ def _lag_at_knots(y: np.ndarray, m: np.ndarray, rd: ThermalRun, tau_s: float) ->
     return z
 
 
-def readings(insts: Sequence[Instrument], rd: ThermalRun, ths: Sequence[Knots]
-             ) -> list[dict[str, np.ndarray]]:
-    """Noise-free thermometer readings at the knots of one run, per instrument.
-
-    Instruments whose thermometer (model and thermometer effects) is the same are read
-    together: one interpolation and one lag filter over a stack of rows.
-    """
-    out: list[dict[str, np.ndarray]] = [{} for _ in insts]
-    names = tuple(ths[0].node_names)
-    j, (b0, b1, b2, b3) = rd.interval, rd.basis
-    for name, col in THERMOMETERS.items():
+def _same_thermometer(insts: Sequence[Instrument]) -> dict[str, list[list[int]]]:
+    """Per thermometer, the instruments whose thermometer (model and thermometer effects)
+    is the same, as groups of indices."""
+    out = {}
+    for name in THERMOMETERS:
         same: dict[tuple, list[int]] = {}
         for s, inst in enumerate(insts):
             effects = tuple((e.name, tuple(sorted(e.params.items()))) for e in inst.effects
@@ -368,7 +362,24 @@ def readings(insts: Sequence[Instrument], rd: ThermalRun, ths: Sequence[Knots]
                             and e.params.get("thermometer") == name)
             # (a thermometer's node weights are a dict: its repr is the hashable key)
             same.setdefault((repr(inst.thermometers[name]), effects), []).append(s)
-        for idx in same.values():
+        out[name] = list(same.values())
+    return out
+
+
+def readings(insts: Sequence[Instrument], rd: ThermalRun, ths: Sequence[Knots],
+             groups: dict[str, list[list[int]]] | None = None) -> list[dict[str, np.ndarray]]:
+    """Noise-free thermometer readings at the knots of one run, per instrument.
+
+    Instruments whose thermometer (model and thermometer effects) is the same are read
+    together: one interpolation and one lag filter over a stack of rows (``groups``: those
+    instruments per thermometer, when the caller has them for several runs).
+    """
+    out: list[dict[str, np.ndarray]] = [{} for _ in insts]
+    names = tuple(ths[0].node_names)
+    j, (b0, b1, b2, b3) = rd.interval, rd.basis
+    groups = _same_thermometer(insts) if groups is None else groups
+    for name, col in THERMOMETERS.items():
+        for idx in groups[name]:
             inst = insts[idx[0]]
             model = inst.thermometers[name]
             y = np.stack([model.sensed(ths[s].temperature_c, names) for s in idx])
@@ -401,8 +412,9 @@ def thermal_residual_parts(insts: Sequence[Instrument], data: Sequence[ThermalRu
     for lo in range(0, len(insts), MAX_STACK):
         chunk = insts[lo:lo + MAX_STACK]
         knots = simulate_knots(chunk, data)
+        groups = _same_thermometer(chunk)
         for i, rd in enumerate(data):
-            for s, model in enumerate(readings(chunk, rd, [k[i] for k in knots])):
+            for s, model in enumerate(readings(chunk, rd, [k[i] for k in knots], groups)):
                 for col, y in model.items():
                     parts[lo + s][col].append((y - rd.measured[col])[rd.mask[col]])
     return parts
