@@ -98,7 +98,12 @@ def simulate_many(network: Network, time_s: np.ndarray, *, ambient_c, initial_c,
         raise ThermalError(f"initial_c must have shape ({r},) or ({r}, {n}), got shape "
                            f"{np.shape(initial_c)}")
     law = power_w if callable(power_w) else None
-    if law is None:
+    linear = ambient_hold == "first-order"
+    width = 2 * n + 2 + linear
+    per = r if max_bytes is None else max(1, int(max_bytes) // (8 * n_t * width))
+    if law is None or r == 1 or per == 1:
+        # closed form (no law) or one run at a time: simulate's own march, the same bits
+        # at less cost, and no step matrices built here for nothing
         return [simulate(network, t, ambient_c=amb_all[i], initial_c=t0_all[i],
                          power_w=power_w, ambient_hold=ambient_hold) for i in range(r)]
     if not np.all(np.isfinite(t0_all)):
@@ -108,7 +113,6 @@ def simulate_many(network: Network, time_s: np.ndarray, *, ambient_c, initial_c,
         raise ThermalError(f"ambient_hold must be one of {', '.join(AMBIENT_HOLDS)}, got "
                            f"{ambient_hold!r}")
     ambs = [_as_ambient(amb_all[i], t) for i in range(r)]
-    linear = ambient_hold == "first-order"
     a, b = network.matrices()
     steps, cls = _step_classes(t)
     mats = [step_matrices(a, b, h, slope=linear) for h in steps]
@@ -118,8 +122,6 @@ def simulate_many(network: Network, time_s: np.ndarray, *, ambient_c, initial_c,
         if linear and n_t > 1:
             slope[:-1] = np.diff(amb) / np.diff(t)
         slopes.append(slope)
-    width = 2 * n + 2 + linear
-    per = r if max_bytes is None else max(1, int(max_bytes) // (8 * n_t * width))
     out = []
     for b0 in range(0, r, per):
         batch = range(b0, min(r, b0 + per))
