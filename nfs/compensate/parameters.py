@@ -187,14 +187,17 @@ def calibrate_cycles(run: Run, result) -> CycleParameters:
               "gyro_scale_ppm": 1e6 * (np.asarray(result.horizontal_rate_dph) / omega_h - 1.0),
               "acc_x_bias_ug": 1e6 * bx, "acc_y_bias_ug": 1e6 * by}
     t = np.asarray(run.columns["time_s"], dtype=float)
+    # each cycle's samples t_start <= t <= t_end as an index range (time is increasing):
+    # found once, not a mask over the whole run per cycle and thermometer
+    lo = np.searchsorted(t, [c.t_start_s for c in result.cycles], side="left")
+    hi = np.searchsorted(t, [c.t_end_s for c in result.cycles], side="right")
     temps = {}
     for col in dict.fromkeys(th for _, _, th in PARAMETERS.values()):
         if col not in run.columns:
             raise NfsError(f"run '{run.name}' has no column '{col}': the parameter models "
                            "need each sensor's thermometer")
         v = np.asarray(run.columns[col], dtype=float)
-        temps[col] = np.array([np.nanmean(v[(t >= c.t_start_s) & (t <= c.t_end_s)])
-                               for c in result.cycles])
+        temps[col] = np.array([np.nanmean(v[a:b]) for a, b in zip(lo, hi)])
     return CycleParameters(run.name, np.asarray(result.t_end_s, dtype=float), temps, values)
 
 

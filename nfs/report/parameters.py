@@ -37,13 +37,11 @@ def _cell(v: float, ci) -> str:
     return f"{_num(v)} ({_num(ci[0])} .. {_num(ci[1])})"
 
 
-def _gain_pct(study, parameter: str, metric: str) -> float:
-    """How much HHO-RVR betters LS on one parameter's metric [%] (NaN without both rows)."""
-    by = {r.method: r.values[metric] for r in study.parameters if r.parameter == parameter}
+def _gain_pct(study, parameter: str) -> float:
+    """How much HHO-RVR lowers LS's RMSE on one parameter [%] (NaN without both rows)."""
+    by = {r.method: r.values["rmse"] for r in study.parameters if r.parameter == parameter}
     if _PAPER_LS not in by or _PAPER_RVR not in by or not by[_PAPER_LS]:
         return math.nan
-    if metric == "r2":
-        return 100.0 * (by[_PAPER_RVR] - by[_PAPER_LS]) / abs(by[_PAPER_LS])
     return 100.0 * (1.0 - by[_PAPER_RVR] / by[_PAPER_LS])
 
 
@@ -77,7 +75,7 @@ def _notes(study) -> list[str]:
 
 def _shape(study) -> list[str]:
     params = list(dict.fromkeys(r.parameter for r in study.parameters))
-    gains = {p: _gain_pct(study, p, "rmse") for p in params}
+    gains = {p: _gain_pct(study, p) for p in params}
     if not any(math.isfinite(g) for g in gains.values()):
         return []
     paper = LIANG2021_RVR_OVER_LS_PCT
