@@ -142,6 +142,9 @@ def test_baseline_refused_before_any_work(tmp_path, cli):
     p = tmp_path / "ramp.toml"
     p.write_text(RAMP)
     base = tmp_path / "b.json"
-    base.write_text("{}")
+    # a valid heading table (so the refusal cannot come from reading it)
+    base.write_text(json.dumps({"temperatures_c": [20.0],
+                                "rows": [{"method": "before", "rmse_deg": [0.01]}]}))
     code, _, err = cli("table", p, "-o", tmp_path / "o", "--baseline", base)
     assert code == 2 and not (tmp_path / "o").exists()
+    assert "compensation.protocol" in err, err
