@@ -377,7 +377,8 @@ def _cmd_fit(args) -> int:
     res = fit_model(inst, runs, free=args.free, stages=tuple(args.stages),
                     decimate_s=args.decimate_s,
                     prior=None if args.no_prior else "default", prior_scale=args.prior_scale,
-                    n_starts=args.starts, fit_noise=not args.no_noise_fit)
+                    n_starts=args.starts, fit_noise=not args.no_noise_fit,
+                    start_state=_start_model(args))
     write_fitted_model(res, args.output)
     print(res.summary())
     print(f"wrote {args.output}")
@@ -396,7 +397,7 @@ def _cmd_compare(args) -> int:
     if not args.quiet:
         print(f"simulating {inst.name} beside {len(runs)} run(s)...", file=sys.stderr)
     c = compare(inst, runs, seed=args.seed, startup_end_s=args.startup_end_s,
-                stable_start_s=args.stable_start_s)
+                stable_start_s=args.stable_start_s, start_state=_start_model(args))
     paths = write_report(c, args.output)
     # the runs are hashed once, for the JSON and the folder's manifest
     prov = output_provenance(instrument=inst, runs=runs, seeds={"model_noise": args.seed})
@@ -439,13 +440,15 @@ def _cmd_diagnose(args) -> int:
                       f"{args.apply}...", file=sys.stderr)
             found = diagnose(inst, runs, random_state=args.seed, alpha=args.alpha,
                              node_temperatures=args.node_temperatures,
-                             check_structure=not args.no_structure).to_dict()
+                             check_structure=not args.no_structure,
+                             start_state=_start_model(args)).to_dict()
             source = "the diagnosis of these runs"
         significant, finding = candidate_finding(found, name, target or None)
         if not significant:
             print(f"nfs: warning: {source} does not support this effect: {finding}; "
                   "adding it as asked", file=sys.stderr)
-        new, fit, report = apply_candidate(inst, runs, name, target or None)
+        new, fit, report = apply_candidate(inst, runs, name, target or None,
+                                           start_state=_start_model(args))
         from .diagnose import write_fitted_model
         write_fitted_model(fit, args.output)
         print(f"added {args.apply} ({source}: {finding}); refitted:")
@@ -462,7 +465,7 @@ def _cmd_diagnose(args) -> int:
         print(f"diagnosing {inst.name} on {len(runs)} run(s)...", file=sys.stderr)
     d = diagnose(inst, runs, random_state=args.seed, alpha=args.alpha,
                  node_temperatures=args.node_temperatures,
-                 check_structure=not args.no_structure)
+                 check_structure=not args.no_structure, start_state=_start_model(args))
     print("| rank | effect | target | channel | significant | CV RMS before | after | "
           "coefficient |")
     print("|---:|---|---|---|---|---:|---:|---|")
@@ -587,6 +590,16 @@ def _runs_and_model(p: argparse.ArgumentParser) -> None:
     _runs(p)
     p.add_argument("--model", default="default",
                    help="instrument preset name or TOML file (default: default)")
+    p.add_argument("--start", choices=("estimated", "soaked"), default="estimated",
+                   help="each run's node temperatures at power-on: estimated from its "
+                        "thermometers with the model (an unfinished soak, a unit off its "
+                        "air; default), or soaked: every node at the run's T0")
+
+
+def _start_model(args):
+    """The start model of ``--start`` (nfs.diagnose.start_state)."""
+    from .diagnose.thermal_residual import DEFAULT_START
+    return DEFAULT_START if args.start == "estimated" else None
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -26,7 +26,7 @@ from .io.measurement import Run, RunMeta
 from .noise import gyro_noise_dph, white_noise
 from .sensors import (Schedule, earth_rate_along_axis_dph, thermometer_reading,
                       turntable_motion)
-from .variability import (Variability, start_up_state, unit_instrument,
+from .variability import (Variability, drawn_soak, start_up_state, unit_instrument,
                           unpowered_network)
 
 __all__ = ["RunConditions", "SimulationResult", "simulate_run", "simulate_runs", "effect_context",
@@ -72,6 +72,10 @@ class RunConditions:
     """Time the unpowered unit follows the chamber before power-on [s]: soaked at T0, it
     sits in ``chamber_c`` over [-soak_s, 0) (a chamber program's steps before its power-on
     marker); not recorded."""
+    initial_c: np.ndarray | None = None
+    """Node temperatures at the start of the record [degC] (n_nodes,), when known (a
+    measured run's start estimated from its thermometers, :mod:`nfs.diagnose.start_state`);
+    None: soaked at T0 (and ``variability``'s soak)."""
 
     @property
     def time_s(self) -> np.ndarray:
@@ -89,13 +93,14 @@ class RunConditions:
         return turntable_motion(self.schedule, time_s)
 
 
-def conditions_from_run(run: Run, *, seed=0, schedule: Schedule | None = None
-                        ) -> RunConditions:
+def conditions_from_run(run: Run, *, seed=0, schedule: Schedule | None = None,
+                        initial_c: np.ndarray | None = None) -> RunConditions:
     """The conditions of a measured run, to simulate a model beside it.
 
     The model replays the run's own time base and turntable motion (``position_deg``,
     ``moving``), start temperature, latitude and heading (0 when unknown), and its chamber
-    temperature when the run recorded ``temp_chamber_c``.
+    temperature when the run recorded ``temp_chamber_c``; its nodes start at ``initial_c``
+    [degC] when given (the run's estimated start), else at T0.
     """
     m = run.meta
     t = np.asarray(run.columns["time_s"], dtype=float)
@@ -113,6 +118,7 @@ def conditions_from_run(run: Run, *, seed=0, schedule: Schedule | None = None
         true_heading_deg=m.true_heading_deg if m.true_heading_deg is not None else 0.0,
         schedule=schedule, duration_s=float(t[-1] - t[0]) if t.size else 0.0,
         sample_rate_hz=fs, seed=seed, chamber_c=chamber,
+        initial_c=None if initial_c is None else np.asarray(initial_c, dtype=float),
         motion=(t, np.asarray(cols["position_deg"], dtype=float),
                 np.asarray(cols["moving"], dtype=float)))
 
@@ -292,6 +298,7 @@ class _Prepared:
     stateful: list
     initial: Any            # node temperatures at power-on
     ambient: np.ndarray     # chamber at the run's samples
+    soak: tuple[float, float] | None = None   # (soak_from_c, soak_h) of an unfinished soak
 
 
 def _prepare(inst: Instrument, cond: RunConditions) -> _Prepared:
@@ -320,8 +327,8 @@ def _prepare(inst: Instrument, cond: RunConditions) -> _Prepared:
     t_all = np.concatenate([-cond.soak_s + np.arange(n_pre) / fs, t]) if n_pre else t
     ambient = (np.full(t_all.shape, cond.start_temperature_c) if cond.chamber_c is None
                else np.asarray(cond.chamber_c(t_all), dtype=float))
-    initial = cond.start_temperature_c
-    if var is not None and var.per_start_up:
+    initial = cond.start_temperature_c if cond.initial_c is None else cond.initial_c
+    if var is not None and var.per_start_up and cond.initial_c is None:
         initial, terms = start_up_state(inst, var, cond.start_temperature_c, t_all,
                                         cond.seed)
         ambient = ambient + terms
@@ -330,8 +337,10 @@ def _prepare(inst: Instrument, cond: RunConditions) -> _Prepared:
                                 ambient_c=ambient[:n_pre + 1], initial_c=initial,
                                 ambient_hold="first-order")
         initial, ambient = soak.temperature_c[-1], ambient[n_pre:]
+    soak = (drawn_soak(var, cond.seed) if var is not None and cond.initial_c is None
+            and not n_pre else None)
     return _Prepared(inst, cond, rngs, theta, moving, geom, axes, power, thermal_terms,
-                     stateful, initial, np.asarray(ambient, dtype=float))
+                     stateful, initial, np.asarray(ambient, dtype=float), soak)
 
 
 def simulate_run(inst: Instrument, cond: RunConditions) -> SimulationResult:
@@ -469,7 +478,9 @@ def _finish(prep: _Prepared, th) -> SimulationResult:
     meta = RunMeta(latitude_deg=cond.latitude_deg, start_temperature_c=soaked_c,
                    true_heading_deg=cond.true_heading_deg, sample_rate_hz=fs,
                    positions_deg=sched.cycle_positions_deg, dwell_s=sched.dwell_s,
-                   move_s=sched.move_s, instrument=inst.name)
+                   move_s=sched.move_s, instrument=inst.name,
+                   extra={} if prep.soak is None else
+                   {"soak_from_c": prep.soak[0], "soak_h": round(prep.soak[1], 4)})
     run = Run(name=cond.name, columns=columns, meta=meta)
     return SimulationResult(conditions=cond, thermal=th, context=ctx,
                             thermal_terms_w=thermal_terms, gyro_terms_dph=gyro_terms,

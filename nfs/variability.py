@@ -77,7 +77,8 @@ from .parameters import ParameterError, expand_paths, get_param, param_paths, se
 
 __all__ = ["Variability", "NO_VARIABILITY", "REALISTIC", "VARIABILITY_PRESETS",
            "VARIABILITY_KEYS", "CYCLING_SHAPES", "SOAK_STEP_S", "unit_scatter",
-           "unit_instrument", "start_up_state", "chamber_terms", "lognormal_factor",
+           "unit_instrument", "start_up_state", "drawn_soak", "chamber_terms",
+           "lognormal_factor",
            "describe_units", "unpowered_network"]
 
 #: Shapes of the chamber controller's cycling.
@@ -370,6 +371,16 @@ def chamber_terms(var: Variability, time_s: np.ndarray, entropy) -> np.ndarray:
 
 #: Step of the soak's grid [s]: resolves the chamber's wander and cycling (minutes).
 SOAK_STEP_S = 10.0
+
+
+def drawn_soak(var: Variability, entropy) -> tuple[float, float] | None:
+    """(the temperature the unit came from [degC], the soak's drawn duration [h]) of an
+    unfinished soak, as a laboratory log would give them (the measurement sidecar's
+    ``soak_from_c`` and ``soak_h``); None without an unfinished soak."""
+    if not var.unfinished_soak:
+        return None
+    _, z_soak = _run_rng(entropy, _SOAK_KEY).standard_normal(2)
+    return var.soak_from_c, var.soak_h * float(lognormal_factor(z_soak, var.soak_h_rel_std))
 
 
 def start_up_state(inst: Instrument, var: Variability, start_temperature_c: float,

@@ -240,6 +240,27 @@ class Network:
         ambient = _finite_number(ambient_c, "steady_state: ambient_c")
         return np.linalg.solve(laplacian, to_chamber * ambient + power)
 
+    def modes(self) -> tuple[np.ndarray, np.ndarray]:
+        """Free modes of (2): time constants tau_i [s], longest first, and shapes V (n, n).
+
+        With no input, T(t) - T_amb = sum_i a_i v_i exp(-t / tau_i).  From the symmetric
+        form S = C^-1/2 L C^-1/2 = U diag(mu) U^T, A = -C^-1/2 S C^1/2, so column i of V is
+        v_i = C^-1/2 u_i and tau_i = 1 / mu_i (``inf`` for a node set with no path to the
+        chamber).  Each column is scaled to max |v_i| = 1 with its largest entry positive:
+        a_i is then the kelvins the mode puts on the node it moves most.
+        """
+        laplacian, _ = self.conductances()
+        scale = 1.0 / np.sqrt(self.capacity_j_per_k)
+        rates, u = np.linalg.eigh(scale[:, None] * laplacian * scale[None, :])
+        positive = rates > 1e3 * np.finfo(float).eps * max(rates.max(), 0.0)
+        taus = np.full(rates.shape, np.inf)
+        taus[positive] = 1.0 / rates[positive]
+        v = scale[:, None] * u
+        big = np.argmax(np.abs(v), axis=0)
+        v = v / v[big, np.arange(v.shape[1])]
+        order = np.argsort(-taus, kind="stable")
+        return taus[order], v[:, order]
+
     def time_constants_s(self) -> np.ndarray:
         """Time constants -1/lambda_i [s] of the eigenvalues of A, longest first.
 

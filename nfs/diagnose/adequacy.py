@@ -75,7 +75,8 @@ from ..errors import NfsError
 from ..instrument import Instrument
 from ..io.measurement import Run
 from .fit import default_free
-from .thermal_residual import prepare_thermal, thermal_residual_parts
+from .start_state import StartModel
+from .thermal_residual import DEFAULT_START, prepare_thermal, thermal_residual_parts
 from .params import fit_bounds, get_param, set_params
 from .structure import StructuralAlternative, structural_alternatives
 
@@ -248,8 +249,10 @@ class ThermalAdequacy:
 class _Problem:
     """The prepared runs, the label of every residual (thermometer, stage) and their groups."""
 
-    def __init__(self, runs: Sequence[Run], decimate_s: float, startup_s: float):
+    def __init__(self, runs: Sequence[Run], decimate_s: float, startup_s: float,
+                 start: StartModel | None = DEFAULT_START):
         self.data = [prepare_thermal(r, decimate_s) for r in runs]
+        self.start = start
         self.cols = tuple(THERMOMETERS.values())
         self.names = tuple(THERMOMETERS)
         self.labels: list[tuple[np.ndarray, np.ndarray]] = []
@@ -273,7 +276,7 @@ class _Problem:
         """:meth:`resid` of instruments of one structure, solved as one stack."""
         self.n_eval += len(insts)
         return [[np.concatenate([parts[c][i] for c in self.cols]) for i in range(len(self.data))]
-                for parts in thermal_residual_parts(insts, self.data)]
+                for parts in thermal_residual_parts(insts, self.data, self.start)]
 
     def rms(self, r: list[np.ndarray]) -> dict[str, dict[str, float]]:
         """RMS [K] per thermometer and stage."""
@@ -595,7 +598,8 @@ def thermal_adequacy(inst: Instrument, runs: Sequence[Run],
                      | Callable[[Instrument], Sequence[StructuralAlternative]] | None = None, *,
                      decimate_s: float = DEFAULT_DECIMATE_S, factor: float = ADEQUACY_FACTOR,
                      startup_s: float = STARTUP_S, refine_top: int = REFINE_TOP,
-                     max_nfev: int = 6) -> ThermalAdequacy:
+                     max_nfev: int = 6, start_state: StartModel | None = DEFAULT_START
+                     ) -> ThermalAdequacy:
     """Is the thermal structure of ``inst`` adequate for ``runs``? (module docstring).
 
     Parameters
@@ -621,6 +625,11 @@ def thermal_adequacy(inst: Instrument, runs: Sequence[Run],
         How many of the screened alternatives are fitted to convergence.
     max_nfev : int
         Residual evaluations of each refinement (Jacobian evaluations not counted).
+    start_state : StartModel or None
+        Each run's start estimated with the model (:mod:`nfs.diagnose.start_state`, in
+        every residual, the held-out runs' too: a new run's soak is not known either);
+        None: the runs were soaked exactly at T0 (the check then has more power: a
+        structural error can no longer hide in the starts).
 
     Raises
     ------
@@ -633,7 +642,7 @@ def thermal_adequacy(inst: Instrument, runs: Sequence[Run],
         raise NfsError(f"thermal_adequacy: decimate_s must be > 0, got {decimate_s}")
     if not factor >= 1.0:
         raise NfsError(f"thermal_adequacy: factor must be >= 1, got {factor}")
-    prob = _Problem(runs, decimate_s, startup_s)
+    prob = _Problem(runs, decimate_s, startup_s, start_state)
     if len(set(prob.group)) < 2:
         raise NfsError("thermal_adequacy needs runs at two start temperatures at least "
                        "(leave-one-start-temperature-out validation); got "

@@ -14,6 +14,8 @@ from .candidates import (FAST_KINDS, SHAPE_GRID, Candidate, effect_of, split_par
                          targets)
 from .design import (PreparedRun, bare_instrument, fit_shapes, model_drift_paths,
                      prepare_runs, startup_heading_rmse)
+from .start_state import StartModel
+from .thermal_residual import DEFAULT_START, start_states
 from .fit import (DEFAULT_DECIMATE_S, FitResult, _drift_context, _prepare_drift, default_free,
                   fit_model, model_drift_dph)
 
@@ -24,7 +26,8 @@ _THERMAL_STARTS = {"tau": 20.0}
 
 
 def apply_candidate(inst: Instrument, runs: Sequence[Run], name: str,
-                    target: str | None = None, *, decimate_s: float = DEFAULT_DECIMATE_S
+                    target: str | None = None, *, decimate_s: float = DEFAULT_DECIMATE_S,
+                    start_state: StartModel | None = DEFAULT_START
                     ) -> tuple[Instrument, FitResult, dict[str, Any]]:
     """Add effect ``name`` (on ``target``) to ``inst``, refit, and report before/after.
 
@@ -33,7 +36,8 @@ def apply_candidate(inst: Instrument, runs: Sequence[Run], name: str,
     :data:`SHAPE_GRID`).  Thermal and thermometer effects: both stages, default free set plus
     the new effect's parameters.  Returns (new instrument, FitResult, report) where the report
     holds ``rms_before``/``rms_after`` per channel (before = the model as given) and the
-    pooled start-up ``heading_rmse_before_deg``/``heading_rmse_after_deg``.
+    pooled start-up ``heading_rmse_before_deg``/``heading_rmse_after_deg``.  Each run's
+    start is estimated as :func:`fit_model` does (``start_state``).
 
     Raises NfsError for an unknown effect or target (listing the valid ones) or an effect
     the model already has on that target.
@@ -52,7 +56,8 @@ def apply_candidate(inst: Instrument, runs: Sequence[Run], name: str,
     c = Candidate(name, target, spec.kind, tuple(coefs), tuple(shapes), tried=True)
     starts: dict[str, float] = {k: 0.0 for k in coefs}
     if spec.kind in FAST_KINDS:
-        preps, _ = prepare_runs(inst, runs, decimate_s)
+        preps, _ = prepare_runs(inst, runs, decimate_s,
+                                start_c=start_states(inst, runs, decimate_s, start_state))
         best, _ = fit_shapes(c, preps, bare_instrument(inst))
         starts.update(best)
     else:
@@ -63,19 +68,20 @@ def apply_candidate(inst: Instrument, runs: Sequence[Run], name: str,
     new_paths = [f"effects.{e.label}.{p}" for p in coefs + shapes]
     if spec.kind in FAST_KINDS:
         result = fit_model(new, runs, free=model_drift_paths(inst) + new_paths, stages=("drift",),
-                           decimate_s=decimate_s)
+                           decimate_s=decimate_s, start_state=start_state)
     else:
         free = list(dict.fromkeys(default_free(new) + new_paths))
         result = fit_model(new, runs, free=free, stages=("thermal", "drift"),
-                           decimate_s=decimate_s)
+                           decimate_s=decimate_s, start_state=start_state)
     fitted = result.instrument
+    start_c = result.start_c or start_states(fitted, runs, decimate_s, start_state)
 
     def heading(model: Instrument) -> float:
         preps_m = []
         full = []
         for run in runs:
             rd = _prepare_drift(run, decimate_s, False, "raw")
-            ctx = _drift_context(model, rd)
+            ctx = _drift_context(model, rd, start_c.get(run.name))
             p = PreparedRun(run, rd, ctx, rd.cond.latitude_deg, rd.measured["drift_dph"],
                       np.zeros(0), np.zeros((0, 0)), np.zeros((0, 0)))
             preps_m.append(p)

@@ -66,6 +66,8 @@ from ..experiment import conditions_from_run, simulate_run
 from ..instrument import Instrument
 from ..io.measurement import Run
 from ..northfind import heading_rmse, north_find
+from .start_state import StartModel
+from .thermal_residual import DEFAULT_START, start_states
 
 __all__ = [
     "CHANNELS", "CONSISTENT_RATIO", "POSITION_RATIO", "T0_CORRELATION", "SEED_SALT",
@@ -501,12 +503,13 @@ def _channel_run(spec, run, t, pos, measured, model, f2, rest, cycles, per_sampl
         position_test=_position_test(per_sample_residual, cycles))
 
 
-def _compare_run(inst: Instrument, clean: Instrument, run: Run, k: int, cfg) -> tuple[
-        dict[str, ChannelRun], RunHeading]:
+def _compare_run(inst: Instrument, clean: Instrument, run: Run, k: int, cfg,
+                 start_c: np.ndarray | None) -> tuple[dict[str, ChannelRun], RunHeading]:
     seed = cfg["seed"]
-    sim_a = simulate_run(inst, conditions_from_run(run, seed=_run_seed(seed, k, 0)))
-    sim_b = simulate_run(inst, conditions_from_run(run, seed=_run_seed(seed, k, 1)))
-    expect = simulate_run(clean, conditions_from_run(run, seed=_run_seed(seed, k, 2))).run
+    sim_a, sim_b, expect = (simulate_run(model, conditions_from_run(
+        run, seed=_run_seed(seed, k, role), initial_c=start_c))
+        for model, role in ((inst, 0), (inst, 1), (clean, 2)))
+    expect = expect.run
 
     t = np.asarray(run["time_s"], dtype=float)
     pos = np.asarray(run["position_deg"], dtype=float)
@@ -685,7 +688,8 @@ def _summarise(spec: ChannelSpec, runs: Sequence[ChannelRun]) -> ChannelSummary:
 
 
 def compare(inst: Instrument, runs: Sequence[Run], *, seed=0, startup_end_s: float = 3600.0,
-            stable_start_s: float = 5400.0, window_s: float = 600.0) -> Comparison:
+            stable_start_s: float = 5400.0, window_s: float = 600.0,
+            start_state: StartModel | None = DEFAULT_START) -> Comparison:
     """Set the model ``inst`` beside every measured run, channel by channel.
 
     Each run is replayed on its own (time base, motion, T0, latitude, heading, chamber), so
@@ -705,6 +709,10 @@ def compare(inst: Instrument, runs: Sequence[Run], *, seed=0, startup_end_s: flo
         RMSE uses :func:`nfs.northfind.heading_rmse` with the same bounds.
     window_s : float
         Length of the window of the worst residual [s].
+    start_state : StartModel or None
+        Each run's node temperatures at power-on are estimated from its thermometers
+        through the model (:func:`nfs.diagnose.thermal_residual.start_states`: an
+        unfinished soak, a unit off its air) and the model starts there; None: at T0.
 
     Returns
     -------
@@ -726,10 +734,11 @@ def compare(inst: Instrument, runs: Sequence[Run], *, seed=0, startup_end_s: flo
     cfg = {"seed": seed, "startup_end_s": float(startup_end_s),
            "stable_start_s": float(stable_start_s), "window_s": float(window_s)}
     clean = noise_free(inst)
+    starts = start_states(inst, runs) if start_state is not None else {}
     per_run: dict[str, list[ChannelRun]] = {c.key: [] for c in CHANNELS}
     headings = []
     for k, run in enumerate(runs):
-        chans, heading = _compare_run(inst, clean, run, k, cfg)
+        chans, heading = _compare_run(inst, clean, run, k, cfg, starts.get(run.name))
         for key, cr in chans.items():
             per_run[key].append(cr)
         headings.append(heading)

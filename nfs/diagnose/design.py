@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, replace
-from typing import Any, Sequence
+from typing import Any, Mapping, Sequence
 
 import numpy as np
 from scipy.optimize import least_squares
@@ -36,7 +36,8 @@ from ..io.measurement import Run
 from ..northfind import heading_rmse, north_find
 from .candidates import Candidate, SHAPE_GRID, effect_of, shape_grid, split_parameters
 from .fit import _block, _drift_context, _prepare_drift, default_free, model_drift_dph
-from .thermal_residual import prepare_thermal, thermal_residual_parts
+from .start_state import StartModel
+from .thermal_residual import DEFAULT_START, prepare_thermal, thermal_residual_parts
 from .params import fit_bounds, get_param, set_params
 from .stats import run_grams, solve
 
@@ -115,19 +116,22 @@ def drift_context_on(inst: Instrument, rd: Any, thermal: Any):
 
 
 def prepare_runs(inst: Instrument, runs: Sequence[Run], decimate_s: float,
-                 thermal: Sequence[Any] | None = None) -> tuple[list[PreparedRun], list[str]]:
+                 thermal: Sequence[Any] | None = None,
+                 start_c: Mapping[str, np.ndarray] | None = None
+                 ) -> tuple[list[PreparedRun], list[str]]:
     """Every run on the drift channel, and the model's drift parameter paths (its columns).
 
-    The drift effects are evaluated on the model's open-loop node temperatures, or on
-    ``thermal`` (one per run, e.g. the smoothed node temperatures of
-    :func:`nfs.diagnose.smoother.smooth_runs`) when given.
+    The drift effects are evaluated on the model's open-loop node temperatures (started at
+    ``start_c[run name]`` when given, else at T0), or on ``thermal`` (one per run, e.g. the
+    smoothed node temperatures of :func:`nfs.diagnose.smoother.smooth_runs`) when given.
     """
+    start_c = start_c or {}
     paths = model_drift_paths(inst)
     zero = set_params(inst, {p: 0.0 for p in paths})
     out = []
     for i, run in enumerate(runs):
         rd = _prepare_drift(run, decimate_s, False, "raw")
-        ctx = (_drift_context(inst, rd) if thermal is None
+        ctx = (_drift_context(inst, rd, start_c.get(run.name)) if thermal is None
                else drift_context_on(inst, rd, thermal[i]))
         lat = rd.cond.latitude_deg
         offset = model_drift_dph(zero, ctx, lat)
@@ -255,30 +259,35 @@ class ThermalDesign:
     """Model minus measured, the three thermometers stacked, per run [K]."""
     X: list[np.ndarray]
     """d model / d parameter, per run."""
+    start: StartModel | None = DEFAULT_START
+    """How each run's start was profiled (:mod:`nfs.diagnose.start_state`)."""
 
 
-def _thermal_resid(models: Sequence[Instrument], data) -> list[list[np.ndarray]]:
+def _thermal_resid(models: Sequence[Instrument], data, start: StartModel | None
+                   ) -> list[list[np.ndarray]]:
     """Per model, per run: model minus measured, the three thermometers stacked [K] (the
     models solved as one stack)."""
     return [[np.concatenate([parts[c][i] for c in parts]) for i in range(len(data))]
-            for parts in thermal_residual_parts(models, data)]
+            for parts in thermal_residual_parts(models, data, start)]
 
 
-def thermal_design(inst: Instrument, runs: Sequence[Run], decimate_s: float) -> ThermalDesign:
+def thermal_design(inst: Instrument, runs: Sequence[Run], decimate_s: float,
+                   start: StartModel | None = DEFAULT_START) -> ThermalDesign:
     """The thermometer residual of the model and its Jacobian in the free thermal parameters
-    (:func:`~nfs.diagnose.fit.default_free`, thermal stage), by forward differences."""
+    (:func:`~nfs.diagnose.fit.default_free`, thermal stage), by forward differences, each
+    run's start profiled (``start``, :mod:`nfs.diagnose.start_state`)."""
     data = [prepare_thermal(r, decimate_s) for r in runs]
     paths = default_free(inst, ("thermal",))
     values = np.array([get_param(inst, p) for p in paths])
     steps = [1e-3 * abs(v) if v else 1e-2 for v in values]
     base, *moved_all = _thermal_resid(
-        [inst] + [set_params(inst, {p: v + h}) for p, v, h in zip(paths, values, steps)], data)
+        [inst] + [set_params(inst, {p: v + h}) for p, v, h in zip(paths, values, steps)], data, start)
     cols: list[list[np.ndarray]] = [[] for _ in runs]
     for h, moved in zip(steps, moved_all):
         for i, (m, b0) in enumerate(zip(moved, base)):
             cols[i].append((m - b0) / h)
     X = [np.column_stack(c) if c else np.zeros((b0.size, 0)) for c, b0 in zip(cols, base)]
-    return ThermalDesign(data, paths, values, base, X)
+    return ThermalDesign(data, paths, values, base, X, start)
 
 
 def thermal_candidate_columns(c: Candidate, inst: Instrument, ts: ThermalDesign
@@ -290,7 +299,7 @@ def thermal_candidate_columns(c: Candidate, inst: Instrument, ts: ThermalDesign
     models = [inst.with_effects(list(inst.effects) + [effect_of(
         c, {k: (h if k == name else 0.0) for k in c.coefficients})])
         for name, h in zip(c.coefficients, steps)]
-    for h, moved in zip(steps, _thermal_resid(models, ts.data)):
+    for h, moved in zip(steps, _thermal_resid(models, ts.data, ts.start)):
         for i, (m, b0) in enumerate(zip(moved, ts.base)):
             cols[i].append((m - b0) / h)
     return [np.column_stack(cc) for cc in cols]

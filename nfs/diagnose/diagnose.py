@@ -118,6 +118,8 @@ from .design import (PreparedRun, bare_instrument, candidate_columns, fit_shapes
 from .drift_structure import DriftStructure, beyond_alternative, rate_columns
 from .fit import DEFAULT_DECIMATE_S, fit_model
 from .smoother import smooth_runs
+from .start_state import StartModel
+from .thermal_residual import DEFAULT_START, start_states
 from .stats import (RunGrams, augmented_grams, clustered_fit, group_cv_rms, holm,
                     run_grams, solve)
 from .structure import effect_alternative, structural_alternatives
@@ -309,7 +311,8 @@ def _explained_by_top(ranking: list[CandidateScore], scored: list[_Scored], grou
 
 def diagnose(inst: Instrument, runs: Sequence[Run], *, n_boot: int = 20, alpha: float = 0.05,
              random_state=0, decimate_s: float = DEFAULT_DECIMATE_S,
-             node_temperatures: str = "smoothed", check_structure: bool = True) -> Diagnosis:
+             node_temperatures: str = "smoothed", check_structure: bool = True,
+             start_state: StartModel | None = DEFAULT_START) -> Diagnosis:
     """Score every candidate effect the model lacks (module docstring for the method).
 
     Parameters
@@ -333,6 +336,9 @@ def diagnose(inst: Instrument, runs: Sequence[Run], *, n_boot: int = 20, alpha: 
         Set the model's thermal structure against generic alternatives
         (:func:`nfs.diagnose.adequacy.thermal_adequacy`); a thermal candidate is then
         significant only if it also beats every structural alternative.
+    start_state : StartModel or None
+        How each run's node temperatures at power-on are estimated
+        (:mod:`nfs.diagnose.start_state`); None: the runs were soaked exactly at T0.
 
     The cross-validation leaves one start temperature out (one run, when all runs start
     at the same temperature).  Raises NfsError for fewer than 2 runs.
@@ -349,16 +355,19 @@ def diagnose(inst: Instrument, runs: Sequence[Run], *, n_boot: int = 20, alpha: 
         raise NfsError(f"diagnose: node_temperatures must be one of "
                        f"{', '.join(NODE_TEMPERATURES)}, got {node_temperatures!r}")
     paths = model_drift_paths(inst)
-    baseline = fit_model(inst, runs, free=paths, stages=("drift",), decimate_s=decimate_s)
+    # each run's start (an unfinished soak), estimated once for every stage below
+    start_c = start_states(inst, runs, decimate_s, start_state)
+    baseline = fit_model(inst, runs, free=paths, stages=("drift",), decimate_s=decimate_s,
+                         start_state=start_state, start_c=start_c)
     node_info: dict[str, Any] = {"source": node_temperatures}
     smoothed = None
     if node_temperatures == "smoothed":
-        sm = smooth_runs(inst, runs, decimate_s=decimate_s)
+        sm = smooth_runs(inst, runs, decimate_s=decimate_s, start_c=start_c)
         smoothed = sm.runs
         node_info.update(q_w2_per_s=sm.q_w2_per_s,
                          significant=bool(sm.fit.significant) if sm.fit is not None else None,
                          thermometer_rms_c=dict(sm.thermometer_rms_c))
-    preps, paths = prepare_runs(inst, runs, decimate_s, thermal=smoothed)
+    preps, paths = prepare_runs(inst, runs, decimate_s, thermal=smoothed, start_c=start_c)
     bare = bare_instrument(inst)
     rng = np.random.default_rng(random_state)
     boot = [rng.integers(0, len(runs), len(runs)) for _ in range(n_boot)]
@@ -423,10 +432,10 @@ def diagnose(inst: Instrument, runs: Sequence[Run], *, n_boot: int = 20, alpha: 
             return structural_alternatives(model) + [effect_alternative(
                 model, c.effect, c.target) for c in thermal_cands]
 
-        adequacy = thermal_adequacy(inst, runs, alternatives)
+        adequacy = thermal_adequacy(inst, runs, alternatives, start_state=start_state)
         effect_alt = {a.name: a for a in adequacy.alternatives
                      if a.kind == "effect"}
-    ts = thermal_design(inst, runs, decimate_s) if thermal_cands else None
+    ts = thermal_design(inst, runs, decimate_s, start_state) if thermal_cands else None
     if ts is not None:
         therm = _channel([-b0 for b0 in ts.base], ts.X, groups, boot)
         beta_t = therm.beta
@@ -479,7 +488,8 @@ def diagnose(inst: Instrument, runs: Sequence[Run], *, n_boot: int = 20, alpha: 
         if s.candidate.label not in drift_of:
             pm = len(ts.paths)
             drift_of[s.candidate.label] = prepare_runs(thermal_step_instrument(
-                inst, ts, s.beta[:pm], s.candidate, s.beta[pm:]), runs, decimate_s)[0]
+                inst, ts, s.beta[:pm], s.candidate, s.beta[pm:]), runs, decimate_s,
+                start_c=start_c)[0]
         return drift_of[s.candidate.label]
 
     ranking = []
@@ -514,7 +524,8 @@ def diagnose(inst: Instrument, runs: Sequence[Run], *, n_boot: int = 20, alpha: 
                 # beside the same step without the candidate
                 if h_before_t is None:
                     h_before_t = refit_heading_rmse(prepare_runs(
-                        thermal_step_instrument(inst, ts, beta_t), runs, decimate_s)[0])
+                        thermal_step_instrument(inst, ts, beta_t), runs, decimate_s,
+                        start_c=start_c)[0])
                 sc = replace(sc, heading_rmse_before_deg=h_before_t,
                              heading_rmse_after_deg=refit_heading_rmse(after_thermal(s)))
         ranking.append(sc)

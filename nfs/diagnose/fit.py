@@ -97,8 +97,10 @@ from .prior import build_prior
 from .sensor_fit import LEVEL_PATHS, LevelData, level_from_means
 from .soak import SoakAnchor, anchor_offsets, soak_offsets
 from .stage import StageReport, solve_stage
-from .thermal_residual import (ThermalRun, decimation_step, prepare_thermal, require_columns,
-                               simulate_knots, thermal_residual_parts)
+from .start_state import StartModel
+from .thermal_residual import (DEFAULT_START, ThermalRun, decimation_step, prepare_thermal,
+                               require_columns, simulate_knots, thermal_residual,
+                               start_states, thermal_residual_parts, thermometer_floors)
 
 __all__ = ["StageReport", "FitResult", "fit_model", "fitted_name", "default_free",
            "write_fitted_model",
@@ -164,6 +166,11 @@ class FitResult:
     noise: GyroNoiseEstimate | None = None
     """Gyro noise fitted to the Allan deviation of the drift residual at rest, with the curve
     (None: the drift stage did not run or ``fit_noise`` was off)."""
+    start_c: dict[str, np.ndarray] = field(default_factory=dict)
+    """Each run's node temperatures at power-on [degC] {run name: (n_nodes,)}, as the thermal
+    stage estimated them (:mod:`nfs.diagnose.start_state`); empty: every node at T0."""
+    start_amplitudes_c: dict[str, np.ndarray] = field(default_factory=dict)
+    """Each run's start amplitudes a [K] (slow modes, then the fast remainder u)."""
 
     @property
     def converged(self) -> dict[str, bool]:
@@ -323,14 +330,17 @@ def _prepare_drift(run: Run, decimate_s: float, acc_channels: bool,
                      azimuth=azimuth, aux=aux)
 
 
-def _drift_context(inst: Instrument, rd: _DriftRun):
+def _drift_context(inst: Instrument, rd: _DriftRun, start_c: np.ndarray | None = None):
+    """The effect context of ``inst`` replayed on the run, started at ``start_c`` (node
+    temperatures at power-on [degC]; None: T0 everywhere)."""
     cond = rd.cond
     t = cond.time_s
     _, moving = cond.turntable(t)
     power, _, _ = thermal_power(inst, t, moving)
     ambient = cond.start_temperature_c if cond.chamber_c is None else cond.chamber_c(t)
     th = thermal.simulate(inst.network, t, ambient_c=ambient,
-                          initial_c=cond.start_temperature_c, power_w=power,
+                          initial_c=cond.start_temperature_c if start_c is None else start_c,
+                          power_w=power,
                           ambient_hold="first-order")   # the recorded chamber, interpolated
     return effect_context(inst, th, rd.azimuth, rd.projection, moving, rd.aux)
 
@@ -476,7 +486,8 @@ def fit_model(inst: Instrument, runs: Sequence[Run], free: Iterable[str] | None 
               max_nfev: int | None = 100, drift_signal: str = "raw",
               prior: Mapping[str, float | str] | str | None = "default",
               prior_scale: float = 1.0, soak_anchor: bool = True, n_starts: int = 3,
-              fit_noise: bool = True) -> FitResult:
+              fit_noise: bool = True, start_state: StartModel | None = DEFAULT_START,
+              start_c: Mapping[str, np.ndarray] | None = None) -> FitResult:
     """Calibrate the free parameters of ``inst`` to ``runs`` (module docstring for the method).
 
     Parameters
@@ -518,6 +529,13 @@ def fit_model(inst: Instrument, runs: Sequence[Run], free: Iterable[str] | None 
         :func:`nfs.diagnose.bound_advice.perturbed_starts`), tried only while the best
         solution stays above the noise (reduced chi-square > 1.5) or on a bound; the lowest
         cost is kept.  1: the preset only.
+    start_state : StartModel or None
+        How each run's node temperatures at power-on are estimated with the thermal
+        parameters (:mod:`nfs.diagnose.start_state`: an unfinished soak, a unit off its
+        air); None: every node at T0, the soak taken as complete.
+    start_c : mapping {run name: node temperatures [degC]}, optional
+        The runs' starts when the thermal stage does not run (default: estimated from the
+        thermometers through ``inst`` with ``start_state``).
     fit_noise : bool
         After the drift stage, fit the gyro's ARW, bias instability and rate random walk to the
         Allan deviation of the drift residual at rest (:mod:`nfs.diagnose.noise_fit`) and set
@@ -554,11 +572,19 @@ def fit_model(inst: Instrument, runs: Sequence[Run], free: Iterable[str] | None 
     start = dict(initial_params)
     soak = None
     if pr is not None and soak_anchor and any(p.endswith(".offset_c") for p in paths):
-        soak = soak_offsets(inst, runs)
+        soak = soak_offsets(inst, runs, start=start_state if "thermal" in stages else None)
         pr, start = anchor_offsets(pr, start, soak, prior_scale)
 
     current = inst
     noise = None
+    amplitudes: dict[str, np.ndarray] = {}
+    if "thermal" in stages:
+        start_c = {}
+    elif start_c is not None:
+        start_c = dict(start_c)
+    else:
+        start_c = ({} if start_state is None else
+                   start_states(inst, runs, decimate_s, start_state))
     stage_reports: dict[str, StageReport] = {}
     stderr: dict[str, float] = {}
     unident: dict[str, str] = {}
@@ -584,25 +610,29 @@ def fit_model(inst: Instrument, runs: Sequence[Run], free: Iterable[str] | None 
     if "thermal" in stages:
         data = [prepare_thermal(r, decimate_s) for r in runs]
         sp = by_stage["thermal"]
-        rms_before.update(_rms(thermal_residual_parts([current], data)[0]))
+        rms_before.update(_rms(thermal_residual_parts([current], data, start_state)[0]))
         if sp:
             base = current
             # each thermometer's rows divided by its noise and rounding level, so the cost is
             # chi-square-like beside the prior rows
-            floor = {col: math.hypot(base.thermometers[nm].noise_c,
-                                     base.thermometers[nm].quantum_c / math.sqrt(12.0)) or 1.0
-                     for nm, col in THERMOMETERS.items()}
+            floor = thermometer_floors(base)
 
             def fun_many(xs) -> list[np.ndarray]:
-                # the parameter vectors of a Jacobian solved as one stack (thermal_residual)
+                # the parameter vectors of a Jacobian solved as one stack (thermal_residual),
+                # each run's start profiled out with its prior rows
                 models = [set_params(base, dict(zip(sp, x))) for x in xs]
+                res = thermal_residual(models, data, start_state)
                 return [np.concatenate([a / floor[c] for c, arrs in parts.items()
-                                        for a in arrs])
-                        for parts in thermal_residual_parts(models, data)]
+                                        for a in arrs] + [rows])
+                        for parts, rows in zip(res.parts, res.start_rows)]
 
             current = stage("thermal", lambda x: fun_many([x])[0], base, sp, batch=fun_many)
             unident.update(_tec_identifiability(current, data, sp))
-        rms_after.update(_rms(thermal_residual_parts([current], data)[0]))
+        final = thermal_residual([current], data, start_state)
+        rms_after.update(_rms(final.parts[0]))
+        if start_state is not None:
+            start_c = {rd.run.name: final.start_c[0][i] for i, rd in enumerate(data)}
+            amplitudes = {rd.run.name: final.amplitudes_c[0][i] for i, rd in enumerate(data)}
 
     if "drift" in stages and by_stage["drift"]:
         sp = by_stage["drift"]
@@ -610,7 +640,7 @@ def fit_model(inst: Instrument, runs: Sequence[Run], free: Iterable[str] | None 
         data_d = [_prepare_drift(r, decimate_s, acc_ch, drift_signal) for r in runs]
         resim = any(kinds[p] in _THERMAL_KINDS for p in sp)
         for rd in data_d:
-            rd.ctx = _drift_context(current, rd)
+            rd.ctx = _drift_context(current, rd, start_c.get(rd.run.name))
         base = current
         weights = {ch: float(np.median([rd.scale[ch] for rd in data_d]))
                    for ch in data_d[0].measured}
@@ -618,7 +648,7 @@ def fit_model(inst: Instrument, runs: Sequence[Run], free: Iterable[str] | None 
         def parts_of(model) -> dict[str, list[np.ndarray]]:
             parts: dict[str, list[np.ndarray]] = {ch: [] for ch in weights}
             for rd in data_d:
-                ctx = _drift_context(model, rd) if resim else rd.ctx
+                ctx = _drift_context(model, rd, start_c.get(rd.run.name)) if resim else rd.ctx
                 for ch, y in _drift_models(model, rd, ctx).items():
                     parts[ch].append(y - rd.measured[ch])
             return parts
@@ -662,7 +692,8 @@ def fit_model(inst: Instrument, runs: Sequence[Run], free: Iterable[str] | None 
                      prior_centre={} if pr is None else dict(zip(pr.paths, pr.centre.tolist())),
                      prior_sigma={} if pr is None else dict(zip(pr.paths, pr.sigma.tolist())),
                      prior_shift={} if pr is None else pr.shift([params[p] for p in pr.paths]),
-                     bound_advice=advice, soak=soak, noise=noise)
+                     bound_advice=advice, soak=soak, noise=noise, start_c=start_c,
+                     start_amplitudes_c=amplitudes)
 
 
 def write_fitted_model(result: FitResult, path: str | Path) -> Path:

@@ -181,7 +181,8 @@ def _window_mean(x: np.ndarray, knots: np.ndarray) -> np.ndarray:
     return sums / (counts if x.ndim == 1 else counts[:, None])
 
 
-def _prepare(inst: Instrument, run: Run, decimate_s: float) -> _Prepared:
+def _prepare(inst: Instrument, run: Run, decimate_s: float,
+             start_c: np.ndarray | None = None) -> _Prepared:
     for col in ("time_s", "position_deg", "moving", *THERMOMETERS.values()):
         if col not in run.columns:
             raise InputError(f"run '{run.name}' has no column '{col}', which the thermal "
@@ -225,7 +226,7 @@ def _prepare(inst: Instrument, run: Run, decimate_s: float) -> _Prepared:
                                 for col in THERMOMETERS.values()])
     record = ThermalRecord(time_s=t_knot, readings_c=readings,
                            ambient_c=_window_mean(amb, knots),
-                           initial_c=cond.start_temperature_c,
+                           initial_c=cond.start_temperature_c if start_c is None else start_c,
                            power_w=_window_mean(fixed, knots), power_law=law)
     return _Prepared(record=record, time_s=t, knots=knots)
 
@@ -249,8 +250,8 @@ def smooth_runs(inst: Instrument, runs: Sequence[Run], *,
                 bounds_w2_per_s: tuple[float, float] = (1e-12, 1e-1),
                 noise_weights: Mapping[str, float] | None = None,
                 initial_std_c: float = 0.05, initial_power_std_w: float = 0.0,
-                initial_power_bounds_w: tuple[float, float] | None = None
-                ) -> RunSmoothing:
+                initial_power_bounds_w: tuple[float, float] | None = None,
+                start_c: Mapping[str, np.ndarray] | None = None) -> RunSmoothing:
     """Node temperatures of ``runs`` estimated from their thermometers through ``inst``'s network.
 
     Parameters
@@ -269,7 +270,7 @@ def smooth_runs(inst: Instrument, runs: Sequence[Run], *,
     bounds_w2_per_s : (float, float)
         Search interval of q [W^2/s].
     initial_std_c : float
-        Standard deviation of every node temperature about T0 at power-on [K].
+        Standard deviation of every node temperature about its start at power-on [K].
     initial_power_std_w : float
         Standard deviation of the unmodelled heat of every node at power-on [W].  The
         default 0 lets the unmodelled heat grow from zero (a wrong capacity or conductance
@@ -281,6 +282,9 @@ def smooth_runs(inst: Instrument, runs: Sequence[Run], *,
     initial_power_bounds_w : (float, float), optional
         Estimate the unmodelled heat's standard deviation at power-on by maximum likelihood
         within these bounds [W] too (with q; about three times the filter runs).
+    start_c : mapping {run name: node temperatures [degC]}, optional
+        Each run's start (:func:`nfs.diagnose.thermal_residual.start_states`: an unfinished
+        soak); a run not in it starts at its T0 everywhere.
 
     Returns
     -------
@@ -298,7 +302,8 @@ def smooth_runs(inst: Instrument, runs: Sequence[Run], *,
     if not (math.isfinite(decimate_s) and decimate_s > 0):
         raise NfsError(f"smooth_runs: decimate_s must be > 0, got {decimate_s}")
     sensors = thermometer_sensors(inst, min_lag_s=_MIN_LAG_FRACTION * decimate_s)
-    prepared = [_prepare(inst, run, decimate_s) for run in runs]
+    start_c = start_c or {}
+    prepared = [_prepare(inst, run, decimate_s, start_c.get(run.name)) for run in runs]
     try:
         est = estimate_states(inst.network, sensors, [p.record for p in prepared],
                               q_w2_per_s=q_w2_per_s, bounds_w2_per_s=bounds_w2_per_s,

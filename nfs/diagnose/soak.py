@@ -36,6 +36,7 @@ from ..instrument import Instrument
 from ..io.measurement import Run
 from ..sensors import thermometer_reading
 from .prior import Prior
+from .start_state import StartModel, soak_history, start_basis, start_prior
 
 __all__ = ["DEFAULT_WINDOW_S", "DEFAULT_SOAK_TOLERANCE_K", "SoakAnchor", "soak_offsets",
            "anchor_offsets"]
@@ -91,8 +92,26 @@ def _model_readings(inst: Instrument, run: Run, n: int) -> dict[str, np.ndarray]
     return out
 
 
+def _start_spread(inst: Instrument, run: Run, start: StartModel | None
+                  ) -> dict[str, tuple[float, float]]:
+    """Per thermometer, the prior (centre, standard deviation) [K] of what the run's start
+    puts on its sensed temperature at power-on (:mod:`nfs.diagnose.start_state`)."""
+    if start is None:
+        return {name: (0.0, 0.0) for name in THERMOMETERS}
+    net = inst.network
+    basis = start_basis(net, start.n_slow, start.fast_width_c > 0)
+    centre, width = start_prior(net, basis, run.meta.start_temperature_c, soak_history(run),
+                                start)
+    out = {}
+    for name in THERMOMETERS:
+        seen = inst.thermometers[name].sensed(basis.T, net.node_names)   # (k,)
+        out[name] = (float(seen @ centre), float(np.sqrt(np.sum((seen * width) ** 2))))
+    return out
+
+
 def soak_offsets(inst: Instrument, runs: Sequence[Run], *, window_s: float = DEFAULT_WINDOW_S,
-                 tolerance_k: float = DEFAULT_SOAK_TOLERANCE_K) -> SoakAnchor:
+                 tolerance_k: float = DEFAULT_SOAK_TOLERANCE_K,
+                 start: StartModel | None = None) -> SoakAnchor:
     """Each thermometer's offset from the first ``window_s`` of every run (module docstring).
 
     Parameters
@@ -106,6 +125,13 @@ def soak_offsets(inst: Instrument, runs: Sequence[Run], *, window_s: float = DEF
     tolerance_k : float
         A run whose estimate of any thermometer exceeds this in magnitude is reported as not
         soaked and left out [K].
+    start : StartModel, optional
+        The start of each run is not T0 everywhere but estimated by the fit
+        (:mod:`nfs.diagnose.start_state`): each run's estimate has the prior centre of its
+        start's sensed deviation taken off, and the anchor's standard error takes in the
+        prior's spread of it, averaged over the runs (without a soak history the anchor is
+        then a weak one, as it should be: an unfinished soak looks like an offset at
+        power-on).
 
     Returns
     -------
@@ -115,6 +141,7 @@ def soak_offsets(inst: Instrument, runs: Sequence[Run], *, window_s: float = DEF
         raise InputError(f"soak window must be > 0 s, got {window_s}")
     per_run: dict[str, dict[str, float]] = {}
     n_used: dict[str, int] = {}
+    spread: dict[str, dict[str, tuple[float, float]]] = {}
     unsoaked, warnings = [], []
     for run in runs:
         for col in ("time_s", "moving", *THERMOMETERS.values()):
@@ -125,6 +152,7 @@ def soak_offsets(inst: Instrument, runs: Sequence[Run], *, window_s: float = DEF
         t = np.asarray(run["time_s"], dtype=float)
         n = max(1, int(np.count_nonzero(t - t[0] < window_s)))
         model = _model_readings(inst, run, n)
+        spread[run.name] = _start_spread(inst, run, start)
         est = {}
         t0_c = run.meta.start_temperature_c
         for name, col in THERMOMETERS.items():
@@ -137,7 +165,7 @@ def soak_offsets(inst: Instrument, runs: Sequence[Run], *, window_s: float = DEF
             # columns 1 and w(t); lstsq gives the plain mean when the model predicts no warming
             design = np.column_stack([np.ones(warming.size), warming])
             coef, *_ = np.linalg.lstsq(design, y[ok] - t0_c, rcond=None)
-            est[name] = float(coef[0])
+            est[name] = float(coef[0]) - spread[run.name][name][0]
         per_run[run.name] = est
         n_used[run.name] = n
         bad = {k: v for k, v in est.items() if abs(v) > tolerance_k}
@@ -162,8 +190,10 @@ def soak_offsets(inst: Instrument, runs: Sequence[Run], *, window_s: float = DEF
         floor = math.hypot(m.quantum_c / math.sqrt(12.0),
                            m.noise_c / math.sqrt(n_samples)) / math.sqrt(vals.size)
         scatter = float(np.std(vals, ddof=1) / math.sqrt(vals.size)) if vals.size > 1 else 0.0
+        start_sd = math.sqrt(float(np.mean([spread[r][name][1] ** 2 for r in soaked]))
+                             / vals.size)
         offset[name] = float(np.mean(vals))
-        stderr[name] = max(scatter, floor)
+        stderr[name] = math.hypot(max(scatter, floor), start_sd)
     return SoakAnchor(offset_c=offset, stderr_c=stderr, per_run=per_run,
                       unsoaked=tuple(unsoaked), window_s=float(window_s),
                       warnings=tuple(warnings))

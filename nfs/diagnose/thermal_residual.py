@@ -37,10 +37,12 @@ from ..instrument import Instrument
 from ..io.measurement import Run
 from ..sensors import thermometer_reading
 from ..signal import uniform_steps
+from .start_state import StartModel, solve_amplitudes, start_basis, soak_history, start_prior
 
-__all__ = ["MAX_STACK", "THERMAL_COLUMNS", "ThermalRun", "Knots", "prepare_thermal", "simulate_knots",
-           "readings", "thermal_residual_parts", "require_columns", "decimation_step",
-           "window_mean"]
+__all__ = ["MAX_STACK", "THERMAL_COLUMNS", "DEFAULT_START", "ThermalRun", "Knots",
+           "ThermalResidual", "prepare_thermal", "simulate_knots", "readings",
+           "thermometer_floors", "thermal_residual", "thermal_residual_parts", "start_states",
+           "require_columns", "decimation_step", "window_mean"]
 
 _ZERO_RNG = np.random.default_rng(0)   # never drawn from: the readings are noise-free
 
@@ -89,6 +91,9 @@ class ThermalRun:
     per_knot: int = 0           # samples per knot interval when every interval has the same
     """offsets (uniform sampling, knots every ``per_knot`` samples): the lag can then be
     stepped knot to knot (:func:`readings`); 0 otherwise."""
+    history: tuple[float, float] | None = None
+    """The soak history of the sidecar (soak_from_c [degC], soak_h [h]), if given
+    (:func:`nfs.diagnose.start_state.soak_history`)."""
 
 
 def prepare_thermal(run: Run, decimate_s: float) -> ThermalRun:
@@ -122,7 +127,8 @@ def prepare_thermal(run: Run, decimate_s: float) -> ThermalRun:
     return ThermalRun(run=run, t0_c=cond.start_temperature_c, time_s=t, knots=knots,
                        t_knot=t_knot, moving_knot=window_mean(moving, k),
                        ambient_knot=window_mean(amb, k), measured=measured, mask=mask,
-                       interval=interval, basis=basis, per_knot=k if uniform else 0)
+                       interval=interval, basis=basis, per_knot=k if uniform else 0,
+                       history=soak_history(run))
 
 
 @dataclass
@@ -197,9 +203,12 @@ def _each(x: np.ndarray, mats: np.ndarray) -> np.ndarray:
     return (xs @ mats).reshape(n_s, n_k, r, -1).transpose(1, 0, 2, 3)
 
 
-def simulate_knots(insts: Sequence[Instrument], data: Sequence[ThermalRun]
-                   ) -> list[list[Knots]]:
+def simulate_knots(insts: Sequence[Instrument], data: Sequence[ThermalRun],
+                   initial_offset_c: np.ndarray | None = None) -> list[list[Knots]]:
     """Solve the network of every instrument on the knots of every run: ``out[s][i]``.
+
+    Every node starts at the run's T0, plus ``initial_offset_c[s, i]`` [K] (shape
+    (instruments, runs, nodes)) when given.
 
     The same exact step as :func:`thermal.simulate` (zero-order hold of the inputs over each
     knot interval, :func:`thermal.solve.step_matrices` once per instrument and step size),
@@ -223,8 +232,9 @@ def simulate_knots(insts: Sequence[Instrument], data: Sequence[ThermalRun]
             continue
         for s, inst in enumerate(insts):
             power, _, _ = thermal_power(inst, rd.t_knot, rd.moving_knot)
+            start = rd.t0_c if initial_offset_c is None else rd.t0_c + initial_offset_c[s, i]
             th = thermal.simulate(inst.network, rd.t_knot, ambient_c=rd.ambient_knot,
-                                  initial_c=rd.t0_c, power_w=power)
+                                  initial_c=start, power_w=power)
             out[s][i] = Knots(names, th.temperature_c, th.rate_c_per_s)
     if not groups:
         return out  # type: ignore[return-value]
@@ -294,6 +304,8 @@ def simulate_knots(insts: Sequence[Instrument], data: Sequence[ThermalRun]
         law_p = np.zeros((n_k, n_s, r, len(cols)))
         g_law = g_pow[:, cols, :]
         temp[0] = t0[None, :, None]
+        if initial_offset_c is not None:
+            temp[0] += initial_offset_c[:, members, :]
         times = t_knot.tolist()
         moving_rows = np.tile(moving, (1, n_s))
         for k in range(n_k):
@@ -403,18 +415,112 @@ def readings(insts: Sequence[Instrument], rd: ThermalRun, ths: Sequence[Knots],
     return out
 
 
-def thermal_residual_parts(insts: Sequence[Instrument], data: Sequence[ThermalRun]
-                           ) -> list[dict[str, list[np.ndarray]]]:
-    """Model minus measured readings at the knots (NaN readings dropped), per instrument:
-    ``out[s][column][run]`` [K]."""
+#: The start of every run estimated with one slow mode and the fast remainder of a uniform
+#: offset (:mod:`nfs.diagnose.start_state`).
+DEFAULT_START = StartModel()
+
+
+def thermometer_floors(inst: Instrument) -> dict[str, float]:
+    """Each thermometer column's noise and rounding level sqrt(noise_c^2 + quantum_c^2 / 12)
+    [K] (1 where both are zero): the scale its residual rows are divided by."""
+    out = {}
+    for name, col in THERMOMETERS.items():
+        th = inst.thermometers[name]
+        out[col] = math.hypot(th.noise_c, th.quantum_c / math.sqrt(12.0)) or 1.0
+    return out
+
+
+@dataclass
+class ThermalResidual:
+    """The thermometer residual of a stack of instruments, the start of every run profiled."""
+
+    parts: list[dict[str, list[np.ndarray]]]
+    """Model minus measured at the knots, NaN readings dropped: ``parts[s][column][run]`` [K]."""
+    start_rows: list[np.ndarray]
+    """Per instrument, the start amplitudes' prior rows (a - centre) / width of every run,
+    concatenated (empty without a start model)."""
+    start_c: list[np.ndarray]
+    """Per instrument, every run's node temperatures at power-on, shape (runs, nodes) [degC]."""
+    amplitudes_c: list[np.ndarray]
+    """Per instrument, every run's start amplitudes a, shape (runs, k + 1) [K]."""
+
+
+def thermal_residual(insts: Sequence[Instrument], data: Sequence[ThermalRun],
+                     start: StartModel | None = DEFAULT_START) -> ThermalResidual:
+    """Model minus measured readings of every instrument and run, each run started where the
+    readings and the start's prior put it (:mod:`nfs.diagnose.start_state`; ``start=None``:
+    every node at T0).
+
+    The readings' response to each start amplitude comes from the same march (the runs
+    stacked once more per amplitude, started 1 K along its pattern), so the TEC law and the
+    thermometers' lags are in it; the amplitudes are then solved per run and instrument by
+    weighted linear least squares (rows divided by :func:`thermometer_floors`) with their
+    prior.
+    """
     insts = list(insts)
-    parts = [{c: [] for c in THERMOMETERS.values()} for _ in insts]
+    if start is not None and start.n_amplitudes == 0:
+        start = None
+    r_n = len(data)
+    cols = tuple(THERMOMETERS.values())
+    parts = [{c: [] for c in cols} for _ in insts]
+    rows: list[list[np.ndarray]] = [[] for _ in insts]
+    start_c = [np.empty((r_n, len(inst.network.node_names))) for inst in insts]
+    amps = [np.zeros((r_n, 0 if start is None else start.n_amplitudes)) for _ in insts]
     for lo in range(0, len(insts), MAX_STACK):
         chunk = insts[lo:lo + MAX_STACK]
-        knots = simulate_knots(chunk, data)
         groups = _same_thermometer(chunk)
+        if start is None:
+            knots = simulate_knots(chunk, data)
+            for i, rd in enumerate(data):
+                for s, model in enumerate(readings(chunk, rd, [k[i] for k in knots], groups)):
+                    for col, y in model.items():
+                        parts[lo + s][col].append((y - rd.measured[col])[rd.mask[col]])
+                    start_c[lo + s][i] = rd.t0_c
+            continue
+        bases = [start_basis(inst.network, start.n_slow, start.fast_width_c > 0) for inst in chunk]
+        k = bases[0].shape[1]
+        n = bases[0].shape[0]
+        offsets = np.zeros((len(chunk), r_n * (k + 1), n))
+        for s, v in enumerate(bases):
+            for m in range(k):
+                offsets[s, (m + 1) * r_n:(m + 2) * r_n, :] = v[:, m]
+        knots = simulate_knots(chunk, list(data) * (k + 1), offsets)
+        floors = [thermometer_floors(inst) for inst in chunk]
         for i, rd in enumerate(data):
-            for s, model in enumerate(readings(chunk, rd, [k[i] for k in knots], groups)):
-                for col, y in model.items():
-                    parts[lo + s][col].append((y - rd.measured[col])[rd.mask[col]])
-    return parts
+            base = readings(chunk, rd, [kn[i] for kn in knots], groups)
+            moved = [readings(chunk, rd, [kn[i + (m + 1) * r_n] for kn in knots], groups)
+                     for m in range(k)]
+            for s, inst in enumerate(chunk):
+                f = floors[s]
+                r0 = {c: (base[s][c] - rd.measured[c])[rd.mask[c]] for c in cols}
+                g = {c: np.column_stack([(mv[s][c] - base[s][c])[rd.mask[c]] for mv in moved])
+                     for c in cols}
+                centre, width = start_prior(inst.network, bases[s], rd.t0_c, rd.history, start)
+                a = solve_amplitudes(np.concatenate([r0[c] / f[c] for c in cols]),
+                                     np.concatenate([g[c] / f[c] for c in cols]), centre, width)
+                for c in cols:
+                    parts[lo + s][c].append(r0[c] + g[c] @ a)
+                rows[lo + s].append((a - centre) / width)
+                amps[lo + s][i] = a
+                start_c[lo + s][i] = rd.t0_c + bases[s] @ a
+    return ThermalResidual(parts=parts,
+                           start_rows=[np.concatenate(r) if r else np.empty(0) for r in rows],
+                           start_c=start_c, amplitudes_c=amps)
+
+
+def thermal_residual_parts(insts: Sequence[Instrument], data: Sequence[ThermalRun],
+                           start: StartModel | None = DEFAULT_START
+                           ) -> list[dict[str, list[np.ndarray]]]:
+    """Model minus measured readings at the knots (NaN readings dropped), per instrument:
+    ``out[s][column][run]`` [K] (:func:`thermal_residual`, its parts only)."""
+    return thermal_residual(insts, data, start).parts
+
+
+def start_states(inst: Instrument, runs: Sequence[Run], decimate_s: float = 10.0,
+                 start: StartModel | None = DEFAULT_START) -> dict[str, np.ndarray]:
+    """Each run's node temperatures at power-on [degC] {run name: (n_nodes,)}, estimated
+    from its thermometers through ``inst`` (:func:`thermal_residual`; ``start=None``: T0)."""
+    runs = list(runs)
+    data = [prepare_thermal(r, decimate_s) for r in runs]
+    res = thermal_residual([inst], data, start)
+    return {r.name: res.start_c[0][i] for i, r in enumerate(runs)}

@@ -4,6 +4,8 @@ Oracle: runs simulated from a known instrument (the default with some parameters
 +20 %, noise as usual) -- the fit started from the unperturbed default must recover the
 perturbed values within the stated tolerance, and the thermometer residual must fall to the
 thermometer's own noise and quantisation level sqrt(0.01^2 + 0.0625^2/12) = 0.0206 K.
+The runs are soaked exactly at T0 (the nominal world) and the fit is told so
+(``start_state=None``); tests/diagnose/test_start_state.py fits unfinished soaks.
 At-bound, single-run and bad-input cases are checked against what they must report.
 """
 
@@ -52,7 +54,7 @@ def runs(scenario, truth):
 
 @pytest.fixture(scope="module")
 def fitted(scenario, runs):
-    return fit_model(scenario.instrument, runs)
+    return fit_model(scenario.instrument, runs, start_state=None)
 
 
 def test_recovers_perturbed_parameters(fitted, truth):

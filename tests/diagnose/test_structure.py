@@ -5,7 +5,10 @@
 start-up, one of stable stage), simulated with noise by nfs.experiment.simulate_run.
 Residual grid every 30 s.  Oracle: the generating instrument (we know its structure).
 Noise floor of each thermometer: sqrt(0.01^2 + 0.0625^2 / 12) = 0.0206 K (default noise and
-quantum).
+quantum).  The runs are soaked exactly at T0 (the nominal world) and the check is told so
+(``start_state=None``): with every run's start free, a common start of -0.3 K on the slow
+mode takes up most of what the hidden link does out of sample (CV 1.1x the floor instead of
+2.5x), which is the price of not knowing how a soak ended.
 """
 
 from __future__ import annotations
@@ -49,7 +52,7 @@ def own(default):
     def alts(model):
         return structural_alternatives(model) + [
             effect_alternative(model, "heat_source", "coil_outer")]
-    return thermal_adequacy(default, _runs(default), alts)
+    return thermal_adequacy(default, _runs(default), alts, start_state=None)
 
 
 @pytest.fixture(scope="module")
@@ -59,7 +62,7 @@ def link_runs(default):
 
 @pytest.fixture(scope="module")
 def hidden_link(default, link_runs):
-    return thermal_adequacy(default, link_runs)
+    return thermal_adequacy(default, link_runs, start_state=None)
 
 
 def test_alternatives_of_the_default(default):
@@ -168,8 +171,9 @@ def _exact_cv_k(model, runs, extra):
     for i, held in enumerate(runs):
         train = runs[:i] + runs[i + 1:]
         fit = fit_model(model, train, free=default_free(model, ("thermal",)) + extra,
-                        stages=("thermal",), decimate_s=30.0)
-        parts = thermal_residual_parts([fit.instrument], [prepare_thermal(held, 30.0)])[0]
+                        stages=("thermal",), decimate_s=30.0, start_state=None)
+        parts = thermal_residual_parts([fit.instrument], [prepare_thermal(held, 30.0)],
+                                       None)[0]
         x = np.concatenate([v[0] for v in parts.values()])
         sse, n = sse + float(x @ x), n + x.size
     return math.sqrt(sse / n)
@@ -196,7 +200,7 @@ def test_thermometer_elsewhere_is_found(default):
     ``thermometer``: coil_inner and the housing, both slow nodes, fit alike) and brings
     the held-out residual within 1.5x its floor."""
     truth = thermometer_weight(default, "fog", "coil_inner").build([0.3])
-    ad = thermal_adequacy(default, _runs(truth))
+    ad = thermal_adequacy(default, _runs(truth), start_state=None)
     assert not ad.adequate
     assert ad.worst.thermometer == "fog" and ad.worst.ratio > 3.0
     assert ad.best.kind == "thermometer", [a.name for a in ad.alternatives]
