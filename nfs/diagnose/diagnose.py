@@ -104,7 +104,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from ..errors import NfsError
+from ..errors import NfsError, ThermalError
 from ..instrument import Instrument
 from ..io.measurement import Run
 from .adequacy import MODEL_RIVAL, structure_rival, thermal_adequacy
@@ -122,7 +122,7 @@ from .start_state import StartModel
 from .thermal_residual import DEFAULT_START, start_states
 from .stats import (RunGrams, augmented_grams, clustered_fit, group_cv_rms, holm,
                     run_grams, solve)
-from .structure import effect_alternative, structural_alternatives
+from .structure import effect_alternative, physical_lower, structural_alternatives
 from .result import CandidateScore, Diagnosis
 from .unexplained import unexplained
 
@@ -306,14 +306,70 @@ def _explained_by_top(ranking: list[CandidateScore], scored: list[_Scored], grou
     return out
 
 
+def _heading_or_nan(f) -> float:
+    """A heading RMSE after a linearised thermal step, or NaN where that step leaves the
+    network unphysical (a capacity through zero: the node temperatures are not finite)."""
+    try:
+        v = float(f())
+    except (np.linalg.LinAlgError, FloatingPointError, ValueError, ThermalError):
+        return math.nan
+    return v if math.isfinite(v) else math.nan
+
+
+def _physical(sc: CandidateScore) -> bool:
+    """No coefficient below its physical bound (a heat power or a lag below 0)."""
+    for k, v in sc.coefficient.items():
+        lo = physical_lower(sc.effect, k)
+        if lo is not None and v < lo:
+            return False
+    return True
+
+
+def _rank_key(s: _Scored) -> tuple:
+    """Significant thermometer candidates first (a missing thermal effect also shows in the
+    drift, a missing gyro effect never in the thermometers), then significant drift and
+    accelerometer ones, then the rest, unphysical ones last; within each group by the
+    relative drop of the CV RMS."""
+    sc = s.score
+    group = (0 if sc.channel == "thermometers" else 1) if sc.significant else \
+        (2 if sc.physical else 3)
+    return group, sc.cv_rms_after / sc.cv_rms_before
+
+
 # ---------------------------------------------------------------------------------------------
 # Diagnose
 
-def diagnose(inst: Instrument, runs: Sequence[Run], *, n_boot: int = 20, alpha: float = 0.05,
-             random_state=0, decimate_s: float = DEFAULT_DECIMATE_S,
-             node_temperatures: str = "smoothed", check_structure: bool = True,
-             start_state: StartModel | None = DEFAULT_START) -> Diagnosis:
+def diagnose(inst: Instrument, runs: Sequence[Run], **kwargs) -> Diagnosis:
     """Score every candidate effect the model lacks (module docstring for the method).
+
+    Keywords are those of :func:`diagnose_candidates`.  A linear algebra that these runs
+    leave ill-conditioned (a singular or non-finite system in a candidate's refit) does not
+    end in a traceback: the diagnosis comes back with its ``failure`` set and the answer
+    "cannot be determined from these runs", with the reason.
+
+    Raises
+    ------
+    NfsError
+        Fewer than 2 runs, a bad setting, a run without a column a stage needs.
+    """
+    t0 = time.perf_counter()
+    try:
+        return diagnose_candidates(inst, runs, **kwargs)
+    except (np.linalg.LinAlgError, FloatingPointError) as exc:
+        return Diagnosis(ranking=(), not_tried=(), unexplained={}, baseline=None,
+                         time_s=time.perf_counter() - t0, alpha=kwargs.get("alpha", 0.05),
+                         failure=f"a least-squares system of these runs is ill-conditioned "
+                                 f"({exc}); more runs, longer runs or runs at other start "
+                                 "temperatures would condition it")
+
+
+def diagnose_candidates(inst: Instrument, runs: Sequence[Run], *, n_boot: int = 20,
+                        alpha: float = 0.05,
+                        random_state=0, decimate_s: float = DEFAULT_DECIMATE_S,
+                        node_temperatures: str = "smoothed", check_structure: bool = True,
+                        start_state: StartModel | None = DEFAULT_START) -> Diagnosis:
+    """Score every candidate effect the model lacks (:func:`diagnose` without its net for
+    ill-conditioned runs).
 
     Parameters
     ----------
@@ -479,8 +535,8 @@ def diagnose(inst: Instrument, runs: Sequence[Run], *, n_boot: int = 20, alpha: 
                     structure_tie=None if r in (None, MODEL_RIVAL) else r))
     # Thermometers are upstream of the drift: significant thermometer candidates rank first;
     # within each group, by the relative drop of the CV RMS.
-    scored.sort(key=lambda s: (not (s.score.significant and s.score.channel == "thermometers"),
-                               s.score.cv_rms_after / s.score.cv_rms_before))
+    scored = [replace(s, score=replace(s.score, physical=_physical(s.score))) for s in scored]
+    scored.sort(key=_rank_key)
     drift_of: dict[str, list[PreparedRun]] = {}
 
     def after_thermal(s: _Scored) -> list[PreparedRun]:
@@ -523,11 +579,12 @@ def diagnose(inst: Instrument, runs: Sequence[Run], *, n_boot: int = 20, alpha: 
                 # the linearised thermal refit (one Gauss-Newton step) then the drift refit,
                 # beside the same step without the candidate
                 if h_before_t is None:
-                    h_before_t = refit_heading_rmse(prepare_runs(
+                    h_before_t = _heading_or_nan(lambda: refit_heading_rmse(prepare_runs(
                         thermal_step_instrument(inst, ts, beta_t), runs, decimate_s,
-                        start_c=start_c)[0])
+                        start_c=start_c)[0]))
                 sc = replace(sc, heading_rmse_before_deg=h_before_t,
-                             heading_rmse_after_deg=refit_heading_rmse(after_thermal(s)))
+                             heading_rmse_after_deg=_heading_or_nan(
+                                 lambda: refit_heading_rmse(after_thermal(s))))
         ranking.append(sc)
     ranking = _explained_by_top(ranking, scored, groups, channels, bare, after_thermal)
     return Diagnosis(ranking=tuple(ranking), not_tried=tuple(not_tried),

@@ -90,7 +90,7 @@ from ..io.atomic import atomic_write_text
 from ..io.measurement import Run
 from ..sensors import axis_elevation_deg
 from .bound_advice import bound_advice, perturbed_starts
-from .noise_fit import GyroNoiseEstimate, gyro_noise_from_residual
+from .noise_fit import GyroNoiseEstimate, gyro_noise_from_residual, noise_record
 from .params import (_all_paths, expand_paths, fit_bounds, get_param,
                      set_params)
 from .prior import build_prior
@@ -104,7 +104,7 @@ from .thermal_residual import (DEFAULT_START, ThermalRun, decimation_step, prepa
 
 __all__ = ["StageReport", "FitResult", "fit_model", "fitted_name", "default_free",
            "write_fitted_model",
-           "model_drift_dph", "STAGES", "DEFAULT_DECIMATE_S"]
+           "model_drift_dph", "far_from_start", "FAR_FACTOR", "STAGES", "DEFAULT_DECIMATE_S"]
 
 #: The stages of :func:`fit_model`, in order.
 STAGES = ("thermal", "drift")
@@ -456,14 +456,38 @@ def _level_start(base: Instrument, data_d: list[_DriftRun], sp: Sequence[str],
 
 
 def _noise_of(model: Instrument, data_d: list[_DriftRun]) -> GyroNoiseEstimate:
-    """Allan fit of the full-rate drift residual at rest, gyro - projection - model drift."""
+    """Allan fit of the full-rate drift residual at rest, gyro - projection - model drift,
+    after the start-up hour and with its position harmonics removed
+    (:func:`nfs.diagnose.noise_fit.noise_record`)."""
     recs = []
     for rd in data_d:
         e = (np.asarray(rd.run["gyro_dph"], dtype=float) - rd.projection
              - model_drift_dph(model, rd.ctx, rd.cond.latitude_deg))
-        recs.append(e[rd.trusted])
+        recs.append(noise_record(e[rd.trusted], rd.cond.time_s[rd.trusted],
+                                 rd.azimuth[rd.trusted]))
     fs = float(np.median([rd.cond.sample_rate_hz for rd in data_d]))
     return gyro_noise_from_residual(recs, fs)
+
+
+#: A fitted value this many times its start (or its inverse), or this many prior widths
+#: away, is reported as moved far: one effect or node explaining what another should.
+FAR_FACTOR = 3.0
+
+
+def far_from_start(start: float, value: float, prior_shift: float | None) -> str:
+    """'from a to b (k times; s prior widths)' when ``value`` is far from ``start``
+    (:data:`FAR_FACTOR` times or its inverse, a change of sign, or that many prior widths),
+    else ''."""
+    ratio = value / start if start else math.nan
+    far = (start != 0 and (ratio > FAR_FACTOR or ratio < 1.0 / FAR_FACTOR)) or (
+        prior_shift is not None and math.isfinite(prior_shift)
+        and abs(prior_shift) > FAR_FACTOR)
+    if not far:
+        return ""
+    what = [f"{ratio:.2g} times" if math.isfinite(ratio) else ""]
+    if prior_shift is not None and math.isfinite(prior_shift):
+        what.append(f"{prior_shift:+.1f} prior widths")
+    return f"from {start:.4g} to {value:.4g} (" + "; ".join(w for w in what if w) + ")"
 
 
 def fitted_name(model_name: str, runs: Sequence[Run]) -> str:
@@ -674,6 +698,14 @@ def fit_model(inst: Instrument, runs: Sequence[Run], free: Iterable[str] | None 
     for p in at_bound:
         warnings.append(f"{p} ended at its bound {bounds[p]} (value {params[p]:.6g}): "
                         f"{advice[p]}")
+    shifts = {} if pr is None else pr.shift([params[q] for q in pr.paths])
+    for p in paths:
+        if p not in at_bound and p not in unident:
+            far = far_from_start(initial_params[p], params[p], shifts.get(p))
+            if far:
+                warnings.append(f"{p} moved {far}: the runs push it far from the model's "
+                                "value, where it may stand in for an effect the model lacks "
+                                "(nfs diagnose)")
     if soak is not None:
         warnings.extend(soak.warnings)
     for p, why in unident.items():
@@ -691,7 +723,7 @@ def fit_model(inst: Instrument, runs: Sequence[Run], free: Iterable[str] | None 
                      rms_before=rms_before, rms_after=rms_after, warnings=tuple(warnings),
                      prior_centre={} if pr is None else dict(zip(pr.paths, pr.centre.tolist())),
                      prior_sigma={} if pr is None else dict(zip(pr.paths, pr.sigma.tolist())),
-                     prior_shift={} if pr is None else pr.shift([params[p] for p in pr.paths]),
+                     prior_shift=shifts,
                      bound_advice=advice, soak=soak, noise=noise, start_c=start_c,
                      start_amplitudes_c=amplitudes)
 

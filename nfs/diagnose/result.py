@@ -11,7 +11,46 @@ from .candidates import Candidate
 from .drift_structure import DriftStructure
 from .fit import FitResult
 
-__all__ = ["CandidateScore", "Diagnosis", "candidate_finding"]
+__all__ = ["ANSWER_KINDS", "Answer", "CandidateScore", "Diagnosis", "candidate_finding",
+           "label_of"]
+
+#: The kinds of :class:`Answer`, one per diagnosis.
+ANSWER_KINDS = ("add", "tie", "nothing", "unexplained", "undetermined")
+
+
+@document_fields
+@dataclass(frozen=True)
+class Answer:
+    """The one thing a diagnosis tells an engineer to do."""
+
+    kind: str
+    """``add``: add the one effect in ``labels``; ``tie``: these runs cannot tell the
+    explanations in ``labels`` apart (a run that would: ``nfs design``); ``nothing``: the
+    residual is noise, nothing beyond it; ``unexplained``: the residual is not noise but no
+    library effect explains it; ``undetermined``: these runs cannot determine it (``text``
+    says why)."""
+    labels: tuple[str, ...]
+    """Effect labels (``name`` or ``name:target``) or structural alternatives' names."""
+    text: str
+    """One sentence in words."""
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"kind": self.kind, "labels": list(self.labels), "text": self.text}
+
+
+#: The drift's generic structural alternative (:mod:`nfs.diagnose.drift_structure`).
+RATE_ALTERNATIVE = "a rate term on every node"
+
+
+def _coef(s: "CandidateScore") -> str:
+    """Each coefficient with its 95 % interval."""
+    return ", ".join(f"{k} = {v:.3g} [{s.interval[k][0]:.3g}, {s.interval[k][1]:.3g}]"
+                     for k, v in s.coefficient.items() if k in s.interval)
+
+
+def label_of(effect: str, target: str | None) -> str:
+    """``effect`` or ``effect:target``."""
+    return effect if target is None else f"{effect}:{target}"
 
 
 @document_fields
@@ -67,6 +106,9 @@ class CandidateScore:
     """A thermal candidate significant against the model that does not beat this structural
     alternative pooled and run by run (:func:`nfs.diagnose.adequacy.structure_rival`): the
     runs cannot tell the two apart, and the candidate is not significant; None otherwise."""
+    physical: bool = True
+    """False when a coefficient lies below its physical bound (a negative heat power or
+    lag, :func:`nfs.diagnose.structure.physical_lower`): never ranked above a physical one."""
 
     @property
     def cv_drop(self) -> float:
@@ -86,7 +128,7 @@ class CandidateScore:
                 "heading_rmse_before_deg": self.heading_rmse_before_deg,
                 "heading_rmse_after_deg": self.heading_rmse_after_deg,
                 "beyond_structure_p": self.beyond_structure_p,
-                "structure_tie": self.structure_tie}
+                "structure_tie": self.structure_tie, "physical": self.physical}
 
 
 @document_fields
@@ -95,13 +137,15 @@ class Diagnosis:
     """The ranked candidates and what is left unexplained."""
 
     ranking: tuple[CandidateScore, ...]
-    """Scored candidates: significant thermometer ones first, then by relative CV drop."""
+    """Scored candidates: significant thermometer ones first, then the other significant
+    ones, then the rest, unphysical ones last; within each group by relative CV drop."""
     not_tried: tuple[Candidate, ...]
     """Candidates not scored, each with its reason."""
     unexplained: dict[str, Any]
     """Ljung-Box test of the baseline residual and its cross-correlation with every channel."""
-    baseline: FitResult
-    """The model's own drift refit (:func:`fit_model`, drift stage)."""
+    baseline: FitResult | None
+    """The model's own drift refit (:func:`fit_model`, drift stage); None when the diagnosis
+    failed."""
     time_s: float
     """Wall time [s]."""
     alpha: float = 0.05
@@ -119,64 +163,80 @@ class Diagnosis:
     """The drift's thermal structure against a rate term on every node, and the significant
     drift candidates tied with it (:mod:`nfs.diagnose.drift_structure`); None when not
     checked."""
+    failure: str | None = None
+    """Why these runs cannot determine the answer (an ill-conditioned fit), or None."""
 
     @property
     def significant(self) -> list[CandidateScore]:
         return [s for s in self.ranking if s.significant]
 
     @property
-    def verdict(self) -> str:
-        """What fails, whether the thermal structure is adequate, and which effect to add with
-        its coefficient and 95 % interval (or that none is significant)."""
-        parts = []
-        ts = self.thermal_structure
-        sig = self.significant
-        # a significant thermal candidate beat every structural alternative: it is the
-        # thermal model's missing piece, and the structure's misfit is its signature
-        if ts is not None and not ts.adequate and not any(
-                s.channel == "thermometers" for s in sig):
-            parts.append("thermal structure: " + ts.message)
-        def name(s):
-            return s.effect if s.target is None else f"{s.effect}:{s.target}"
-
-        def coef(s):
-            return ", ".join(f"{k} = {v:.3g} [{s.interval[k][0]:.3g}, {s.interval[k][1]:.3g}]"
-                             for k, v in s.coefficient.items() if k in s.interval)
-
-        # thermal candidates the runs cannot tell from a change of the network's structure
-        ties = [s for s in self.ranking if s.structure_tie]
-        tie_text = ("tie: " + "; ".join(
-            f"{name(s)} ({coef(s)}; Holm p {s.holm_p:.2g} against the model) fits the "
-            f"thermometers no better, run by run, than {s.structure_tie}" for s in ties)
-            + ": these runs cannot tell " + ("it" if len(ties) == 1 else "them")
-            + " from that change of the thermal structure") if ties else ""
-        if not sig:
-            if tie_text:
-                parts.append(tie_text)
-            parts.append("no candidate is significant: the missing effect (if any) is not in "
-                         "the library" + (" or is tied with a structural alternative"
-                                          if ties else "") + "; see 'unexplained'")
-            return "; ".join(parts)
-
-        own = [s for s in sig if s.explained_by is None]
-        parts.append("add " + "; ".join(f"{name(s)} ({coef(s)}; Holm p {s.holm_p:.2g}, CV "
-                                        f"RMS -{100 * s.cv_drop:.0f} % on {s.channel})"
-                                        for s in own))
+    def answer(self) -> Answer:
+        """The one answer (:class:`Answer`): add the top significant candidate that no other
+        explains; or a tie when that candidate does not stand beyond a rate term on every
+        node, or when a thermal candidate fits the thermometers no better than a change of
+        structure; or nothing beyond noise; or a residual no library effect explains; or
+        that these runs cannot determine it."""
+        if self.failure:
+            return Answer("undetermined", (),
+                          f"cannot be determined from these runs: {self.failure}")
+        own = [s for s in self.significant if s.explained_by is None]
         ds = self.drift_structure
-        tied = [name(s) for s in own if ds is not None and name(s) in ds.tied]
-        if tied:
-            parts.append("tie: " + ds.tie_message(tied))
-        if tie_text:
-            parts.append(tie_text)
-        by = [s for s in sig if s.explained_by is not None]
-        if by:
-            parts.append(f"also significant alone but explained by {by[0].explained_by}: "
-                         + ", ".join(name(s) for s in by))
-        return "; ".join(parts)
+        if own:
+            top = own[0]
+            lab = label_of(top.effect, top.target)
+            if ds is not None and lab in ds.tied:
+                return Answer("tie", (lab, RATE_ALTERNATIVE),
+                              f"these runs cannot tell apart: {lab} ({_coef(top)}; Holm p "
+                              f"{top.holm_p:.2g} against the model) and {RATE_ALTERNATIVE} "
+                              f"(p beyond it {top.beyond_structure_p:.2g}): right after "
+                              "power-on every node's rate decays like a transient; a run "
+                              "that would tell them apart: nfs design")
+            text = (f"add {lab} ({_coef(top)}; Holm p {top.holm_p:.2g}, CV RMS "
+                    f"-{100 * top.cv_drop:.0f} % on {top.channel})")
+            if len(own) > 1:
+                text += ("; then diagnose again (also significant on their own: "
+                         + ", ".join(label_of(s.effect, s.target) for s in own[1:]) + ")")
+            return Answer("add", (lab,), text)
+        ties = [s for s in self.ranking if s.structure_tie]
+        if ties:
+            s = ties[0]
+            lab = label_of(s.effect, s.target)
+            return Answer("tie", (lab, s.structure_tie),
+                          f"these runs cannot tell apart: {lab} ({_coef(s)}; Holm p "
+                          f"{s.holm_p:.2g} against the model) and {s.structure_tie}, which "
+                          "fits the thermometers as well run by run; a run that would tell "
+                          "them apart: nfs design")
+        why = self._not_noise()
+        if not why:
+            return Answer("nothing", (), "nothing beyond noise: no candidate is significant, "
+                                         "the drift residual is consistent with the gyro "
+                                         "noise model and the thermal structure fits")
+        return Answer("unexplained", (), "no library effect explains what is left: "
+                      + "; ".join(why) + " (see 'unexplained' for the channels it follows)")
+
+    def _not_noise(self) -> list[str]:
+        """What says the residual is more than noise, in words (empty: nothing)."""
+        out = []
+        lb = (self.unexplained or {}).get("ljung_box") or {}
+        if lb and lb.get("consistent") is False:
+            out.append(f"the drift residual is not the gyro noise (Ljung-Box p "
+                       f"{lb.get('p_value', float('nan')):.2g}, variance ratio "
+                       f"{lb.get('variance_ratio', float('nan')):.3g})")
+        ts = self.thermal_structure
+        if ts is not None and not ts.adequate:
+            out.append("thermal structure: " + ts.message)
+        return out
+
+    @property
+    def verdict(self) -> str:
+        """The answer in one sentence (:attr:`answer`)."""
+        return self.answer.text
 
     def to_dict(self) -> dict[str, Any]:
         return {"ranking": [s.to_dict() for s in self.ranking],
-                "verdict": self.verdict,
+                "answer": self.answer.to_dict(), "verdict": self.verdict,
+                "failure": self.failure,
                 "not_tried": [{"effect": c.effect, "target": c.target, "reason": c.reason}
                               for c in self.not_tried],
                 "thermal_structure": (None if self.thermal_structure is None

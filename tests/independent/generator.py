@@ -25,6 +25,11 @@ Sensors
     Gauss-Markov bias; two accelerometers on a tilted table; a chamber that cycles and
     wanders; a TEC drive current and an oscillator voltage.
 
+Family
+    ``family.py`` next to this file draws a whole unit (structure, noise, chamber, soak and
+    the hidden effect's strength) from one seed; its public names are also reached from here
+    (:func:`draw_unit`, :func:`generate_family_set`, :class:`FamilyDraw`).
+
 Run ``python tests/independent/generator.py --help``.  This module imports nothing from
 ``nfs`` or ``thermal``.
 """
@@ -42,9 +47,12 @@ import numpy as np
 from scipy.linalg import expm
 from scipy.signal import lfilter
 
-__all__ = ["OMEGA_IE_DPH", "T_REF_C", "HIDDEN_EFFECTS", "CoilGeometry", "Unit", "Network",
-           "RunData", "coil_network", "unit_network", "Stepper", "simulate_run",
-           "generate_set", "measure_strength", "main"]
+__all__ = ["OMEGA_IE_DPH", "T_REF_C", "HIDDEN_EFFECTS", "TEC_LAWS", "BIAS_NOISE_LAWS",
+           "CoilGeometry", "Unit", "Network", "RunData", "coil_network", "unit_network",
+           "Stepper", "tec_power_w", "gauss_markov", "flicker_sum", "rate_random_walk",
+           "simulate_run", "generate_set", "measure_strength", "main",
+           # from family.py (loaded on first use)
+           "FamilyDraw", "draw_unit", "generate_family_set"]
 
 #: Earth rotation rate Omega_ie [deg/h] (WGS-84: 7.292115e-5 rad/s).
 OMEGA_IE_DPH = 15.041067
@@ -67,6 +75,11 @@ HIDDEN_EFFECTS: dict[str, dict] = {
     "thermometer_lag": {"thermometer": "fog", "tau": 90.0},
     "outside": {"effect": "quadrantal", "c": 0.012, "D2_deg": 15.0},
 }
+
+#: Forms of the TEC law (:func:`tec_power_w`).
+TEC_LAWS = ("quadratic", "piecewise", "saturating")
+#: Forms of the gyro's bias noise on top of the angle random walk (:func:`simulate_run`).
+BIAS_NOISE_LAWS = ("gauss_markov", "flicker", "rate_random_walk")
 
 #: hidden effect -> the measured column it acts on.
 _CHANNEL = {"shupe_product": "gyro_dph", "magnetic": "gyro_dph",
@@ -126,6 +139,16 @@ class Unit:
     """a of the TEC law [W/K]."""
     tec_c_w_per_k2: float = 6.0e-4
     """c of the TEC law [W/K^2]."""
+    tec_law: str = "quadratic"
+    """Form of the TEC law, one of :data:`TEC_LAWS` (see :func:`tec_power_w`)."""
+    tec_heat_w_per_k: float = 0.03
+    """``piecewise``: c_h, the slope below the dead band (heating the source) [W/K]."""
+    tec_cool_w_per_k: float = 0.07
+    """``piecewise``: c_c, the slope above the dead band (cooling the source) [W/K]."""
+    tec_dead_band_k: float = 1.0
+    """``piecewise``: full width of the dead band about T_set [K]."""
+    tec_max_w: float = 1.2
+    """``saturating``: the driver's power limit P_max [W]."""
     tec_resistance_ohm: float = 2.2
     """Electrical resistance of the TEC, for its drive current [ohm]."""
     fog_thermometer: dict = field(default_factory=lambda: {
@@ -159,6 +182,15 @@ class Unit:
     """sigma of the first-order Gauss-Markov bias [deg/h]."""
     gm_tau_s: float = 400.0
     """Correlation time of the Gauss-Markov bias [s]."""
+    bias_noise: str = "gauss_markov"
+    """The gyro's bias noise besides ARW, one of :data:`BIAS_NOISE_LAWS`."""
+    flicker_b_dph: float = 0.003
+    """``flicker``: B, the bias instability coefficient of IEEE 952 [deg/h]."""
+    flicker_taus_s: tuple = (2.0, 6.32, 20.0, 63.2, 200.0, 632.0, 2000.0, 6320.0, 20000.0)
+    """``flicker``: correlation times of the Gauss-Markov processes summed [s], spaced by a
+    constant ratio (see :func:`flicker_sum`)."""
+    rrw_dph_per_rth_h: float = 0.002
+    """``rate_random_walk``: K, the rate random walk [deg/h/sqrt(h)]."""
     tilt_north_deg: float = 0.025
     """alpha_N, turntable tilt towards north [deg]."""
     tilt_east_deg: float = 0.012
@@ -364,9 +396,29 @@ def tec_power_w(unit: Unit, t_src_c):
     module equations (Q_c = alpha I T_c - I^2 R / 2 - K dT, P = alpha I dT + I^2 R; Rowe
     (ed.), CRC Handbook of Thermoelectrics, 1995) motivate the shape; the quadratic itself
     is an assumed smooth fit, not derived from a module.  p0 [W], a [W/K], c [W/K^2] (README).
+
+    ``unit.tec_law`` selects the form (the quadratic above is ``quadratic``):
+
+    ``piecewise``
+        P_tec = p0 + c_h max(0, T_set - w/2 - T_src) + c_c max(0, T_src - T_set - w/2): a
+        heater/cooler controller that idles at p0 inside a dead band of full width w and
+        pumps heat with a slope of its own on each side (a Peltier element heats more
+        efficiently than it cools, its Joule heat helping one way and opposing the other:
+        Rowe (ed.), CRC Handbook of Thermoelectrics, 1995, ch. 54); c_h, c_c [W/K], w [K].
+    ``saturating``
+        P_tec = min(quadratic, P_max): the same law, clipped at the driver's current limit
+        (P_max = I_max^2 R, the drive current cannot rise further) [W].
     """
     d = np.asarray(t_src_c, dtype=float) - unit.tec_set_c
-    return unit.tec_p0_w + unit.tec_a_w_per_k * d + unit.tec_c_w_per_k2 * d * d
+    law = unit.tec_law
+    if law == "piecewise":
+        half = 0.5 * unit.tec_dead_band_k
+        return (unit.tec_p0_w + unit.tec_heat_w_per_k * np.maximum(0.0, -d - half)
+                + unit.tec_cool_w_per_k * np.maximum(0.0, d - half))
+    if law not in ("quadratic", "saturating"):
+        raise ValueError(f"unknown TEC law {law!r}; valid: {', '.join(TEC_LAWS)}")
+    p = unit.tec_p0_w + unit.tec_a_w_per_k * d + unit.tec_c_w_per_k2 * d * d
+    return np.minimum(p, unit.tec_max_w) if law == "saturating" else p
 
 
 # ---------------------------------------------------------------------------------------------
@@ -398,6 +450,55 @@ def shupe_weights(n_layers: int) -> np.ndarray:
     27, fig. 3).  The cosine profile is an assumed smooth shape, not derived from a winding.
     """
     return np.cos(np.pi * (np.arange(n_layers) + 0.5) / n_layers)
+
+
+def gauss_markov(rng: np.random.Generator, n: int, h_s: float, sigma: float, tau_s: float
+                 ) -> np.ndarray:
+    """First-order Gauss-Markov process, stationary from the first sample [unit of sigma].
+
+    b_k+1 = phi b_k + sigma sqrt(1 - phi^2) w_k, phi = exp(-h/tau), b_0 ~ N(0, sigma^2): the
+    exact discretisation of db/dt = -b/tau + white noise, autocorrelation sigma^2
+    exp(-|t|/tau) (Brown & Hwang, Introduction to Random Signals and Applied Kalman
+    Filtering, 4th ed., sec. 2.9 and 3.9); sigma [deg/h], tau [s].
+    """
+    phi = math.exp(-h_s / tau_s)
+    w = rng.standard_normal(n)
+    w[0] /= math.sqrt(1.0 - phi ** 2)        # start in the stationary distribution
+    return sigma * math.sqrt(1.0 - phi ** 2) * lfilter([1.0], [1.0, -phi], w)
+
+
+def flicker_sum(rng: np.random.Generator, n: int, h_s: float, b_dph: float, taus_s
+                ) -> np.ndarray:
+    """Flicker (1/f) bias as a sum of Gauss-Markov processes with log-spaced times [deg/h].
+
+    A process of variance sigma^2 and correlation time tau has the one-sided spectrum
+    4 sigma^2 tau / (1 + (2 pi f tau)^2); summed over tau_i = tau_0 r^i with equal sigma^2
+    it is (4 sigma^2 / (2 pi f)) sum x_i / (1 + x_i^2), x_i = 2 pi f tau_i, which for a
+    dense log grid is (4 sigma^2 / (2 pi f ln r)) int_0^inf dx / (1 + x^2) = sigma^2 /
+    (f ln r) between 1/(2 pi tau_max) and 1/(2 pi tau_min) (Keshner, Proc. IEEE 70(3) 212,
+    1982, sec. III: 1/f noise as a superposition of relaxation processes).  Flicker rate
+    noise of bias instability B has S(f) = B^2 / (2 pi f) (IEEE Std 952-1997, annex C,
+    table C.1), so sigma^2 = B^2 ln r / (2 pi), and its Allan deviation is flat at
+    B sqrt(2 ln 2 / pi) = 0.664 B for averaging times well inside [tau_min, tau_max].
+    ``taus_s`` must be (nearly) geometric; r is taken from its first and last value.
+    """
+    taus = np.asarray(taus_s, dtype=float)
+    if taus.size < 2 or np.any(np.diff(taus) <= 0):
+        raise ValueError("flicker_sum needs at least two increasing correlation times")
+    ln_r = math.log(taus[-1] / taus[0]) / (taus.size - 1)
+    sigma = b_dph * math.sqrt(ln_r / (2.0 * math.pi))
+    return sum(gauss_markov(rng, n, h_s, sigma, float(tau)) for tau in taus)
+
+
+def rate_random_walk(rng: np.random.Generator, n: int, h_s: float, k_dph_per_rth_h: float
+                     ) -> np.ndarray:
+    """Rate random walk from b_0 = 0 [deg/h]: b_k+1 = b_k + K sqrt(h / 3600) w_k.
+
+    Integrated white rate acceleration of density K [deg/h/sqrt(h)]; its Allan deviation is
+    K sqrt(tau / 3) with tau in hours (IEEE Std 952-1997, annex C, table C.1).
+    """
+    step = k_dph_per_rth_h * math.sqrt(h_s / 3600.0)
+    return step * np.concatenate([[0.0], np.cumsum(rng.standard_normal(n - 1))])
 
 
 def _turntable(time_s: np.ndarray):
@@ -460,7 +561,8 @@ class RunData:
     """True chamber air temperature [degC]."""
     gyro_terms_dph: dict
     """Each part of the gyro output [deg/h]: earth, bias, shupe_layers, mean_rate, hidden,
-    arw, gauss_markov."""
+    arw, and the bias noise under its law's name (gauss_markov, flicker or
+    rate_random_walk; :data:`GYRO_NOISE_TERMS`)."""
     acc_terms_g: dict
     """Parts of each accelerometer output [g] (``x_hidden``, ``x_noise``, ...)."""
     clean: dict
@@ -493,6 +595,9 @@ def _check_hidden(hidden: str | None, params: dict | None) -> dict:
     return p
 
 
+#: Names of the gyro's noise terms in :attr:`RunData.gyro_terms_dph`.
+GYRO_NOISE_TERMS = ("arw",) + BIAS_NOISE_LAWS
+
 _STREAMS = ("arw", "gauss_markov", "acc_x", "acc_y", "therm_fog", "therm_x", "therm_y",
             "chamber", "osc", "current")
 
@@ -501,12 +606,18 @@ def simulate_run(start_temperature_c: float, *, hidden: str | None = None,
                  params: dict | None = None, seed: int = 0, run_index: int = 0,
                  duration_s: float = 9000.0, sample_rate_hz: float = 1.0,
                  latitude_deg: float = 30.26, true_heading_deg: float = 212.7,
-                 unit: Unit | None = None, noise: bool = True) -> RunData:
+                 unit: Unit | None = None, noise: bool = True,
+                 chamber_c: np.ndarray | None = None, initial_c: np.ndarray | None = None
+                 ) -> RunData:
     """Generate one start-up run at T0 = ``start_temperature_c`` [degC].
 
     The unit is soaked at T0 (every node at T0) and powered on at t = 0.  Random streams:
     ``SeedSequence((seed, run_index))`` spawned per sensor, so a hidden effect never
     changes another sensor's draws.  ``noise=False`` zeroes every random draw (for checks).
+
+    ``chamber_c`` (one value per sample [degC]) replaces the chamber air process (kept as
+    given, noise or not), ``initial_c`` (one value per node of :func:`unit_network` [degC])
+    the soaked start: the family's unfinished soak (``family.py``) passes both.
     """
     unit = Unit() if unit is None else unit
     p = _check_hidden(hidden, params)
@@ -535,15 +646,26 @@ def simulate_run(start_temperature_c: float, *, hidden: str | None = None,
             raise ValueError(f"heat_source node {p['node']!r} unknown; valid: "
                              + ", ".join(sorted(set(names) | set(node_alias))))
         base_p[idx[target]] += p["power"]
-    chamber = _chamber(unit, start_temperature_c, t, rngs["chamber"])
-    if not noise:
-        chamber = np.full(n, float(start_temperature_c))
+    if chamber_c is not None:
+        chamber = np.asarray(chamber_c, dtype=float)
+        if chamber.shape != (n,):
+            raise ValueError(f"chamber_c needs {n} samples, got shape {chamber.shape}")
+    else:
+        chamber = _chamber(unit, start_temperature_c, t, rngs["chamber"])
+        if not noise:
+            chamber = np.full(n, float(start_temperature_c))
     st = Stepper(net, h)
     drive = st.boundary_terms(chamber[:, None]) + st.gamma_p @ base_p
     g_e = st.gamma_p[:, idx["electronics"]]
     phi = st.phi
     temp = np.empty((n, len(names)))
-    x = np.full(len(names), float(start_temperature_c))
+    if initial_c is None:
+        x = np.full(len(names), float(start_temperature_c))
+    else:
+        x = np.array(initial_c, dtype=float)
+        if x.shape != (len(names),):
+            raise ValueError(f"initial_c needs {len(names)} node temperatures, got shape "
+                             f"{x.shape}")
     p_tec = np.empty(n)
     ie = idx["electronics"]
     # A plain loop: the TEC power depends on the state, so the steps are sequential.
@@ -611,11 +733,18 @@ def simulate_run(start_temperature_c: float, *, hidden: str | None = None,
     terms["hidden"] = hid
     terms["arw"] = gain * unit.arw_deg_per_rth_h * 60.0 * math.sqrt(sample_rate_hz) \
         * rngs["arw"].standard_normal(n)
-    phi_gm = math.exp(-h / unit.gm_tau_s)
-    w = rngs["gauss_markov"].standard_normal(n)
-    w[0] /= math.sqrt(1.0 - phi_gm ** 2)        # start in the stationary distribution
-    terms["gauss_markov"] = gain * unit.gm_sigma_dph * math.sqrt(1.0 - phi_gm ** 2) * lfilter(
-        [1.0], [1.0, -phi_gm], w)
+    rng_b = rngs["gauss_markov"]              # the bias noise's stream, whatever its law
+    if unit.bias_noise == "gauss_markov":
+        terms["gauss_markov"] = gain * gauss_markov(rng_b, n, h, unit.gm_sigma_dph,
+                                                    unit.gm_tau_s)
+    elif unit.bias_noise == "flicker":
+        terms["flicker"] = gain * flicker_sum(rng_b, n, h, unit.flicker_b_dph,
+                                              unit.flicker_taus_s)
+    elif unit.bias_noise == "rate_random_walk":
+        terms["rate_random_walk"] = gain * rate_random_walk(rng_b, n, h, unit.rrw_dph_per_rth_h)
+    else:
+        raise ValueError(f"unknown bias noise {unit.bias_noise!r}; valid: "
+                         + ", ".join(BIAS_NOISE_LAWS))
     gyro = sum(terms.values())
 
     # 5. accelerometers
@@ -671,8 +800,12 @@ _FORMATS = {"time_s": "%.10g", "position_deg": "%.10g", "moving": "%d", "gyro_dp
 
 
 def _write_run(run: RunData, out_dir: Path, *, latitude_deg: float, true_heading_deg: float,
-               sample_rate_hz: float) -> None:
-    """NAME.csv (one header row, %-formatted rows) and NAME.toml, written by hand."""
+               sample_rate_hz: float, extra: dict | None = None,
+               instrument: str = "independent generator (tests/independent)") -> None:
+    """NAME.csv (one header row, %-formatted rows) and NAME.toml, written by hand.
+
+    ``extra``: further sidecar keys (numbers), e.g. the soak history ``soak_from_c`` [degC]
+    and ``soak_h`` [h]."""
     cols = list(_FORMATS)
     data = np.column_stack([run.columns[c] for c in cols])
     fmt = ",".join(_FORMATS[c] for c in cols)
@@ -688,7 +821,8 @@ def _write_run(run: RunData, out_dir: Path, *, latitude_deg: float, true_heading
         f"positions_deg = [{', '.join(repr(p) for p in _POSITIONS_DEG)}]\n"
         f"dwell_s = {_DWELL_S!r}\n"
         f"move_s = {_MOVE_S!r}\n"
-        'instrument = "independent generator (tests/independent)"\n')
+        f'instrument = "{instrument}"\n'
+        + "".join(f"{k} = {float(v)!r}\n" for k, v in (extra or {}).items()))
     (out_dir / f"{run.name}.toml").write_text(toml, encoding="utf-8")
 
 
@@ -734,6 +868,56 @@ def _window_means(x: np.ndarray, moving: np.ndarray, n_win: int) -> np.ndarray:
     return xw[ok].mean(axis=1)
 
 
+def unabsorbed_ratio_key(hidden: str) -> str:
+    """The ratio of :func:`measure_strength` that counts what a fitted model cannot take up:
+    ``ratio_after_rescale`` on a thermometer, ``ratio_detrended`` on the gyro or an
+    accelerometer."""
+    return "ratio_after_rescale" if _CHANNEL[hidden].startswith("temp_") else "ratio_detrended"
+
+
+def _after_rescale(d: np.ndarray, rise: np.ndarray) -> np.ndarray:
+    """d minus its least-squares fit on [1, rise]: what another power or conductance cannot
+    take up of a thermometer's change d."""
+    basis = np.column_stack([np.ones_like(rise), rise])
+    coef, *_ = np.linalg.lstsq(basis, d, rcond=None)
+    return d - basis @ coef
+
+
+def strength_of_runs(hidden: str, params: dict, pairs, sample_rate_hz: float = 1.0) -> dict:
+    """:func:`measure_strength` of given runs: ``pairs`` yields (with the effect, without it)
+    per run; ``without`` is used on a thermometer channel only (may be None otherwise)."""
+    channel = _CHANNEL[hidden]
+    n_win = max(1, int(round(10.0 * sample_rate_hz)))
+    ex, ex_d, fl = [], [], []
+    for with_, without in pairs:
+        mv = with_.columns["moving"] > 0.5
+        if channel == "gyro_dph":
+            term = with_.gyro_terms_dph["hidden"]
+            noise = sum(with_.gyro_terms_dph[k] for k in GYRO_NOISE_TERMS
+                        if k in with_.gyro_terms_dph)
+        elif channel.startswith("acc_"):
+            ax = channel[4]
+            term, noise = with_.acc_terms_g[f"{ax}_hidden"], with_.acc_terms_g[f"{ax}_noise"]
+        else:
+            d = with_.clean[channel] - without.clean[channel]
+            ex.append(d)
+            ex_d.append(_after_rescale(d, without.clean[channel] - without.clean[channel][0]))
+            fl.append(with_.columns[channel] - with_.clean[channel])
+            continue
+        wm = _window_means(term, mv, n_win)
+        ex.append(wm)
+        ex_d.append(wm - wm.mean())
+        fl.append(_window_means(noise, mv, n_win))
+
+    def rms(parts):
+        return float(np.sqrt(np.mean(np.concatenate(parts) ** 2)))
+
+    floor, excess, excess_d = rms(fl), rms(ex), rms(ex_d)
+    return {"hidden": hidden, "channel": channel, "params": params, "floor": floor,
+            "excess": excess, "ratio": excess / floor,
+            unabsorbed_ratio_key(hidden): excess_d / floor}
+
+
 def measure_strength(hidden: str, *, params: dict | None = None, seed: int = 0,
                      start_temperatures_c=(-32.0, -16.0, -5.0, 17.0, 28.0, 43.0, 54.0),
                      duration_s: float = 9000.0, sample_rate_hz: float = 1.0) -> dict:
@@ -748,41 +932,37 @@ def measure_strength(hidden: str, *, params: dict | None = None, seed: int = 0,
     a model with another power or conductance could take up.
     """
     p = _check_hidden(hidden, params)
-    channel = _CHANNEL[hidden]
-    n_win = max(1, int(round(10.0 * sample_rate_hz)))
-    ex, ex_d, fl = [], [], []
-    for i, t0 in enumerate(start_temperatures_c):
-        kw = dict(seed=seed, run_index=i, duration_s=duration_s, sample_rate_hz=sample_rate_hz)
-        with_ = simulate_run(float(t0), hidden=hidden, params=p, **kw)
-        mv = with_.columns["moving"] > 0.5
-        if channel == "gyro_dph":
-            term = with_.gyro_terms_dph["hidden"]
-            noise = with_.gyro_terms_dph["arw"] + with_.gyro_terms_dph["gauss_markov"]
-        elif channel.startswith("acc_"):
-            ax = channel[4]
-            term, noise = with_.acc_terms_g[f"{ax}_hidden"], with_.acc_terms_g[f"{ax}_noise"]
-        else:
-            without = simulate_run(float(t0), **kw)
-            d = with_.clean[channel] - without.clean[channel]
-            rise = without.clean[channel] - without.clean[channel][0]
-            coef, *_ = np.linalg.lstsq(np.column_stack([np.ones_like(rise), rise]), d,
-                                       rcond=None)
-            ex.append(d)
-            ex_d.append(d - np.column_stack([np.ones_like(rise), rise]) @ coef)
-            fl.append(with_.columns[channel] - with_.clean[channel])
-            continue
-        wm = _window_means(term, mv, n_win)
-        ex.append(wm)
-        ex_d.append(wm - wm.mean())
-        fl.append(_window_means(noise, mv, n_win))
+    thermo = _CHANNEL[hidden].startswith("temp_")
 
-    def rms(parts):
-        return float(np.sqrt(np.mean(np.concatenate(parts) ** 2)))
+    def pairs():
+        for i, t0 in enumerate(start_temperatures_c):
+            kw = dict(seed=seed, run_index=i, duration_s=duration_s,
+                      sample_rate_hz=sample_rate_hz)
+            yield (simulate_run(float(t0), hidden=hidden, params=p, **kw),
+                   simulate_run(float(t0), **kw) if thermo else None)
 
-    floor, excess, excess_d = rms(fl), rms(ex), rms(ex_d)
-    second = "ratio_after_rescale" if channel.startswith("temp_") else "ratio_detrended"
-    return {"hidden": hidden, "channel": channel, "params": p, "floor": floor,
-            "excess": excess, "ratio": excess / floor, second: excess_d / floor}
+    return strength_of_runs(hidden, p, pairs(), sample_rate_hz)
+
+
+# ---------------------------------------------------------------------------------------------
+# The family (family.py), reached from here too
+
+_FAMILY_NAMES = ("FamilyDraw", "draw_unit", "generate_family_set")
+
+
+def _family():
+    """The family module, imported on first use (it imports this one)."""
+    if __package__:
+        from . import family
+    else:
+        import family
+    return family
+
+
+def __getattr__(name: str):
+    if name in _FAMILY_NAMES:
+        return getattr(_family(), name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 # ---------------------------------------------------------------------------------------------
