@@ -989,6 +989,10 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--latitude", type=float, default=30.26, help="latitude [deg]")
     ap.add_argument("--heading", type=float, default=212.7, help="true heading [deg]")
     ap.add_argument("--truth", default=None, help="also write the truth JSON to this file")
+    ap.add_argument("--family", action="store_true",
+                    help="a unit of the family drawn from --seed (family.py: structure, "
+                         "noise, chamber, soak and the hidden effect's strength); the truth "
+                         "adds the strength and the draw's description")
     ap.add_argument("--strengths", action="store_true",
                     help="instead of writing runs, print every hidden effect's excess RMS "
                          "over its channel's noise floor")
@@ -1015,10 +1019,11 @@ def main(argv: list[str] | None = None) -> int:
             return 0
         if a.out_dir is None:
             ap.error("OUT_DIR is required (unless --strengths)")
-        truth = generate_set(a.out_dir, hidden=a.hidden, seed=a.seed,
-                             start_temperatures_c=tuple(a.temperatures), duration_s=a.duration,
-                             sample_rate_hz=a.rate, latitude_deg=a.latitude,
-                             true_heading_deg=a.heading, params=params or None)
+        make = _family().generate_family_set if a.family else generate_set
+        truth = make(a.out_dir, hidden=a.hidden, seed=a.seed,
+                     start_temperatures_c=tuple(a.temperatures), duration_s=a.duration,
+                     sample_rate_hz=a.rate, latitude_deg=a.latitude,
+                     true_heading_deg=a.heading, params=params or None)
     except ValueError as exc:
         print(f"generator.py: error: {exc}", file=sys.stderr)
         return 2
