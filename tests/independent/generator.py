@@ -471,22 +471,23 @@ def flicker_sum(rng: np.random.Generator, n: int, h_s: float, b_dph: float, taus
                 ) -> np.ndarray:
     """Flicker (1/f) bias as a sum of Gauss-Markov processes with log-spaced times [deg/h].
 
-    A process of variance sigma^2 and correlation time tau has the one-sided spectrum
-    4 sigma^2 tau / (1 + (2 pi f tau)^2); summed over tau_i = tau_0 r^i with equal sigma^2
-    it is (4 sigma^2 / (2 pi f)) sum x_i / (1 + x_i^2), x_i = 2 pi f tau_i, which for a
-    dense log grid is (4 sigma^2 / (2 pi f ln r)) int_0^inf dx / (1 + x^2) = sigma^2 /
-    (f ln r) between 1/(2 pi tau_max) and 1/(2 pi tau_min) (Keshner, Proc. IEEE 70(3) 212,
+    A process of variance sigma^2 and correlation time tau has the two-sided spectrum
+    S(f) = 2 sigma^2 tau / (1 + (2 pi f tau)^2); summed over tau_i = tau_0 r^i with equal
+    sigma^2 it is (2 sigma^2 / (2 pi f)) sum x_i / (1 + x_i^2), x_i = 2 pi f tau_i, which
+    for a dense log grid is (2 sigma^2 / (2 pi f ln r)) int_0^inf dx / (1 + x^2) = sigma^2 /
+    (2 f ln r) between 1/(2 pi tau_max) and 1/(2 pi tau_min) (Keshner, Proc. IEEE 70(3) 212,
     1982, sec. III: 1/f noise as a superposition of relaxation processes).  Flicker rate
-    noise of bias instability B has S(f) = B^2 / (2 pi f) (IEEE Std 952-1997, annex C,
-    table C.1), so sigma^2 = B^2 ln r / (2 pi), and its Allan deviation is flat at
-    B sqrt(2 ln 2 / pi) = 0.664 B for averaging times well inside [tau_min, tau_max].
+    noise of bias instability B has S(f) = B^2 / (2 pi f) in the same two-sided convention
+    as white rate noise S = N^2 (IEEE Std 952-1997, annex C, table C.1), so sigma^2 = B^2
+    ln r / pi, and its Allan deviation is flat at B sqrt(2 ln 2 / pi) = 0.664 B for
+    averaging times well inside [tau_min, tau_max] (tested).
     ``taus_s`` must be (nearly) geometric; r is taken from its first and last value.
     """
     taus = np.asarray(taus_s, dtype=float)
     if taus.size < 2 or np.any(np.diff(taus) <= 0):
         raise ValueError("flicker_sum needs at least two increasing correlation times")
     ln_r = math.log(taus[-1] / taus[0]) / (taus.size - 1)
-    sigma = b_dph * math.sqrt(ln_r / (2.0 * math.pi))
+    sigma = b_dph * math.sqrt(ln_r / math.pi)
     return sum(gauss_markov(rng, n, h_s, sigma, float(tau)) for tau in taus)
 
 

@@ -9,10 +9,12 @@ from __future__ import annotations
 
 import ast
 import math
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 import pytest
+from scipy.linalg import expm
 
 from nfs.io.measurement import REQUIRED_COLUMNS, read_runs
 
@@ -25,19 +27,23 @@ def _files(folder: Path) -> dict[str, bytes]:
     return {p.name: p.read_bytes() for p in sorted(folder.iterdir())}
 
 
-def test_imports_nothing_from_nfs():
+@pytest.mark.parametrize("module", ["generator.py", "family.py"])
+def test_imports_nothing_from_nfs(module):
     """Oracle: the generator's own source; its imports are the standard library, NumPy
-    and SciPy only (an independent truth must not share code with the model)."""
-    tree = ast.parse(Path(g.__file__).read_text(encoding="utf-8"))
+    and SciPy only, and each other (an independent truth must not share code with the
+    model)."""
+    tree = ast.parse((Path(g.__file__).parent / module).read_text(encoding="utf-8"))
     roots = set()
     for node in ast.walk(tree):
         if isinstance(node, ast.Import):
             roots |= {a.name.split(".")[0] for a in node.names}
+        elif isinstance(node, ast.ImportFrom) and node.level:    # from . import sibling
+            assert {a.name for a in node.names} <= {"generator", "family"}
         elif isinstance(node, ast.ImportFrom):
             roots.add((node.module or "").split(".")[0])
     assert not roots & {"nfs", "thermal"}
-    assert roots <= {"__future__", "argparse", "json", "math", "sys", "dataclasses",
-                     "pathlib", "numpy", "scipy"}
+    assert roots <= {"__future__", "argparse", "json", "math", "sys", "zlib", "dataclasses",
+                     "pathlib", "numpy", "scipy", "generator", "family"}
 
 
 def test_files_load_and_pass_the_readers_checks(tmp_path):
@@ -251,3 +257,231 @@ def test_command_line(tmp_path, capsys):
     assert len(read_runs(tmp_path)) == 1
     with pytest.raises(SystemExit):
         g.main(["--help"])
+
+
+# ---------------------------------------------------------------------------------------------
+# The family (family.py)
+
+from . import family as fam  # noqa: E402
+
+SHORT = dict(start_temperatures_c=(-16.0, 43.0), duration_s=900.0)
+
+
+def _allan(y, h_s, m):
+    """Overlapping Allan deviation of rate samples y at tau = m h (NIST SP 1065, eq. (14)),
+    from the integrated rate theta_k = h sum y."""
+    th = np.concatenate([[0.0], np.cumsum(y) * h_s])
+    d = th[2 * m:] - 2.0 * th[m:-m] + th[:-2 * m]
+    return math.sqrt(np.mean(d ** 2) / (2.0 * (m * h_s) ** 2))
+
+
+def test_family_same_seed_same_bytes_other_seed_other_unit(tmp_path):
+    """Oracle: determinism (every draw from a SeedSequence of the seed): the same seed writes
+    the same bytes and the same truth; other seeds draw other structures (of 10 seeds, the
+    coil's layers, the TEC law, the noise law and the FOG thermometer's nodes are not all
+    one value)."""
+    t_a = fam.generate_family_set(tmp_path / "a", seed=11, hidden="magnetic", **SHORT)
+    t_b = fam.generate_family_set(tmp_path / "b", seed=11, hidden="magnetic", **SHORT)
+    fam.generate_family_set(tmp_path / "c", seed=12, hidden="magnetic", **SHORT)
+    a, b, c = (_files(tmp_path / x) for x in "abc")
+    assert a == b and t_a == t_b
+    assert a.keys() == c.keys() and a != c
+    draws = [fam.draw_unit(s) for s in range(10)]
+    assert fam.draw_unit(11) == fam.draw_unit(11)
+    assert len({d.unit.coil.n_layers for d in draws}) > 3
+    assert len({d.unit.tec_law for d in draws}) > 1
+    assert len({d.unit.bias_noise for d in draws}) > 1
+    assert len({tuple(d.unit.fog_thermometer) for d in draws}) > 1
+    assert len({d.paths for d in draws}) > 1
+    # the public names are reached from generator.py too
+    assert g.draw_unit is fam.draw_unit and g.generate_family_set is fam.generate_family_set
+
+
+def test_family_draws_lie_in_their_ranges():
+    """Oracle: the ranges of the README's table (fam.RANGES): over 200 seeds every recorded
+    draw lies in its range, and the drawn unit itself agrees (the network's slowest time
+    constant, the thermometer weights summing to 1, capacities and links positive, the laws
+    from their lists); every law, path and sidecar choice occurs."""
+    laws, noise, paths, sidecar, walls = set(), set(), set(), set(), set()
+    for seed in range(200):
+        d = fam.draw_unit(seed)
+        for name, value in d.drawn:
+            lo, hi = fam.RANGES[name]
+            assert lo <= value <= hi, (seed, name, value)
+        u = d.unit
+        names = {n for n, _ in d.drawn}
+        assert {"coil.n_layers", "network.tau1_min", "tec.set_c", "gyro.arw_deg_per_rth_h",
+                "strength.target", "soak.h", "thermometer.lag_s"} <= names
+        assert 2 <= u.coil.n_layers <= 12
+        tau1 = g.unit_network(u).time_constants_s()[0] / 60.0
+        assert 20.0 <= tau1 <= 60.0
+        housing = u.capacity_j_per_k["housing"] + u.capacity_j_per_k.get("base", 0.0)
+        assert 2000.0 <= housing <= 4500.0
+        assert all(c > 0 for c in u.capacity_j_per_k.values())
+        assert all(gk > 0 for *_, gk in u.links_w_per_k)
+        for weights in (u.fog_thermometer, *u.acc_thermometers.values()):
+            assert abs(sum(weights.values()) - 1.0) < 1e-12
+            assert all(0.0 <= w <= 1.0 for w in weights.values())
+        assert all(10.0 <= v <= 60.0 for v in u.thermometer_lag_s.values())
+        assert 18.0 <= u.tec_set_c <= 28.0
+        assert len(d.runs) == 7 and all(2.0 <= r.soak_h <= 8.0 for r in d.runs)
+        assert 1.0 <= d.strength_target <= 3.0
+        laws.add(u.tec_law)
+        noise.add(u.bias_noise)
+        paths |= set(d.paths)
+        sidecar.add(d.sidecar)
+        walls.add((d.chamber.wander, d.chamber.cycle_shape))
+    assert laws == set(g.TEC_LAWS) and noise == set(g.BIAS_NOISE_LAWS)
+    assert paths == {"electronics-plate", "board-plate", "board-coil", "shell/base"}
+    assert sidecar == {True, False} and len(walls) == 4
+
+
+def test_tec_laws_meet_their_closed_forms():
+    """Oracle: each law's equation.  Piecewise: p0 inside the dead band, p0 + c_h (T_set -
+    w/2 - T) below it, p0 + c_c (T - T_set - w/2) above.  Saturating: min(quadratic, P_max).
+    Quadratic as drawn: its slope is -s_b at 45 K below the set point and +s_a at 40 K above
+    (within the reference's 0.02-0.04 and 0.05-0.1 W/K), its minimum 3-20 K below."""
+    u = g.Unit(tec_law="piecewise", tec_set_c=24.0, tec_p0_w=0.2, tec_heat_w_per_k=0.03,
+               tec_cool_w_per_k=0.08, tec_dead_band_k=2.0)
+    t = np.array([10.0, 23.0, 24.5, 25.0, 40.0])
+    np.testing.assert_allclose(g.tec_power_w(u, t),
+                               [0.2 + 0.03 * 13.0, 0.2, 0.2, 0.2, 0.2 + 0.08 * 15.0])
+    q = g.Unit()
+    s = replace(q, tec_law="saturating", tec_max_w=0.9)
+    t = np.linspace(-40.0, 70.0, 23)
+    np.testing.assert_allclose(g.tec_power_w(s, t), np.minimum(g.tec_power_w(q, t), 0.9))
+    with pytest.raises(ValueError, match="valid: quadratic"):
+        g.tec_power_w(replace(q, tec_law="linear"), 0.0)
+    seen = 0
+    for seed in range(60):
+        u = fam.draw_unit(seed).unit
+        if u.tec_law == "piecewise":
+            continue
+        seen += 1
+        quad = replace(u, tec_law="quadratic")
+        d = 1e-3
+        slope = [(g.tec_power_w(quad, u.tec_set_c + x + d) - g.tec_power_w(quad, u.tec_set_c + x
+                                                                         - d)) / (2 * d)
+                 for x in (-45.0, 40.0)]
+        assert 0.02 - 1e-9 <= -slope[0] <= 0.04 + 1e-9 and 0.05 - 1e-9 <= slope[1] <= 0.1 + 1e-9
+        t_min = u.tec_set_c - u.tec_a_w_per_k / (2 * u.tec_c_w_per_k2)
+        assert 3.0 - 1e-9 <= u.tec_set_c - t_min <= 20.0 + 1e-9
+        assert 0.05 - 1e-9 <= g.tec_power_w(quad, t_min) <= 0.4 + 1e-9
+    assert seen > 20
+
+
+def test_bias_noise_laws_meet_their_allan_deviations():
+    """Oracle: IEEE Std 952-1997 annex C, table C.1, on 10^6 samples at 1 Hz.  Flicker of
+    bias instability B (a sum of Gauss-Markov processes with correlation times 2-20000 s):
+    the Allan deviation is flat at 0.664 B from 30 to 3000 s (within 10 %: the sum's ripple
+    and the estimate's scatter).  Rate random walk K: K sqrt(tau/3), tau in hours (within
+    10 % at 10-1000 s).  Gauss-Markov sigma, T: sigma T/tau sqrt(2 tau/T - 3 + 4 exp(-tau/T)
+    - exp(-2 tau/T)) (within 10 %), standard deviation sigma (within 5 %)."""
+    rng = np.random.default_rng(20)
+    n = 10 ** 6
+    b = 0.003
+    y = g.flicker_sum(rng, n, 1.0, b, g.Unit().flicker_taus_s)
+    for m in (30, 100, 300, 1000, 3000):
+        assert abs(_allan(y, 1.0, m) / (math.sqrt(2 * math.log(2) / math.pi) * b) - 1) < 0.1, m
+    k = 0.002
+    y = g.rate_random_walk(rng, n, 1.0, k)
+    for m in (10, 100, 1000):
+        assert abs(_allan(y, 1.0, m) / (k * math.sqrt(m / 3600.0 / 3.0)) - 1) < 0.1, m
+    sigma, tc = 0.003, 400.0
+    y = g.gauss_markov(rng, n, 1.0, sigma, tc)
+    for m in (10, 100, 1000):
+        x = m / tc
+        want = sigma / x * math.sqrt(2 * x - 3 + 4 * math.exp(-x) - math.exp(-2 * x))
+        assert abs(_allan(y, 1.0, m) / want - 1) < 0.1, m
+    assert abs(np.std(y) / sigma - 1) < 0.05
+
+
+@pytest.mark.parametrize("law", g.BIAS_NOISE_LAWS)
+def test_each_noise_law_is_the_gyro_noise_floor(law):
+    """Oracle: the run's gyro is the sum of its terms, the bias noise under its law's name;
+    measure_strength's floor uses exactly ARW plus that term (no other noise term)."""
+    run = g.simulate_run(17.0, duration_s=400.0, unit=replace(g.Unit(), bias_noise=law))
+    terms = run.gyro_terms_dph
+    assert law in terms and not set(g.BIAS_NOISE_LAWS) - {law} & set(terms)
+    np.testing.assert_allclose(sum(terms.values()), run.columns["gyro_dph"], atol=1e-12)
+
+
+def test_soak_start_is_the_unpowered_network_in_still_air():
+    """Oracle: the unpowered linear network from a uniform T_from, left t_soak in still air at
+    T0: T(0) = T0 + expm(A t_soak) (T_from - T0) 1 (the homogeneous solution), plus the run's
+    common offset; the run's air is T0 throughout.  In a wandering chamber the run's air
+    starts where the soak's ended and the start differs from the still one by less than the
+    wander's and the cycling's size."""
+    d = fam.draw_unit(5)
+    still = replace(d, chamber=replace(d.chamber, wander="walk", walk_k_per_rth_s=0.0,
+                                       cycle_k=0.0))
+    net = g.unit_network(d.unit)
+    for i, t0 in ((0, -32.0), (6, 54.0)):
+        rd = d.run_draw(i)
+        x0, air = fam.start_state(still, i, t0, duration_s=300.0)
+        want = t0 + expm(net.a_per_s * 3600.0 * rd.soak_h) @ np.full(len(net.names),
+                                                                      rd.soak_from_c - t0)
+        np.testing.assert_allclose(x0, want + rd.offset_k, atol=1e-9)
+        assert np.all(air == t0)
+        x1, air1 = fam.start_state(d, i, t0, duration_s=300.0)
+        assert np.max(np.abs(x1 - x0)) < 1.0 and np.max(np.abs(air1 - t0)) < 1.0
+    # the start passes into the run: its first node temperatures are the start state
+    run = fam.simulate_family_run(still, 0, -32.0, duration_s=300.0)
+    np.testing.assert_allclose(run.temperature_c[0], fam.start_state(
+        still, 0, -32.0, duration_s=300.0)[0], atol=0)
+
+
+@pytest.mark.parametrize("hidden, rtol", [("magnetic", 1e-9), ("turn_on_transient", 1e-9),
+                                          ("heat_source", fam.STRENGTH_RTOL),
+                                          ("thermometer_lag", 0.05)])
+def test_strength_scaling_hits_its_target(hidden, rtol):
+    """Oracle: the definition of the strength (measure_strength's unabsorbed ratio on the
+    set's own runs): after scaling, the ratio measured afresh on the runs with the effect is
+    the target; exactly for an effect linear in its amplitude, within the secant's tolerance
+    for a heat source (the TEC's working point moves), within 5 % for a lag (bisected on the
+    effect-free runs; the quantiser then sees other values)."""
+    d = fam.draw_unit(7)
+    p = g._check_hidden(hidden, None)
+    for target in (1.0, 2.5):
+        out, s, runs = fam.scale_to_strength(d, hidden, p, target,
+                                             start_temperatures_c=(-16.0, 43.0),
+                                             duration_s=2400.0)
+        key = g.unabsorbed_ratio_key(hidden)
+        assert abs(s[key] / target - 1) <= rtol, (target, s[key], out)
+        assert len(runs) == 2 and out[fam.AMPLITUDE[hidden]] > 0
+
+
+def test_family_files_and_truth(tmp_path):
+    """Oracle: the format spec and the truth's definition: the family's files load with
+    read_runs; a set whose draw records the soak gives soak_from_c and soak_h in every
+    sidecar (the draw's values, rounded as a log book would), another gives neither; the
+    truth says the hidden effect, its strength (target = the draw's, achieved near it), the
+    draw's description; an amplitude given in params is kept (target None)."""
+    with_sc = next(s for s in range(20) if fam.draw_unit(s).sidecar)
+    without = next(s for s in range(20) if not fam.draw_unit(s).sidecar)
+    t = fam.generate_family_set(tmp_path / "a", seed=with_sc, hidden="outside", **SHORT)
+    runs = read_runs(tmp_path / "a")
+    d = fam.draw_unit(with_sc)
+    for i, r in enumerate(sorted(runs, key=lambda r: r.name)):
+        assert r.meta.extra == {"soak_from_c": round(d.runs[i].soak_from_c, 1),
+                                "soak_h": round(d.runs[i].soak_h, 2)}
+    assert t["hidden"] == "outside" and t["seed"] == with_sc and t["soak_sidecar"]
+    assert t["strength"]["target"] == d.strength_target
+    assert abs(t["strength"]["achieved"] / d.strength_target - 1) < 1e-9
+    assert t["family"] == d.describe() and t["family"].startswith(f"seed {with_sc}:")
+    t = fam.generate_family_set(tmp_path / "b", seed=without, hidden="magnetic",
+                                params={"m": 0.02}, **SHORT)
+    assert all(r.meta.extra == {} for r in read_runs(tmp_path / "b"))
+    assert t["params"]["m"] == 0.02 and t["strength"]["target"] is None
+    t = fam.generate_family_set(tmp_path / "c", seed=without, **SHORT)
+    assert t["hidden"] is None and t["strength"] is None
+
+
+def test_family_command_line(tmp_path, capsys):
+    """Oracle: the documented command line (--family) writes the drawn unit's runs and prints
+    the truth with the draw's description."""
+    assert g.main([str(tmp_path), "--family", "--hidden", "magnetic", "--seed", "3",
+                   "--temperatures", "0", "--duration", "320"]) == 0
+    out = capsys.readouterr().out
+    assert '"family": "seed 3:' in out and '"ratio": "ratio_detrended"' in out
+    assert len(read_runs(tmp_path)) == 1
