@@ -55,7 +55,8 @@ from nfs.instrument import load_instrument
 from nfs.io.measurement import read_runs
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests" / "independent"))
-from generator import HIDDEN_EFFECTS, Unit, draw_unit, generate_family_set, generate_set  # noqa: E402,I001
+from generator import (HIDDEN_EFFECTS, Unit, draw_unit,  # noqa: E402
+                       generate_family_set, generate_set)
 
 #: Effects of the default instrument that the generator's unit also has (in its own form).
 MODEL_EFFECTS = ("tec_power", "bias_temperature", "shupe_gradient", "shupe_rate")

@@ -395,7 +395,8 @@ def _coil_rise_k(unit: g.Unit, duration_s: float) -> float:
     for n, pw in unit.power_w.items():
         p[net.names.index(n)] += pw
     p[net.names.index("electronics")] += float(g.tec_power_w(unit, unit.tec_set_c))
-    rise = np.linalg.solve(a, (expm(a * duration_s) - np.eye(len(p))) @ (p / net.capacity_j_per_k))
+    growth = (expm(a * duration_s) - np.eye(len(p))) @ (p / net.capacity_j_per_k)
+    rise = np.linalg.solve(a, growth)
     layers = [net.names.index(n) for n in g._layer_names(unit.coil.n_layers)]
     c = net.capacity_j_per_k[layers]
     return float(rise[layers] @ c / c.sum())
@@ -475,10 +476,12 @@ def _draw_gyro(seed: int, rec: _Record) -> dict:
     rec.values += [(k, v) for k, v in noise.values if k.startswith(prefix)]
     kw.update(law_kw)
     rd = _rng(seed, "gyro_drift")
-    kw.update(b0_dph=rec.uniform(rd, "gyro.b0_dph"), b1_dph_per_k=rec.uniform(rd, "gyro.b1_dph_per_k"),
+    kw.update(b0_dph=rec.uniform(rd, "gyro.b0_dph"),
+              b1_dph_per_k=rec.uniform(rd, "gyro.b1_dph_per_k"),
               b2_dph_per_k2=rec.log_uniform(rd, "gyro.b2_dph_per_k2"),
               shupe_dph_per_k_per_min=rec.log_uniform(rd, "gyro.shupe_dph_per_k_per_min"),
-              mean_rate_dph_per_k_per_min=rec.log_uniform(rd, "gyro.mean_rate_dph_per_k_per_min"))
+              mean_rate_dph_per_k_per_min=rec.log_uniform(
+                  rd, "gyro.mean_rate_dph_per_k_per_min"))
     return kw
 
 
@@ -512,8 +515,9 @@ def _draw_chamber(seed: int, rec: _Record) -> tuple[ChamberDraw, float]:
 
 def _draw_run(seed: int, run_index: int, rec: _Record) -> RunDraw:
     rr = _rng(seed, "soak", run_index)
-    return RunDraw(soak_from_c=rec.uniform(rr, "soak.from_c"), soak_h=rec.uniform(rr, "soak.h"),
-                   offset_k=rec.uniform(rr, "soak.offset_k"), cycle_phase=float(rr.uniform()))
+    return RunDraw(soak_from_c=rec.uniform(rr, "soak.from_c"),
+                   soak_h=rec.uniform(rr, "soak.h"), offset_k=rec.uniform(rr, "soak.offset_k"),
+                   cycle_phase=float(rr.uniform()))
 
 
 def draw_unit(seed: int) -> FamilyDraw:
@@ -668,7 +672,7 @@ class _SetRuns:
         return g.strength_of_runs(hidden, params, pairs, self.kw["sample_rate_hz"]), with_
 
 
-def _lag_ratio(set_runs: _SetRuns, key: str, tau_s: float) -> float:
+def _lag_ratio(set_runs: _SetRuns, tau_s: float) -> float:
     """The after-rescale ratio of an extra FOG-thermometer lag tau, from the effect-free
     runs alone: lag(y + offset) = lag(y) + offset, so the effect is lag(clean) - clean."""
     h = 1.0 / set_runs.kw["sample_rate_hz"]
@@ -702,11 +706,11 @@ def scale_to_strength(draw: FamilyDraw, hidden: str, params: dict, target: float
     lo, hi = _NONLINEAR.get(hidden, (0.0, math.inf))
     if hidden == "thermometer_lag":
         a, b = math.log(lo), math.log(hi)
-        if _lag_ratio(sr, key, hi) <= target:
+        if _lag_ratio(sr, hi) <= target:
             a = b
         for _ in range(40):
             mid = 0.5 * (a + b)
-            if _lag_ratio(sr, key, math.exp(mid)) < target:
+            if _lag_ratio(sr, math.exp(mid)) < target:
                 a = mid
             else:
                 b = mid
