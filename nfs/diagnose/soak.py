@@ -99,7 +99,7 @@ def _start_spread(inst: Instrument, run: Run, start: StartModel | None
     if start is None:
         return {name: (0.0, 0.0) for name in THERMOMETERS}
     net = inst.network
-    basis = start_basis(net, start.n_slow, start.fast_width_c > 0)
+    basis = start_basis(net, start.n_slow, start.fast)
     centre, width = start_prior(net, basis, run.meta.start_temperature_c, soak_history(run),
                                 start)
     out = {}

@@ -15,8 +15,10 @@ each scaled to max |v| = 1): after hours of soak every other mode has decayed, s
 unfinished soak leaves a_1 v_1 (v_1 is nearly uniform: the housing and what it holds,
 lagging the air together).  u is the part of a uniform offset 1 that the slow modes do not
 hold (1 minus its projection on v_1 ... v_k in the capacity-weighted inner product, scaled
-to max |u| = 1): a unit set a little off its air relaxes in minutes by this pattern.  The
-amplitudes a [K] are a run's own; a Gaussian prior keeps them where the record cannot see:
+to max |u| = 1): a unit set a little off its air relaxes in minutes by this pattern.  By
+default only the slow mode is free (:attr:`StartModel.fast`: a free u takes up what the
+model misses of the first minutes in every run alike).  The amplitudes a [K] are a run's
+own; a Gaussian prior keeps them where the record cannot see:
 
 - no soak history: centre 0, widths :data:`SLOW_WIDTH_C` (slow modes) and
   :data:`FAST_WIDTH_C` (u);
@@ -75,20 +77,25 @@ class StartModel:
     """How the start of every run is estimated (None in its place: every node at T0)."""
 
     n_slow: int = DEFAULT_SLOW_MODES
-    """Slow modes with a free amplitude per run (the fast remainder u is always free)."""
+    """Slow modes with a free amplitude per run."""
+    fast: bool = False
+    """Also free the fast remainder u per run.  Off by default: on the package's default
+    world (0.2 K common offsets, whose fast part is a few hundredths of a kelvin) a free u
+    came out near -0.1 K in every run alike, a model error of the first minutes taken up as
+    a start, while the slow mode alone brings the thermometers to their floor."""
     slow_width_c: float = SLOW_WIDTH_C
     """Prior width of each slow amplitude without a soak history [K]."""
     fast_width_c: float = FAST_WIDTH_C
-    """Prior width of the fast remainder's amplitude [K]; 0: no fast remainder."""
+    """Prior width of the fast remainder's amplitude [K]."""
 
     @property
     def n_amplitudes(self) -> int:
         """Amplitudes per run."""
-        return self.n_slow + (1 if self.fast_width_c > 0 else 0)
+        return self.n_slow + (1 if self.fast else 0)
 
 
 def start_basis(network: thermal.Network, n_slow: int = DEFAULT_SLOW_MODES,
-                fast: bool = True) -> np.ndarray:
+                fast: bool = False) -> np.ndarray:
     """V = [v_1, ..., v_k, u] (n_nodes, k + 1) of the module docstring (without u when not
     ``fast``)."""
     _, v = network.modes()
@@ -143,7 +150,7 @@ def start_prior(network: thermal.Network, basis: np.ndarray, t0_c: float,
                 ) -> tuple[np.ndarray, np.ndarray]:
     """(centre, width) of the amplitudes a [K] of one run (module docstring)."""
     k = basis.shape[1]
-    n_slow = model.n_slow
+    n_slow = basis.shape[1] - (1 if model.fast else 0)
     centre = np.zeros(k)
     width = np.full(k, model.slow_width_c)
     width[n_slow:] = model.fast_width_c

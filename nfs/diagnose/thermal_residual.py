@@ -477,7 +477,7 @@ def thermal_residual(insts: Sequence[Instrument], data: Sequence[ThermalRun],
                         parts[lo + s][col].append((y - rd.measured[col])[rd.mask[col]])
                     start_c[lo + s][i] = rd.t0_c
             continue
-        bases = [start_basis(inst.network, start.n_slow, start.fast_width_c > 0) for inst in chunk]
+        bases = [start_basis(inst.network, start.n_slow, start.fast) for inst in chunk]
         k = bases[0].shape[1]
         n = bases[0].shape[0]
         offsets = np.zeros((len(chunk), r_n * (k + 1), n))

@@ -187,9 +187,17 @@ def _check_top(d, name):
     others = [s for s in d.significant[1:] if s.channel == top.channel]
     assert all(s.explained_by for s in others), [
         (s.effect, s.target) for s in others if not s.explained_by]
-    # the verdict names the effect to add, with its coefficient and interval
+    # one answer: add the effect, with its coefficient and interval; or, when the runs
+    # cannot tell it from a rate term on every node, the tie that holds it (never both)
     label = top.effect if top.target is None else f"{top.effect}:{top.target}"
-    assert d.verdict.startswith(f"add {label} (")
+    if d.drift_structure is not None and label in d.drift_structure.tied:
+        assert d.answer.kind == "tie" and d.answer.labels[0] == label, d.verdict
+        assert d.verdict.startswith(f"these runs cannot tell apart: {label} (")
+        assert "add " not in d.verdict
+    else:
+        assert d.answer.kind == "add" and d.answer.labels == (label,), d.verdict
+        assert d.verdict.startswith(f"add {label} (")
+        assert "tie" not in d.verdict
     assert "[" in d.verdict and "Holm p" in d.verdict
     # the fitted coefficients' intervals (CR2, clustered by run) hold the true values
     # (10 % slack: the interval is at the refined shape, one of several near-equivalent)
@@ -214,7 +222,9 @@ def _check_thermal_tie(d, name):
         if p in hidden.interval:
             lo, hi = hidden.interval[p]
             assert lo - 0.1 * abs(v) <= v <= hi + 0.1 * abs(v), (p, v, hidden.interval[p])
-    assert f"tie: {label} (" in d.verdict and hidden.structure_tie in d.verdict
+    assert d.answer.kind == "tie" and d.answer.labels == (label, hidden.structure_tie), \
+        d.verdict
+    assert d.verdict.startswith(f"these runs cannot tell apart: {label} (")
     assert not any(s.channel == "thermometers" for s in d.significant), d.verdict
 
 
@@ -272,7 +282,8 @@ def test_no_hidden_effect_no_significant_candidate(scenario, default):
             for c in dataclasses.replace(scenario, seed=12).conditions()]
     d = diagnose(default, runs)
     assert not d.significant, [(s.effect, s.target, s.cv_drop) for s in d.significant]
-    assert "no candidate is significant" in d.verdict
+    assert d.answer.kind == "nothing", d.verdict
+    assert d.verdict.startswith("nothing beyond noise")
     assert max(s.cv_drop for s in d.ranking) < CV_DROP
 
 
@@ -290,6 +301,7 @@ def test_effect_outside_the_library(scenario, default):
         runs.append(replace(r, columns=cols))
     d = diagnose(default, runs)
     assert not d.significant, [(s.effect, s.target) for s in d.significant]
+    assert d.answer.kind == "unexplained", d.verdict
     u = d.unexplained
     assert u["ljung_box"]["p_value"] < 0.01
     assert u["cross_correlation"][0]["channel"] == "cos_2_position"
