@@ -8,7 +8,7 @@ variability (unfinished soaks from a 23 C laboratory, a chamber that wanders and
 the unit's parameters scattered: :mod:`nfs.variability`), the scenario seed varied
 (``--seed0``, ``--seed0 + 1``, ...), exactly what ``nfs simulate
 scenarios/startup_7temps.toml -o runs --seed S`` writes.  Then what a user does: fit the
-default model to the runs (:func:`nfs.diagnose.fit_model`), diagnose with the fitted model
+default model to the runs (:func:`nfs.diagnose.fit_unit`, as `nfs fit` does), diagnose with the fitted model
 (:func:`nfs.diagnose.diagnose`) and, with ``--compare``, set the fitted model beside the runs
 (:func:`nfs.diagnose.compare`).  The model's structure is the truth's, so any named effect is
 a false alarm.  ``--nominal`` runs the world without variability instead.
@@ -38,7 +38,7 @@ import numpy as np
 from joblib import Parallel, delayed
 from scipy.stats import binomtest
 
-from nfs.diagnose import compare, diagnose, fit_model
+from nfs.diagnose import compare, diagnose, fit_unit
 from nfs.experiment import simulate_run
 from nfs.io.scenario import load_scenario
 
@@ -52,7 +52,7 @@ def one_set(seed: int, nominal: bool, with_compare: bool) -> dict:
     sc = dataclasses.replace(sc.nominal() if nominal else sc, seed=seed)
     runs = [simulate_run(sc.instrument, c).run for c in sc.conditions()]
     t0 = time.perf_counter()
-    fit = fit_model(sc.instrument, runs)
+    fit = fit_unit(sc.instrument, runs)
     t_fit = time.perf_counter() - t0
     d = diagnose(fit.instrument, runs, alpha=ALPHA)
     t_diag = time.perf_counter() - t0 - t_fit

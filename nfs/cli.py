@@ -367,18 +367,18 @@ def _load_model(name_or_path):
 
 
 def _cmd_fit(args) -> int:
-    from .diagnose import fit_model, write_fitted_model
+    from .diagnose import fit_unit, write_fitted_model
     from .io.measurement import read_runs
     inst = _load_model(args.model)
     _file(args.output, "-o")
     runs = read_runs(args.data)
     if not args.quiet:
         print(f"fitting {inst.name} to {len(runs)} run(s)...", file=sys.stderr)
-    res = fit_model(inst, runs, free=args.free, stages=tuple(args.stages),
-                    decimate_s=args.decimate_s,
-                    prior=None if args.no_prior else "default", prior_scale=args.prior_scale,
-                    n_starts=args.starts, fit_noise=not args.no_noise_fit,
-                    start_state=_start_model(args))
+    res = fit_unit(inst, runs, refine=not args.no_refine, free=args.free,
+                   stages=tuple(args.stages), decimate_s=args.decimate_s,
+                   prior=None if args.no_prior else "default", prior_scale=args.prior_scale,
+                   n_starts=args.starts, fit_noise=not args.no_noise_fit,
+                   start_state=_start_model(args))
     write_fitted_model(res, args.output)
     print(res.summary())
     print(f"wrote {args.output}")
@@ -746,6 +746,10 @@ def build_parser() -> argparse.ArgumentParser:
     fi.add_argument("--starts", type=int, default=3,
                     help="most starts of the thermal stage: the preset, then capacities and "
                          "conductances +-30 %% while the fit stays above the noise (default 3)")
+    fi.add_argument("--no-refine", action="store_true",
+                    help="keep the model's thermal structure even where it misses a "
+                         "thermometer by more than 2x its noise floor (default: adopt the "
+                         "generic alternatives that pay on held-out runs, in a chain)")
     fi.add_argument("--no-noise-fit", action="store_true",
                     help="keep the model's gyro noise instead of fitting it to the Allan "
                          "deviation of the drift residual")

@@ -9,8 +9,11 @@
   (:mod:`~nfs.diagnose.bound_advice`);
 - :mod:`~nfs.diagnose.smoother`: node temperatures estimated from the measured thermometers
   (Kalman filter and smoother through the model's network);
+- :mod:`~nfs.diagnose.start_state`: each run's node temperatures at power-on (an
+  unfinished soak), estimated with the thermal fit;
 - :mod:`~nfs.diagnose.structure` and :mod:`~nfs.diagnose.adequacy`: generic alternatives of
-  the thermal structure and the verdict on the model's;
+  the thermal structure and the verdict on the model's; :mod:`~nfs.diagnose.refine`: the
+  alternatives that pay adopted in a chain (:func:`fit_unit`);
 - :mod:`~nfs.diagnose.compare`: the model beside measured runs, channel by channel, with
   "where it fails" in words; :mod:`~nfs.diagnose.compare_report`: its report and figures;
 - :mod:`~nfs.diagnose.diagnose`: which registered effect the model is missing, ranked, and
@@ -25,7 +28,8 @@ from .compare_report import write_report
 from .diagnose import Diagnosis, apply_candidate, candidates, diagnose
 from .fit import FitResult, default_free, fit_model, write_fitted_model
 from .adequacy import ThermalAdequacy, thermal_adequacy
-from .result import candidate_finding
+from .refine import Refinement, fit_unit, refine_structure
+from .result import Answer, candidate_finding
 from .params import (ParameterError, default_bounds, expand_paths, get_param, list_params,
                      set_params)
 from .smoother import RunSmoothing, smooth_runs
@@ -35,4 +39,5 @@ __all__ = ["Comparison", "compare", "write_report", "Diagnosis", "apply_candidat
            "candidates", "diagnose", "FitResult", "default_free", "fit_model",
            "write_fitted_model", "ParameterError", "default_bounds", "expand_paths",
            "get_param", "list_params", "set_params", "ThermalAdequacy", "thermal_adequacy",
-           "RunSmoothing", "smooth_runs", "structural_alternatives", "candidate_finding"]
+           "RunSmoothing", "smooth_runs", "structural_alternatives", "candidate_finding",
+           "Answer", "Refinement", "fit_unit", "refine_structure"]

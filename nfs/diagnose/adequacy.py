@@ -81,8 +81,8 @@ from .params import fit_bounds, get_param, set_params
 from .structure import StructuralAlternative, structural_alternatives
 
 __all__ = ["AlternativeScore", "ChannelFit", "ThermalAdequacy", "OneSided", "thermal_adequacy",
-           "beats_structure", "structure_rival", "MODEL_RIVAL", "one_sided", "ADEQUACY_FACTOR", "BEATS_ALPHA", "CV_DROP",
-           "STARTUP_S",
+           "beats_structure", "better_run_by_run", "structure_rival", "MODEL_RIVAL",
+           "one_sided", "ADEQUACY_FACTOR", "BEATS_ALPHA", "CV_DROP", "STARTUP_S",
            "DEFAULT_DECIMATE_S", "REFINE_TOP", "STAGES"]
 
 #: A channel is adequate when its residual RMS is within this factor of its noise floor.
@@ -695,8 +695,8 @@ def structure_rival(candidate: AlternativeScore, adequacy: ThermalAdequacy,
     The rival is whichever of the model (:data:`MODEL_RIVAL`) and its structural
     alternatives has the lowest CV RMS.  The candidate beats it when (a) its CV RMS is below
     ``(1 - margin)`` times the rival's and (b) its held-out squared residual is smaller run
-    by run: the paired per-run differences are tested one-sided against zero with a t test
-    at ``alpha``, runs being the independent units (as the drift candidates' run-level
+    by run: the paired per-run log-ratios are tested one-sided against zero with a t test
+    at ``alpha`` (:func:`better_run_by_run`), runs being the independent units (as the drift candidates' run-level
     statistics; a rank test would need 5 runs to reach 5 % at all).  A pooled CV RMS a
     fraction of a percent lower, won on some runs and lost on others, is a tie, not a named
     effect.  The candidate's residual must be the same as the alternatives' (the three
@@ -707,15 +707,34 @@ def structure_rival(candidate: AlternativeScore, adequacy: ThermalAdequacy,
         (s.cv_rms_after_k, s.cv_sse_by_run, s.name) for s in adequacy.alternatives
         if s.kind != "effect"]
     ref_cv, ref_sse, rival = min(refs, key=lambda r: r[0])
-    if not (math.isfinite(candidate.cv_rms_after_k)
-            and candidate.cv_rms_after_k < (1.0 - margin) * ref_cv):
-        return rival
-    d = np.asarray(ref_sse, dtype=float) - np.asarray(candidate.cv_sse_by_run, dtype=float)
-    if d.size != len(candidate.cv_sse_by_run) or d.size < 2 or not np.any(d > 0):
-        return rival
+    return None if better_run_by_run(candidate.cv_rms_after_k, candidate.cv_sse_by_run,
+                                     ref_cv, ref_sse, margin, alpha) else rival
+
+
+def better_run_by_run(cv_rms_k: float, cv_sse_by_run: Sequence[float], ref_cv_rms_k: float,
+                      ref_sse_by_run: Sequence[float], margin: float = 0.0,
+                      alpha: float = BEATS_ALPHA) -> bool:
+    """Is one structure's held-out residual lower than a reference's, pooled (by more than
+    ``margin``) and run by run?
+
+    Run by run: the paired per-run log-ratios ln(SSE_ref / SSE) of the held-out squared
+    residual, one-sided t test at ``alpha``.  On the log scale a run whose misfit is ten
+    times another's weighs the same when both improve by the same factor (the differences
+    of the squared residual would let the worst run's scatter hide four runs that all
+    improve threefold or more).
+    """
+    if not (math.isfinite(cv_rms_k) and cv_rms_k < (1.0 - margin) * ref_cv_rms_k):
+        return False
+    ref = np.asarray(ref_sse_by_run, dtype=float)
+    new = np.asarray(cv_sse_by_run, dtype=float)
+    if new.size != ref.size or new.size < 2 or np.any(new <= 0) or np.any(ref <= 0):
+        return False
+    d = np.log(ref / new)
+    if not np.any(d > 0):
+        return False
     if np.all(d > 0) and np.ptp(d) == 0:   # no spread: the t statistic is undefined
-        return None
-    return None if ttest_1samp(d, 0.0, alternative="greater").pvalue < alpha else rival
+        return True
+    return bool(ttest_1samp(d, 0.0, alternative="greater").pvalue < alpha)
 
 
 def beats_structure(candidate: AlternativeScore, adequacy: ThermalAdequacy,

@@ -171,6 +171,9 @@ class FitResult:
     stage estimated them (:mod:`nfs.diagnose.start_state`); empty: every node at T0."""
     start_amplitudes_c: dict[str, np.ndarray] = field(default_factory=dict)
     """Each run's start amplitudes a [K] (slow modes, then the fast remainder u)."""
+    structure: Any = None
+    """The refinement of the thermal structure (:class:`nfs.diagnose.refine.Refinement`)
+    when :func:`nfs.diagnose.refine.fit_unit` tried one; None otherwise."""
 
     @property
     def converged(self) -> dict[str, bool]:
@@ -207,6 +210,8 @@ class FitResult:
         for ch in self.rms_after:
             lines.append(f"rms {ch}: {self.rms_before.get(ch, math.nan):.4g} -> "
                          f"{self.rms_after[ch]:.4g}")
+        if self.structure is not None:
+            lines.append(self.structure.summary())
         lines += [f"warning: {w}" for w in self.warnings]
         return "\n".join(lines)
 
@@ -760,6 +765,8 @@ def write_fitted_model(result: FitResult, path: str | Path) -> Path:
                      f"{rep.n_residuals} residuals")
     for ch, v in result.rms_after.items():
         lines.append(f"# residual RMS {ch}: {result.rms_before.get(ch, math.nan):.4g} -> {v:.4g}")
+    if result.structure is not None:
+        lines += [f"# {line}" for line in result.structure.summary().splitlines()]
     for w in result.warnings:
         lines.append(f"# warning: {w}")
     atomic_write_text(path, "\n".join(lines) + "\n" + result.instrument.to_toml())
