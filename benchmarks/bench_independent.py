@@ -212,8 +212,8 @@ def _world(rows, fixed: bool, seeds) -> str:
     noise = Counter(d.unit.bias_noise for d in draws)
     layers = [d.unit.coil.n_layers for d in draws]
     strengths = [r["strength"] for r in rows if r.get("strength") is not None]
-    st = (f", achieved strength {min(strengths):.2f}-{max(strengths):.2f}x" if strengths
-          else "")
+    st = (f"; hidden strength achieved {min(strengths):.2f}-{max(strengths):.2f}x (target "
+          "log-uniform 1-3x)" if strengths else "")
     return (f"world: the family, one unit per set (seeds {min(seeds)}-{max(seeds)}): coil "
             f"{min(layers)}-{max(layers)} layers; TEC "
             + "/".join(f"{k} {v}" for k, v in sorted(tec.items())) + "; bias noise "
@@ -305,7 +305,7 @@ def main(argv=None) -> None:
     def med(x):
         return f"{x[len(x) // 2]:.0f} s" if x else "-"
 
-    print(f"per set (with {args.jobs} sets at once on this machine): fit median {med(tf)}, "
+    print(f"per set ({args.jobs} at once on this machine): fit median {med(tf)}, "
           f"diagnose median {med(td)}; {len(rows)} sets in {wall:.0f} s")
 
 
