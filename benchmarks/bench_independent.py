@@ -11,7 +11,7 @@ part a fitted model cannot take up).  A rule tuned to one structure then shows u
 
 Each set holds the 7 start temperatures x 2.5 h at 1 Hz with one hidden effect, none, or one
 outside the library (``outside``: a quadrantal bias).  For every set the package does what a
-user does with a real unit's chamber runs: fit the lumped model (:func:`nfs.diagnose.fit_model`,
+user does with a real unit's chamber runs: fit the lumped model (:func:`nfs.diagnose.fit_unit`, as `nfs fit` does,
 default free set), then diagnose (:func:`nfs.diagnose.diagnose`) and read its one answer
 (:func:`answer_of`):
 
@@ -50,7 +50,7 @@ from pathlib import Path
 
 from joblib import Parallel, delayed
 
-from nfs.diagnose import diagnose, fit_model
+from nfs.diagnose import diagnose, fit_unit
 from nfs.instrument import load_instrument
 from nfs.io.measurement import read_runs
 
@@ -162,7 +162,7 @@ def one_set(case: str, seed: int, params: dict | None = None, fixed: bool = Fals
                          f"{', ' + '+'.join(draw.paths) if draw.paths else ''}")
             runs = read_runs(tmp)
         t_gen = time.perf_counter() - t0
-        fit = fit_model(independent_model(), runs)
+        fit = fit_unit(independent_model(), runs)
         t_fit = time.perf_counter() - t0 - t_gen
         d = diagnose(fit.instrument, runs)
         t_diag = time.perf_counter() - t0 - t_gen - t_fit

@@ -406,7 +406,7 @@ def _cmd_compare(args) -> int:
                           + "\n")
     _finish(folder, args, {"runs": prov["runs"], "model": prov["instrument"],
                            "seeds": prov["seeds"]})
-    for line in c.sentences():
+    for line in c.sentences() + [c.heading_sentence()]:
         print(f"- {line}")
     if not args.quiet:
         print("wrote " + ", ".join(str(p) for p in paths[:3]) + " ...", file=sys.stderr)

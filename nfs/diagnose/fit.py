@@ -28,7 +28,7 @@ parameter the runs do not determine stays near its preset instead of running to 
     (:func:`nfs.diagnose.stage.forward_jacobian`).
     With a prior, each free thermometer offset is centred on its soak anchor (the readings of
     the first minute after power-on minus T0, :mod:`nfs.diagnose.soak`).  When the solution
-    from the preset stays above the noise (reduced chi-square > 1.5) or ends on a bound, the
+    from the preset stays above the noise (reduced chi-square > 1.5), the
     stage starts again from the preset with every capacity and conductance +-30 %
     (:func:`nfs.diagnose.bound_advice.perturbed_starts`) and keeps the lowest cost.
 **drift**
@@ -556,8 +556,8 @@ def fit_model(inst: Instrument, runs: Sequence[Run], free: Iterable[str] | None 
         Most starts of the thermal stage: the preset, then up to two perturbations of it
         (every capacity and conductance +-30 %,
         :func:`nfs.diagnose.bound_advice.perturbed_starts`), tried only while the best
-        solution stays above the noise (reduced chi-square > 1.5) or on a bound; the lowest
-        cost is kept.  1: the preset only.
+        solution stays above the noise (reduced chi-square > 1.5); the lowest cost is
+        kept.  1: the preset only.
     start_state : StartModel or None
         How each run's node temperatures at power-on are estimated with the thermal
         parameters (:mod:`nfs.diagnose.start_state`: an unfinished soak, a unit off its
