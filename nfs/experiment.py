@@ -30,7 +30,7 @@ from .variability import (Variability, drawn_soak, start_up_state, unit_instrume
                           unpowered_network)
 
 __all__ = ["RunConditions", "SimulationResult", "simulate_run", "simulate_runs", "effect_context",
-           "conditions_from_run", "thermal_power"]
+           "conditions_from_run", "chamber_assumption", "thermal_power"]
 
 _UG = 1e-6
 #: Stacked runs up to this many get the state-dependent heat law row by row.
@@ -91,6 +91,19 @@ class RunConditions:
             return (np.asarray(self.motion[1], dtype=float),
                     np.asarray(self.motion[2], dtype=float) > 0.5)
         return turntable_motion(self.schedule, time_s)
+
+
+def chamber_assumption(runs) -> str:
+    """'' when every run recorded its chamber (``temp_chamber_c``, every sample finite); else
+    one sentence naming the runs without one and what is assumed for them."""
+    missing = [r.name for r in runs if not ("temp_chamber_c" in r.columns and np.all(
+        np.isfinite(np.asarray(r.columns["temp_chamber_c"], dtype=float))))]
+    if not missing:
+        return ""
+    shown = ", ".join(missing[:3]) + (f" and {len(missing) - 3} more" if len(missing) > 3
+                                      else "")
+    return (f"{len(missing)} run(s) without a complete chamber record (temp_chamber_c): "
+            f"{shown}; the chamber is taken to hold each run's T0 throughout")
 
 
 def conditions_from_run(run: Run, *, seed=0, schedule: Schedule | None = None,

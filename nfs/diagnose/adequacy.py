@@ -145,7 +145,7 @@ class AlternativeScore:
     name: str
     """Name of the alternative."""
     kind: str
-    """``split``, ``insert``, ``link``, ``thermometer`` or ``effect``."""
+    """``split``, ``insert``, ``link``, ``thermometer``, ``tec`` or ``effect``."""
     description: str
     """One sentence: what it changes."""
     params: dict[str, float]
@@ -557,6 +557,9 @@ def _advice(best: AlternativeScore) -> str:
         t, node = path[len("thermometers."):].split(".nodes.", 1)
         return (f"check where the {t} thermometer sits: it reads as if {100 * v[0]:.0f} % of "
                 f"it were {node} ([thermometers.{t}] nodes)")
+    if best.kind == "tec":
+        return (f"set the TEC law's set point T_set to about {v[0]:.3g} C "
+                "([[effects]] tec_power)")
     return f"add {best.name}"
 
 

@@ -63,7 +63,7 @@ from ..docfields import document_fields
 from ..denoise import separate_drift
 from ..effects.thermometer import THERMOMETERS
 from ..errors import MeasurementError, NfsError
-from ..experiment import conditions_from_run, simulate_run
+from ..experiment import chamber_assumption, conditions_from_run, simulate_run
 from ..instrument import Instrument
 from ..io.measurement import Run
 from ..northfind import heading_rmse, north_find
@@ -406,6 +406,8 @@ class Comparison:
     """Heading RMSE per run."""
     heading: HeadingComparison | None = None
     """The heading's own verdict over the runs (:func:`heading_comparison`)."""
+    assumptions: tuple[str, ...] = ()
+    """What the comparison assumed where the runs do not say (a missing chamber record)."""
 
     def sentences(self) -> list[str]:
         """"Where it fails", one sentence per channel, in channel order."""
@@ -454,6 +456,7 @@ class Comparison:
                         **({} if self.heading is None else self.heading.to_dict()),
                         "sentence": self.heading_sentence()},
             "sentences": self.sentences(),
+            "assumptions": list(self.assumptions),
         }
 
 
@@ -854,4 +857,5 @@ def compare(inst: Instrument, runs: Sequence[Run], *, seed=0, startup_end_s: flo
         start_temperatures_c=tuple(float(r.meta.start_temperature_c) for r in runs),
         settings=settings, per_run={k: tuple(v) for k, v in per_run.items()},
         summaries=summaries, headings=tuple(headings),
-        heading=heading_comparison(headings, HEADING_ALPHA))
+        heading=heading_comparison(headings, HEADING_ALPHA),
+        assumptions=tuple(a for a in (chamber_assumption(runs),) if a))

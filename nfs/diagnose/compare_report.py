@@ -147,6 +147,9 @@ def to_markdown(comparison: Comparison, figures: dict[str, list[str]] | None = N
             "wavelet separation on both sides; noise floors as in "
             "`nfs.diagnose.compare`.", "", "## Where it fails", ""]
     out += [f"- {x}" for x in c.sentences()] + [f"- {c.heading_sentence()}", ""]
+    if c.assumptions:
+        out += ["Assumed where the runs do not say:", ""] + [f"- {a}" for a in c.assumptions]
+        out += [""]
     out += ["## Summary", ""]
     rows = []
     for spec in CHANNELS:

@@ -84,7 +84,7 @@ from ..constants import OMEGA_IE_DPH
 from ..denoise import earth_rate_projection_dph, separate_drift
 from ..effects.thermometer import THERMOMETERS
 from ..errors import InputError, NfsError
-from ..experiment import conditions_from_run, effect_context, thermal_power
+from ..experiment import chamber_assumption, conditions_from_run, effect_context, thermal_power
 from ..instrument import Instrument
 from ..io.atomic import atomic_write_text
 from ..io.measurement import Run
@@ -713,6 +713,8 @@ def fit_model(inst: Instrument, runs: Sequence[Run], free: Iterable[str] | None 
                                 "(nfs diagnose)")
     if soak is not None:
         warnings.extend(soak.warnings)
+    if chamber_assumption(runs):
+        warnings.append(chamber_assumption(runs))
     for p, why in unident.items():
         warnings.append(f"{p} is not identifiable: {why}")
     if len(runs) == 1:

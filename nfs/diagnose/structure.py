@@ -20,7 +20,9 @@ Alternatives (:func:`structural_alternatives`; each is a new
 - ``link``: a conductance G [W/K] >= 0 between two nodes of the coil, electronics, board
   and housing that the model does not link;
 - ``thermometer``: the FOG thermometer reads a fraction f of another node (a neighbour of
-  its nodes), or another mix of its own nodes.  Paths ``thermometers.<t>.nodes.<node>``
+  its nodes), or another mix of its own nodes; an accelerometer's thermometer reads a
+  fraction of its mount;
+- ``tec``: the TEC law's set point free (:func:`tec_set_point`).  Paths ``thermometers.<t>.nodes.<node>``
   (the fraction f in [0, 1] of that node in the sensed temperature; the other nodes keep
   their relative weights and share 1 - f) are not :mod:`nfs.diagnose.params` paths:
   :meth:`StructuralAlternative.build` sets them (:func:`set_thermometer_fraction`).
@@ -42,7 +44,8 @@ from ..instrument import Instrument
 from .params import set_params
 
 __all__ = ["StructuralAlternative", "split_node", "insert_node", "free_link",
-           "thermometer_weight", "effect_alternative", "structural_alternatives",
+           "thermometer_weight", "tec_set_point", "effect_alternative",
+           "structural_alternatives",
            "set_thermometer_fraction", "physical_lower"]
 
 _WEIGHT = ".nodes."
@@ -96,7 +99,8 @@ class StructuralAlternative:
     name: str
     """Short name, e.g. ``link electronics-coil_inner``."""
     kind: str
-    """``split``, ``insert``, ``link``, ``thermometer`` or ``effect`` (a named candidate)."""
+    """``split``, ``insert``, ``link``, ``thermometer``, ``tec`` or ``effect`` (a named
+    candidate)."""
     description: str
     """One sentence: what it changes."""
     instrument: Instrument
@@ -244,6 +248,21 @@ def thermometer_weight(inst: Instrument, thermometer: str, node: str) -> Structu
         start=(f0,), bounds=((0.0, 1.0),))
 
 
+def tec_set_point(inst: Instrument) -> StructuralAlternative:
+    """The TEC law's set point T_set [degC] free (+-10 K about the model's): a source held at
+    another temperature than the model says draws its heating and cooling power on other
+    sides of another temperature, which shifts the warm-up by start temperature."""
+    tec = next((e for e in inst.effects if e.name == "tec_power"), None)
+    if tec is None:
+        raise NfsError(f"tec_set_point: '{inst.name}' has no tec_power law")
+    t_set = float(tec.params["T_set"])
+    return StructuralAlternative(
+        name="tec set point", kind="tec",
+        description=f"frees the TEC law's set point (the model's {t_set:g} C)",
+        instrument=inst, free=(f"effects.{tec.label}.T_set",), start=(t_set,),
+        bounds=((t_set - 10.0, t_set + 10.0),))
+
+
 def physical_lower(effect: str, parameter: str) -> float | None:
     """The physical lower bound of a thermal candidate's coefficient, or None.
 
@@ -299,8 +318,10 @@ def structural_alternatives(inst: Instrument) -> list[StructuralAlternative]:
     chamber).  Splits: each coil node, the housing and the powered non-source nodes.
     Inserts: between each node of the FOG thermometer and the housing.  Links: every pair of
     core nodes not yet linked.  Thermometer: the FOG thermometer's share of each neighbour
-    of its nodes, and of its first node.  For the default instrument: 4 splits, 2 inserts,
-    4 links and 3 thermometer shares.
+    of its nodes, and of its first node; each accelerometer thermometer's share of each
+    neighbour of its nodes (the mount it sits on).  The TEC law's set point, when the model
+    has one.  For the default instrument: 4 splits, 2 inserts, 4 links, 5 thermometer
+    shares and the TEC set point.
     """
     net = inst.network
     g = inst.gyro
@@ -325,4 +346,12 @@ def structural_alternatives(inst: Instrument) -> list[StructuralAlternative]:
     out += [thermometer_weight(inst, "fog", m) for m in dict.fromkeys(near)]
     if len(fog_nodes) > 1:
         out.append(thermometer_weight(inst, "fog", fog_nodes[0]))
+    for name, model in inst.thermometers.items():   # an accelerometer's on its mount
+        if name == "fog":
+            continue
+        own = list(model.nodes)
+        out += [thermometer_weight(inst, name, m) for m in dict.fromkeys(
+            m for n in own for m in _neighbours(net, n) if m not in own)]
+    if any(e.name == "tec_power" for e in inst.effects):
+        out.append(tec_set_point(inst))
     return out

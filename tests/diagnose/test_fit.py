@@ -194,3 +194,15 @@ def test_at_bound_advice_and_unsoaked_runs(scenario, runs):
     assert res.soak is not None and res.soak.unsoaked == tuple(r.name for r in shifted)
     for r in shifted:
         assert any(r.name in w and "not soaked" in w for w in res.warnings)
+
+
+def test_a_run_without_a_chamber_record_says_what_is_assumed(scenario, runs):
+    """A run whose CSV has no temp_chamber_c is replayed with the chamber at its T0, and the
+    fit says so, naming the run."""
+    bare = replace(runs[0], columns={k: v for k, v in runs[0].columns.items()
+                                     if k != "temp_chamber_c"})
+    res = fit_model(scenario.instrument, [bare, runs[1]], ["thermometers.fog.lag_s"],
+                    stages=("thermal",), start_state=None, n_starts=1)
+    said = [w for w in res.warnings if "chamber record" in w]
+    assert len(said) == 1 and bare.name in said[0] and "T0" in said[0], res.warnings
+    assert runs[1].name not in said[0]

@@ -68,9 +68,10 @@ def hidden_link(default, link_runs):
 def test_alternatives_of_the_default(default):
     """Oracle: the default network (docs/physics.md section 2) - 4 splits (coil_outer,
     coil_inner, housing, board), 2 inserts (the FOG thermometer's nodes to the housing),
-    the 4 unlinked pairs of electronics, board, coil nodes and housing, 3 thermometer
-    shares; each split halves the capacity, and a split or an insert at its start keeps
-    the steady state of every original node (steady_state, docs/physics.md section 2)."""
+    the 4 unlinked pairs of electronics, board, coil nodes and housing, 3 FOG thermometer
+    shares, each QFA thermometer's share of its mount (the housing) and the TEC set point;
+    each split halves the capacity, and a split or an insert at its start keeps the steady
+    state of every original node (steady_state, docs/physics.md section 2)."""
     alts = structural_alternatives(default)
     names = {a.name for a in alts}
     assert {"split coil_outer", "split coil_inner", "split housing", "split board",
@@ -78,7 +79,11 @@ def test_alternatives_of_the_default(default):
             "link coil_inner-electronics", "link electronics-board",
             "link coil_outer-board", "link coil_inner-board",
             "fog thermometer share of housing", "fog thermometer share of coil_inner",
-            "fog thermometer share of electronics"} == names
+            "fog thermometer share of electronics", "acc_x thermometer share of housing",
+            "acc_y thermometer share of housing", "tec set point"} == names
+    tec = next(a for a in alts if a.kind == "tec")
+    assert tec.free == ("effects.tec_power.T_set",) and tec.start == (25.0,)
+    assert tec.build([22.0]).effect("tec_power").params["T_set"] == 22.0
     s = split_node(default, "coil_outer")
     net = s.build(s.start).network
     assert net.nodes[net.index("coil_outer")].capacity_j_per_k == pytest.approx(47.5)
