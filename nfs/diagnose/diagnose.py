@@ -418,11 +418,18 @@ def diagnose_candidates(inst: Instrument, runs: Sequence[Run], *, n_boot: int = 
     node_info: dict[str, Any] = {"source": node_temperatures}
     smoothed = None
     if node_temperatures == "smoothed":
-        sm = smooth_runs(inst, runs, decimate_s=decimate_s, start_c=start_c)
-        smoothed = sm.runs
-        node_info.update(q_w2_per_s=sm.q_w2_per_s,
-                         significant=bool(sm.fit.significant) if sm.fit is not None else None,
-                         thermometer_rms_c=dict(sm.thermometer_rms_c))
+        try:
+            sm = smooth_runs(inst, runs, decimate_s=decimate_s, start_c=start_c)
+        except NfsError as exc:
+            # a filter these runs leave ill-conditioned: the model's own node temperatures,
+            # and the diagnosis says so
+            node_info.update(source="model", smoother_failed=str(exc))
+        else:
+            smoothed = sm.runs
+            node_info.update(q_w2_per_s=sm.q_w2_per_s,
+                             significant=(bool(sm.fit.significant) if sm.fit is not None
+                                          else None),
+                             thermometer_rms_c=dict(sm.thermometer_rms_c))
     preps, paths = prepare_runs(inst, runs, decimate_s, thermal=smoothed, start_c=start_c)
     bare = bare_instrument(inst)
     rng = np.random.default_rng(random_state)
@@ -593,4 +600,6 @@ def diagnose_candidates(inst: Instrument, runs: Sequence[Run], *, n_boot: int = 
                          decimate_s), baseline=baseline,
                      time_s=time.perf_counter() - t0, alpha=alpha,
                      thermal_structure=adequacy, node_temperatures=node_info,
-                     drift_structure=drift_structure)
+                     drift_structure=drift_structure,
+                     coil_nodes=tuple(n for n in (inst.gyro.coil_outer, inst.gyro.coil_inner)
+                                      if n))

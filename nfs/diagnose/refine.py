@@ -15,7 +15,10 @@ candidate follows it.  So :func:`fit_unit` refines the structure before the drif
    structure's by more than :data:`~nfs.diagnose.adequacy.CV_DROP` and lower run by run (a
    paired one-sided t test over the runs, :func:`~nfs.diagnose.adequacy.better_run_by_run`):
    a structure change is a claim about the unit, held to the standard of a named effect;
-3. repeated on the new structure until every thermometer's held-out residual is within the
+3. the adopted structure is checked again in full (the screening linearises the held-out
+   fit; a change whose full check does not lower the held-out residual by
+   :data:`~nfs.diagnose.adequacy.CV_DROP` is dropped and the chain stops there);
+4. repeated on the new structure until every thermometer's held-out residual is within the
    factor, no alternative pays, or :data:`MAX_STEPS` changes were made.
 
 The two stages of :func:`nfs.diagnose.fit.fit_model` then run on the structure it ended
@@ -127,8 +130,15 @@ def refine_structure(inst: Instrument, runs: Sequence[Run], *, factor: float = R
                        f"{'none' if best is None else best.name}); {ad.worst.thermometer} "
                        f"{ad.worst.stage} stays {worst:.1f}x its floor")
             break
-        model = best.instrument
-        new = thermal_adequacy(model, runs, decimate_s=decimate_s, start_state=start_state)
+        new = thermal_adequacy(best.instrument, runs, decimate_s=decimate_s,
+                               start_state=start_state)
+        if not new.cv_rms_k < (1.0 - CV_DROP) * ad.cv_rms_k:
+            # the screening linearised the held-out fit; checked in full, the change does
+            # not pay (a stiff pair of links, say): keep the structure as it was
+            stopped = (f"{best.name} looked better linearised but not when checked in full "
+                       f"(held-out {ad.cv_rms_k * 1e3:.1f} -> {new.cv_rms_k * 1e3:.1f} mK); "
+                       f"{ad.worst.thermometer} {ad.worst.stage} stays {worst:.1f}x its floor")
+            break
         steps.append(StructureStep(name=best.name, description=best.description,
                                    params=dict(best.params), cv_rms_before_k=ad.cv_rms_k,
                                    cv_rms_after_k=new.cv_rms_k, worst_before=worst,

@@ -165,6 +165,9 @@ class Diagnosis:
     checked."""
     failure: str | None = None
     """Why these runs cannot determine the answer (an ill-conditioned fit), or None."""
+    coil_nodes: tuple[str, ...] = ()
+    """The model's coil nodes (outer, inner): where heat that no thermometer sees would
+    give the gyro a turn-on transient."""
 
     @property
     def significant(self) -> list[CandidateScore]:
@@ -192,6 +195,15 @@ class Diagnosis:
                               f"(p beyond it {top.beyond_structure_p:.2g}): right after "
                               "power-on every node's rate decays like a transient; a run "
                               "that would tell them apart: nfs design")
+            if top.effect == "turn_on_transient" and self.coil_nodes:
+                heat = f"heat_source:{self.coil_nodes[-1]}"
+                return Answer("tie", (lab, heat),
+                              f"these runs cannot tell apart: {lab} ({_coef(top)}; Holm p "
+                              f"{top.holm_p:.2g}) and heat released inside the coil "
+                              f"({heat}), where no thermometer sits: both give the gyro the "
+                              "same decay after power-on at every start temperature, so no "
+                              "soak-and-start run separates them; a run that would (a power "
+                              "cycle): nfs design")
             text = (f"add {lab} ({_coef(top)}; Holm p {top.holm_p:.2g}, CV RMS "
                     f"-{100 * top.cv_drop:.0f} % on {top.channel})")
             if len(own) > 1:

@@ -55,6 +55,16 @@ def test_a_tied_top_is_a_tie_not_an_addition():
     assert "add " not in d.verdict and "nfs design" in d.verdict
 
 
+def test_an_untied_transient_is_tied_with_heat_inside_the_coil():
+    """A turn-on transient that stands beyond the rate terms is still what heat released in
+    the coil, where no thermometer sits, does to the gyro at every start temperature."""
+    d = _diag([_score("turn_on_transient", significant=True, beyond_structure_p=0.001)])
+    d = Diagnosis(**{**d.__dict__, "coil_nodes": ("coil_outer", "coil_inner")})
+    assert d.answer.kind == "tie"
+    assert d.answer.labels == ("turn_on_transient", "heat_source:coil_inner")
+    assert "power cycle" in d.verdict and "add " not in d.verdict
+
+
 def test_thermal_structure_tie():
     d = _diag([_score("heat_source", "coil_inner", coef={"power": 1.0},
                       structure_tie="insert node coil_outer-housing")])
