@@ -743,9 +743,9 @@ def build_parser() -> argparse.ArgumentParser:
                          "inf: no prior)")
     fi.add_argument("--no-prior", action="store_true",
                     help="plain least squares: no prior on the parameters, no soak anchor")
-    fi.add_argument("--starts", type=int, default=3,
+    fi.add_argument("--starts", type=int, default=1,
                     help="most starts of the thermal stage: the preset, then capacities and "
-                         "conductances +-30 %% while the fit stays above the noise (default 3)")
+                         "conductances +-30 %% while the fit stays above the noise (default 1)")
     fi.add_argument("--no-refine", action="store_true",
                     help="keep the model's thermal structure even where it misses a "
                          "thermometer by more than 2x its noise floor (default: adopt the "

@@ -27,9 +27,9 @@ parameter the runs do not determine stays near its preset instead of running to 
     with all n + 1 parameter vectors solved as one stack
     (:func:`nfs.diagnose.stage.forward_jacobian`).
     With a prior, each free thermometer offset is centred on its soak anchor (the readings of
-    the first minute after power-on minus T0, :mod:`nfs.diagnose.soak`).  When the solution
-    from the preset stays above the noise (reduced chi-square > 1.5), the
-    stage starts again from the preset with every capacity and conductance +-30 %
+    the first minute after power-on minus T0, :mod:`nfs.diagnose.soak`).  With ``n_starts``
+    > 1, when the solution from the preset stays above the noise (reduced chi-square > 1.5),
+    the stage starts again from the preset with every capacity and conductance +-30 %
     (:func:`nfs.diagnose.bound_advice.perturbed_starts`) and keeps the lowest cost.
 **drift**
     Thermal parameters fixed at the thermal fit.  Free: ``gyro.bias_dph``, the gyro effect
@@ -514,7 +514,7 @@ def fit_model(inst: Instrument, runs: Sequence[Run], free: Iterable[str] | None 
               stages: Sequence[str] = STAGES, decimate_s: float = DEFAULT_DECIMATE_S,
               max_nfev: int | None = 100, drift_signal: str = "raw",
               prior: Mapping[str, float | str] | str | None = "default",
-              prior_scale: float = 1.0, soak_anchor: bool = True, n_starts: int = 3,
+              prior_scale: float = 1.0, soak_anchor: bool = True, n_starts: int = 1,
               fit_noise: bool = True, start_state: StartModel | None = DEFAULT_START,
               start_c: Mapping[str, np.ndarray] | None = None) -> FitResult:
     """Calibrate the free parameters of ``inst`` to ``runs`` (module docstring for the method).
@@ -557,7 +557,9 @@ def fit_model(inst: Instrument, runs: Sequence[Run], free: Iterable[str] | None 
         (every capacity and conductance +-30 %,
         :func:`nfs.diagnose.bound_advice.perturbed_starts`), tried only while the best
         solution stays above the noise (reduced chi-square > 1.5); the lowest cost is
-        kept.  1: the preset only.
+        kept.  1 (default): the preset only; with each run's start estimated, the extra
+        starts ended at the same or a higher cost on the units of the independent family
+        where they ran, at twice the time.
     start_state : StartModel or None
         How each run's node temperatures at power-on are estimated with the thermal
         parameters (:mod:`nfs.diagnose.start_state`: an unfinished soak, a unit off its

@@ -26,6 +26,12 @@ __all__ = ["StageReport", "solve_stage", "forward_jacobian", "CHI2_SETTLED"]
 #: A stage whose data rows have a reduced chi-square at most this fits to its noise: no other
 #: start is tried, and the data rows keep their stated noise level beside the prior.
 CHI2_SETTLED = 1.5
+#: Relative tolerances of the cost and of the step (scipy's ftol, xtol; 1e-8 by default).
+#: The data rows are in noise units, so the cost is half a chi-square of 10^4 or more: a
+#: relative change of 1e-5 is a few tenths of one unit, where a parameter's standard error
+#: moves the cost by 0.5; tighter, a fit of a unit whose structure is not the model's crawls
+#: on for tens of evaluations more to the same parameters (to well within their errors).
+FTOL = XTOL = 1e-5
 
 
 @document_fields
@@ -152,7 +158,7 @@ def solve_stage(name: str, fun, x0: np.ndarray, lb: np.ndarray, ub: np.ndarray,
         # an extra start only has to show a lower basin: a third of the evaluations
         budget = max_nfev if best is None or max_nfev is None else max(10, max_nfev // 3)
         res = least_squares(total, xs, jac=jacobian(1.0), bounds=(lb, ub), method="trf",
-                            x_scale="jac", max_nfev=budget)
+                            x_scale="jac", max_nfev=budget, ftol=FTOL, xtol=XTOL)
         nfev, tried = nfev + int(res.nfev), tried + 1
         if best is None or res.cost < best.cost:
             best = res
@@ -169,7 +175,8 @@ def solve_stage(name: str, fun, x0: np.ndarray, lb: np.ndarray, ub: np.ndarray,
             return np.concatenate([data_rows(x) / noise_scale, prior.rows(x)])
 
         res = least_squares(scaled, res.x, jac=jacobian(noise_scale), bounds=(lb, ub),
-                            method="trf", x_scale="jac", max_nfev=max_nfev)
+                            method="trf", x_scale="jac", ftol=FTOL, xtol=XTOL,
+                            max_nfev=None if max_nfev is None else max(10, max_nfev // 2))
         nfev += int(res.nfev)
     cost_prior = float(0.5 * np.sum(res.fun[m:] ** 2))
     report = StageReport(name=name, free=tuple(paths), converged=bool(res.status > 0),

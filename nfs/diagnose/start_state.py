@@ -43,7 +43,6 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.linalg import expm
 
 import thermal
 
@@ -95,10 +94,11 @@ class StartModel:
 
 
 def start_basis(network: thermal.Network, n_slow: int = DEFAULT_SLOW_MODES,
-                fast: bool = False) -> np.ndarray:
+                fast: bool = False, modes: tuple[np.ndarray, np.ndarray] | None = None
+                ) -> np.ndarray:
     """V = [v_1, ..., v_k, u] (n_nodes, k + 1) of the module docstring (without u when not
-    ``fast``)."""
-    _, v = network.modes()
+    ``fast``); ``modes``: the network's :meth:`~thermal.Network.modes`, when known."""
+    _, v = network.modes() if modes is None else modes
     k = min(max(int(n_slow), 0), v.shape[1] - 1)
     slow = v[:, :k]
     if not fast:
@@ -146,9 +146,11 @@ def soak_history(run: Run) -> tuple[float, float] | None:
 
 
 def start_prior(network: thermal.Network, basis: np.ndarray, t0_c: float,
-                history: tuple[float, float] | None, model: StartModel
+                history: tuple[float, float] | None, model: StartModel,
+                modes: tuple[np.ndarray, np.ndarray] | None = None
                 ) -> tuple[np.ndarray, np.ndarray]:
-    """(centre, width) of the amplitudes a [K] of one run (module docstring)."""
+    """(centre, width) of the amplitudes a [K] of one run (module docstring); ``modes``:
+    the network's :meth:`~thermal.Network.modes`, when the caller has them."""
     k = basis.shape[1]
     n_slow = basis.shape[1] - (1 if model.fast else 0)
     centre = np.zeros(k)
@@ -156,8 +158,11 @@ def start_prior(network: thermal.Network, basis: np.ndarray, t0_c: float,
     width[n_slow:] = model.fast_width_c
     if history is not None:
         t_from, hours = history
-        a, _ = network.matrices()
-        dev = expm(a * 3600.0 * hours) @ np.full(a.shape[0], t_from - t0_c)
+        # expm(A t) 1 from the free modes: 1 = V b, T(t) - T0 = V diag(exp(-t / tau)) b
+        taus, v = network.modes() if modes is None else modes
+        b = np.linalg.solve(v, np.full(v.shape[0], t_from - t0_c))
+        decay = np.exp(-3600.0 * hours / taus)      # tau = inf (floating) keeps its part
+        dev = v @ (decay * b)
         c = network.capacity_j_per_k
         gram = basis.T @ (c[:, None] * basis)
         centre = np.linalg.solve(gram, basis.T @ (c * dev))

@@ -477,7 +477,9 @@ def thermal_residual(insts: Sequence[Instrument], data: Sequence[ThermalRun],
                         parts[lo + s][col].append((y - rd.measured[col])[rd.mask[col]])
                     start_c[lo + s][i] = rd.t0_c
             continue
-        bases = [start_basis(inst.network, start.n_slow, start.fast) for inst in chunk]
+        modes = [inst.network.modes() for inst in chunk]
+        bases = [start_basis(inst.network, start.n_slow, start.fast, m)
+                 for inst, m in zip(chunk, modes)]
         k = bases[0].shape[1]
         n = bases[0].shape[0]
         offsets = np.zeros((len(chunk), r_n * (k + 1), n))
@@ -495,7 +497,8 @@ def thermal_residual(insts: Sequence[Instrument], data: Sequence[ThermalRun],
                 r0 = {c: (base[s][c] - rd.measured[c])[rd.mask[c]] for c in cols}
                 g = {c: np.column_stack([(mv[s][c] - base[s][c])[rd.mask[c]] for mv in moved])
                      for c in cols}
-                centre, width = start_prior(inst.network, bases[s], rd.t0_c, rd.history, start)
+                centre, width = start_prior(inst.network, bases[s], rd.t0_c, rd.history, start,
+                                            modes[s])
                 a = solve_amplitudes(np.concatenate([r0[c] / f[c] for c in cols]),
                                      np.concatenate([g[c] / f[c] for c in cols]), centre, width)
                 for c in cols:
