@@ -24,6 +24,10 @@ def test_missing_effect_example(tmp_path):
     worse.  About 35 s on two cores (the thermal fit of a network that is not the unit's)."""
     r = load("missing_effect").main(tmp_path)
     assert r["top"] == "magnetic", r["verdict"]
+    assert r["answer"] == "add" and r["labels"] == ("magnetic",), r["verdict"]
+    # before: the drift or the heading says the model fails; after: the heading agrees
+    assert not (r["gyro_consistent_before"] and r["heading_consistent_before"])
+    assert r["heading_consistent_after"]
     lo, hi = r["interval"]["m"]
     assert lo <= r["truth"]["params"]["m"] <= hi
     # the drift residual falls (its excess over the floor is no test here: the floor from

@@ -176,7 +176,8 @@ def solve_stage(name: str, fun, x0: np.ndarray, lb: np.ndarray, ub: np.ndarray,
 
         res = least_squares(scaled, res.x, jac=jacobian(noise_scale), bounds=(lb, ub),
                             method="trf", x_scale="jac", ftol=FTOL, xtol=XTOL,
-                            max_nfev=None if max_nfev is None else max(10, max_nfev // 2))
+                            max_nfev=(None if max_nfev is None
+                                      else max(min(10, max_nfev), max_nfev // 2)))
         nfev += int(res.nfev)
     cost_prior = float(0.5 * np.sum(res.fun[m:] ** 2))
     report = StageReport(name=name, free=tuple(paths), converged=bool(res.status > 0),

@@ -21,7 +21,7 @@ import thermal
 from independent import generator as g
 from nfs.diagnose.fit import default_free
 from nfs.diagnose.params import get_param, set_params
-from nfs.diagnose.stage import forward_jacobian, solve_stage
+from nfs.diagnose.stage import FTOL, XTOL, forward_jacobian, solve_stage
 from nfs.diagnose.thermal_residual import (_StatefulLaw, prepare_thermal, simulate_knots,
                                            thermal_residual_parts)
 from nfs.effects import make_effect
@@ -178,8 +178,8 @@ def test_forward_jacobian_is_scipys_two_point():
 
 def test_solve_stage_with_a_batch_lands_where_scipy_lands():
     """The same minimum as least_squares with its own finite differences (a bounded
-    exponential fit with a prior-free stage), within the solver's termination tolerances
-    (xtol = ftol = 1e-8; measured 3e-10 apart)."""
+    exponential fit with a prior-free stage), with the stage's termination tolerances
+    (xtol = ftol = nfs.diagnose.stage.FTOL) on the same path to 1e-7."""
     t = np.linspace(0.0, 5.0, 60)
     rng = np.random.default_rng(0)
     y = 2.0 * np.exp(-0.8 * t) + 0.3 + 0.01 * rng.standard_normal(t.size)
@@ -192,7 +192,8 @@ def test_solve_stage_with_a_batch_lands_where_scipy_lands():
     a = solve_stage("thermal", fun, x0, lb, ub, 200, ["a", "k", "c"])[0]
     b = solve_stage("thermal", fun, x0, lb, ub, 200, ["a", "k", "c"],
                     batch=lambda xs: [fun(x) for x in xs])[0]
-    ref = least_squares(fun, x0, bounds=(lb, ub), method="trf", x_scale="jac")
+    ref = least_squares(fun, x0, bounds=(lb, ub), method="trf", x_scale="jac", ftol=FTOL,
+                        xtol=XTOL)
     np.testing.assert_allclose(b.x, a.x, rtol=1e-7)
     np.testing.assert_allclose(b.x, ref.x, rtol=1e-7)
     assert math.isclose(b.cost, ref.cost, rel_tol=1e-10)
