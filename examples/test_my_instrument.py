@@ -69,6 +69,6 @@ def test_compensator_no_worse_than_none(tmp_path):
     # training start-ups and test start-ups of other seeds: no test noise seen in training
     assert run_nfs("simulate", scenario, "-o", tmp_path / "train", "-q", "--seed", 1) == 0
     assert run_nfs("simulate", scenario, "-o", tmp_path / "test", "-q", "--seed", 2) == 0
-    model = tmp_path / "ls.joblib"
+    model = tmp_path / "ls.npz"
     assert run_nfs("train", tmp_path / "train", "--method", "ls", "-o", model, "-q") == 0
     assert_compensator_no_worse(model, tmp_path / "test")

@@ -70,7 +70,7 @@ def _cmd_table(args) -> int:
     from .compensate.study import table_provenance
     from .compensate.study import CompensationSettings
     scenario = _with_overrides(load_scenario(args.scenario), args)
-    _file(args.json, "--json")
+    _file(args.json, "--json", args.overwrite)
     settings = _table_settings(args, scenario.compensation or CompensationSettings())
     baseline = _baseline(args, scenario, settings)
     folder = _folder(args, "table")
@@ -185,7 +185,7 @@ def _cmd_train(args) -> int:
     get_method(args.method)                  # a bad name fails before any work
     resolve_features(args.features, ["aux_*"])
     check_features_mode(args.features_mode, "--features-mode")
-    _file(args.output, "-o")
+    _file(args.output, "-o", args.overwrite)
     runs = read_runs(args.data)
     missing = [r.name for r in runs if r.meta.true_heading_deg is None]
     if missing:
@@ -208,10 +208,20 @@ def _cmd_train(args) -> int:
 
 
 def _cmd_compensate(args) -> int:
+    import warnings
     from .compensate import load_compensator
+    from .compensate.model_file import model_file_kind
     from .compensate.modes import check_features_mode
     from .io.measurement import read_runs, write_run
-    comp = load_compensator(args.model)
+    if args.trust_pickle and model_file_kind(args.model) not in ("nfs-model", "missing"):
+        print(f"nfs: warning: --trust-pickle: unpickling {args.model} runs any code it holds; "
+              "load_compensator(path, trust_pickle=True).save('model.npz') converts a trusted "
+              "one", file=sys.stderr)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        comp = load_compensator(args.model, trust_pickle=args.trust_pickle)
+    for w in caught:
+        print(f"nfs: warning: {w.message}", file=sys.stderr)
     if args.features_mode is not None and \
             check_features_mode(args.features_mode, "--features-mode") != comp.features_mode:
         raise NfsError(f"--features-mode {args.features_mode}: the model was trained in "
@@ -235,11 +245,15 @@ def _folder(args, command: str):
     return OutputFolder(args.output, command, overwrite=args.overwrite)
 
 
-def _file(path, option: str):
-    """Check an output file's place before any work (None passes)."""
+def _file(path, option: str, overwrite: bool = False):
+    """Check an output file's place before any work (None passes): its folder exists and
+    takes files, and no file is there unless ``overwrite`` (the command's --overwrite)."""
     from .io.outdir import check_output_file
-    if path is not None:
-        check_output_file(path, option)
+    if path is None:
+        return
+    p = check_output_file(path, option)
+    if not overwrite and (p.exists() or p.is_symlink()):
+        raise NfsError(f"{option} {p}: the file exists; give --overwrite to replace it")
 
 
 def _finish(folder, args, inputs: dict) -> None:
@@ -299,7 +313,7 @@ def _cmd_northfind(args) -> int:
     from .northfind import heading_rmse, north_find
     if args.heading_hint is not None and not math.isfinite(args.heading_hint):
         raise NfsError(f"--heading-hint: {args.heading_hint} is not a finite angle in degrees")
-    _file(args.json, "--json")
+    _file(args.json, "--json", args.overwrite)
     runs = read_runs(args.data)
     rows = []
     out = {"runs": []}
@@ -370,7 +384,7 @@ def _cmd_fit(args) -> int:
     from .diagnose import fit_unit, write_fitted_model
     from .io.measurement import read_runs
     inst = _load_model(args.model)
-    _file(args.output, "-o")
+    _file(args.output, "-o", args.overwrite)
     runs = read_runs(args.data)
     if not args.quiet:
         print(f"fitting {inst.name} to {len(runs)} run(s)...", file=sys.stderr)
@@ -391,7 +405,7 @@ def _cmd_compare(args) -> int:
     from .io.measurement import read_runs
     from .io.provenance import output_provenance
     inst = _load_model(args.model)
-    _file(args.json, "--json")
+    _file(args.json, "--json", args.overwrite)
     runs = read_runs(args.data)
     folder = _folder(args, "compare")
     if not args.quiet:
@@ -421,8 +435,8 @@ def _cmd_diagnose(args) -> int:
     inst = _load_model(args.model)
     if args.apply and args.output is None:
         raise NfsError("--apply needs -o FILE for the new model")
-    _file(args.output, "-o")
-    _file(args.json, "--json")
+    _file(args.output, "-o", args.overwrite)
+    _file(args.json, "--json", args.overwrite)
     runs = read_runs(args.data)
     if args.apply:
         name, _, target = args.apply.partition(":")
@@ -643,9 +657,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help="relative change a worse cell must also exceed (default 0.05: 5 %%)")
     t.add_argument("-q", "--quiet", action="store_true", help="no progress on stderr")
     t.add_argument("--overwrite", action="store_true",
-                   help="write into a folder that holds another command's output or files "
-                        "of unknown origin (files of the earlier output that are not "
-                        "rewritten are removed)")
+                   help="replace an existing --json file, and write into a folder that holds "
+                        "another command's output or files of unknown origin (files of the "
+                        "earlier output that are not rewritten are removed)")
     t.set_defaults(func=_cmd_table)
 
     tr = sub.add_parser("train", help="train a drift compensator on measured runs",
@@ -656,7 +670,10 @@ def build_parser() -> argparse.ArgumentParser:
     tr.add_argument("--method", default="ssa-svr",
                     help="ls, stepwise, bp, rbf, lssvm, ir-lssvm, svr-grid, pso-svr, gwo-svr, "
                          "ssa-svr (default), hho-rvr, tpe-svr")
-    tr.add_argument("-o", "--output", required=True, help="model file to write (.joblib)")
+    tr.add_argument("-o", "--output", required=True,
+                    help="model file to write, e.g. model.npz (nfs-model/1: arrays and JSON, "
+                         "loaded without running code)")
+    tr.add_argument("--overwrite", action="store_true", help="replace an existing model file")
     tr.add_argument("--features", nargs="+", default=["seed004"],
                     help="feature names, sets or patterns (default: seed004)")
     tr.add_argument("--features-mode", default="cycle", metavar="MODE",
@@ -680,6 +697,9 @@ def build_parser() -> argparse.ArgumentParser:
                                     "drift_model_dph are kept as extra columns).")
     _runs(co)
     co.add_argument("--model", required=True, help="model file written by nfs train")
+    co.add_argument("--trust-pickle", action="store_true",
+                    help="also load a joblib pickle written by an earlier nfs train (loading "
+                         "a pickle runs any code it holds: only a file you trust)")
     co.add_argument("-o", "--output", required=True, help="output folder")
     co.add_argument("--features-mode", default=None, metavar="MODE",
                     help="check that the model was trained in this features mode (it is "
@@ -709,6 +729,7 @@ def build_parser() -> argparse.ArgumentParser:
                                    "folders) and print heading and RMSE per run.")
     _runs(n)
     n.add_argument("--json", default=None, help="write per-cycle results as JSON")
+    n.add_argument("--overwrite", action="store_true", help="replace an existing --json file")
     n.add_argument("--no-tilt", action="store_true", help="no tilt correction")
     n.add_argument("--heading-hint", type=float, default=None, metavar="DEG",
                    help="coarse heading of the axis at position 0 [deg] (e.g. a magnetic "
@@ -729,6 +750,7 @@ def build_parser() -> argparse.ArgumentParser:
                                     "model as an instrument TOML with each value's error.")
     _runs_and_model(fi)
     fi.add_argument("-o", "--output", required=True, help="fitted model TOML to write")
+    fi.add_argument("--overwrite", action="store_true", help="replace an existing -o file")
     fi.add_argument("--free", nargs="+", default=None,
                     help="free parameter paths or patterns (default: see nfs.diagnose.fit)")
     fi.add_argument("--stages", nargs="+", default=["thermal", "drift"],
@@ -773,9 +795,9 @@ def build_parser() -> argparse.ArgumentParser:
     cm.add_argument("-q", "--quiet", action="store_true",
                     help="no progress on standard error")
     cm.add_argument("--overwrite", action="store_true",
-                    help="write into a folder that holds another command's output or files "
-                         "of unknown origin (files of the earlier output that are not "
-                         "rewritten are removed)")
+                    help="replace an existing --json file, and write into a folder that holds "
+                         "another command's output or files of unknown origin (files of the "
+                         "earlier output that are not rewritten are removed)")
     cm.set_defaults(func=_cmd_compare)
 
     dg = sub.add_parser("diagnose", help="which physical effect the model is missing",
@@ -792,6 +814,8 @@ def build_parser() -> argparse.ArgumentParser:
     dg.add_argument("--apply", default=None, metavar="NAME[:TARGET]",
                     help="add this effect, refit and write the model to -o")
     dg.add_argument("-o", "--output", default=None, help="new model TOML (with --apply)")
+    dg.add_argument("--overwrite", action="store_true",
+                    help="replace an existing -o or --json file")
     dg.add_argument("--diagnosis", default=None, metavar="JSON",
                     help="with --apply: what an earlier nfs diagnose --json found on these "
                          "runs (default: diagnose them first); adding an effect it did not "

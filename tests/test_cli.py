@@ -193,12 +193,12 @@ def test_bad_measurement(tmp_path, cli, csv_edit, toml_edit, expect):
     (tmp_path / "run.toml").write_text(toml)
     js = tmp_path / "out.json"
     js.write_text("previous")
-    code, _, err = cli("northfind", str(tmp_path), "--json", str(js))
+    code, _, err = cli("northfind", str(tmp_path), "--json", str(js), "--overwrite")
     line = one_line_error(code, err)
     assert "run.csv" in line or "run.toml" in line
     for e in expect:
         assert e in line, line
-    assert js.read_text() == "previous"     # nothing already written is lost
+    assert js.read_text() == "previous"     # nothing already written is lost, even so
 
 
 def test_console_script_exit_code(tmp_path):

@@ -113,7 +113,7 @@ def test_train_and_compensate_keep_one_features_mode(tmp_path, cli, scenario_tex
     scen = tmp_path / "s.toml"
     scen.write_text(scenario_text("modes", 5, (-20.0, 40.0), 1300.0))
     assert cli("simulate", str(scen), "-o", str(tmp_path / "runs"), "-q")[0] == 0
-    model = tmp_path / "m.joblib"
+    model = tmp_path / "m.npz"
     code, out, err = cli("train", str(tmp_path / "runs"), "--method", "ls", "-o", str(model),
                          "-q", "--features-mode", "causal")
     assert code == 0, err
@@ -136,7 +136,7 @@ def test_train_and_compensate_round_trip(tmp_path, cli, scen_text):
                    "--seed", "1")[0] == 0
     assert cli("simulate", str(scen), "-o", str(tmp_path / "test"), "-q",
                    "--seed", "2")[0] == 0
-    model = tmp_path / "m.joblib"
+    model = tmp_path / "m.npz"
     code, out, err = cli("train", str(tmp_path / "train"), "--method", "ls",
                              "-o", str(model), "-q")
     assert code == 0, err
@@ -160,7 +160,7 @@ def test_compensate_refuses_runs_without_its_channels(tmp_path, cli, scen_text):
     scen = tmp_path / "s.toml"
     scen.write_text(scen_text)
     cli("simulate", str(scen), "-o", str(tmp_path / "runs"), "-q")
-    model = tmp_path / "m.joblib"
+    model = tmp_path / "m.npz"
     code, _, err = cli("train", str(tmp_path / "runs"), "--method", "ls",
                            "--features", "T_fog", "aux_tec_power_w", "-o", str(model), "-q")
     assert code == 0, err
@@ -178,9 +178,9 @@ def test_compensate_refuses_runs_without_its_channels(tmp_path, cli, scen_text):
 
 
 @pytest.mark.parametrize("argv, msg", [
-    (["train", "RUNS", "--method", "magic", "-o", "m.joblib"], "unknown compensation method"),
-    (["compensate", "RUNS", "--model", "nope.joblib", "-o", "out"], "model file not found"),
-    (["train", "RUNS", "--method", "ls", "-o", "m.joblib", "--features-mode", "live"],
+    (["train", "RUNS", "--method", "magic", "-o", "m.npz"], "unknown compensation method"),
+    (["compensate", "RUNS", "--model", "nope.npz", "-o", "out"], "model file not found"),
+    (["train", "RUNS", "--method", "ls", "-o", "m.npz", "--features-mode", "live"],
      "--features-mode: unknown mode 'live'; choose one of cycle, causal, offline"),
     (["table", "--features-mode", "centred", "-o", "out"],
      "--features-mode: unknown mode 'centred'; choose one of cycle, causal, offline"),

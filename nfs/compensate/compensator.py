@@ -2,30 +2,30 @@
 
 Apply = predict the drift from the run's own thermometers (and aux channels) and subtract it
 from the gyro output, then north-find (docs/physics.md section 6; the FOG start-up paper).  A
-compensator is
-saved with its feature list, settings and the versions of the libraries that trained it, and
-refuses runs that lack one of its input channels.
+compensator is saved as a model file (:mod:`~nfs.compensate.model_file`, ``nfs-model/1``:
+arrays and JSON, read without running code) with its feature list, settings, the runs it was
+trained on (hashed) and the versions of the libraries that trained it, and refuses runs that
+lack one of its input channels.  The joblib pickles of earlier versions are read only when
+the caller trusts them (``trust_pickle=True``).
 """
 
 from __future__ import annotations
 
-import io
 import time
 from collections.abc import Sequence
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
 from typing import Any
 
-import joblib
 import numpy as np
 
 from ..errors import NfsError
-from ..io.atomic import atomic_write_bytes
 from ..io.measurement import Run
-from ..io.provenance import library_versions
+from ..io.provenance import library_versions, runs_provenance
 from .dataset import DriftDataset, drift_dataset
 from .features import compute_features
 from .methods import get_method
+from .model_file import FORMAT, model_file_kind, read_model_file, write_model_file
 from .modes import (
     DEFAULT_FEATURE_MODE,
     FeatureModeError,
@@ -34,10 +34,14 @@ from .modes import (
 )
 
 __all__ = ["DriftCompensator", "PredictionPlan", "prediction_plan", "train_compensator",
-           "load_compensator", "FORMAT"]
+           "load_compensator", "FORMAT", "PICKLE_FORMAT"]
 
-#: Format tag of a saved compensator.
-FORMAT = "nfs-compensator/1"
+#: Format tag of the dict in the joblib pickles of earlier versions.
+PICKLE_FORMAT = "nfs-compensator/1"
+
+#: DriftCompensator fields stored in a model file's header (the estimator is stored apart).
+_HEADER_FIELDS = ("method", "feature_names", "rate_window_s", "features_mode", "settings",
+                  "trained_on", "provenance", "fit_time_s", "versions")
 
 
 @dataclass(frozen=True)
@@ -148,6 +152,10 @@ class DriftCompensator:
     """Wall time of the training [s]."""
     versions: dict = field(default_factory=dict)
     """Library versions at training time."""
+    provenance: dict = field(default_factory=dict)
+    """What it was trained on: ``{"runs": [{name, file, sha256}, ...]}``
+    (:func:`~nfs.io.provenance.runs_provenance`; the names only when trained on a prepared
+    :class:`~nfs.compensate.dataset.DriftDataset`)."""
 
     def plan(self, run: Run, *, stride_s: float | None = None) -> "PredictionPlan":
         """Where and on what this compensator is evaluated on ``run``
@@ -214,41 +222,69 @@ class DriftCompensator:
         return replace(run, columns=cols, path=None)
 
     def save(self, path: str | Path) -> Path:
-        """Write the compensator with joblib, atomically."""
-        buf = io.BytesIO()
-        joblib.dump({"format": FORMAT, "compensator": self}, buf)
-        atomic_write_bytes(path, buf.getvalue())
-        return Path(path)
+        """Write the compensator as a model file (:data:`FORMAT`, e.g. ``model.npz``),
+        atomically; loading it runs no code (:mod:`~nfs.compensate.model_file`)."""
+        header = {name: getattr(self, name) for name in _HEADER_FIELDS}
+        header["feature_names"] = list(self.feature_names)
+        header["trained_on"] = list(self.trained_on)
+        return write_model_file(path, header, self.estimator)
 
 
-def load_compensator(path: str | Path) -> DriftCompensator:
+def load_compensator(path: str | Path, *, trust_pickle: bool = False) -> DriftCompensator:
     """Read a compensator written by :meth:`DriftCompensator.save`.
+
+    A joblib pickle (what earlier versions wrote) is refused by its leading bytes before
+    anything is unpickled, unless ``trust_pickle``: unpickling runs whatever code the file
+    holds.  ``load_compensator(old, trust_pickle=True).save(new)`` converts a trusted one.
 
     Parameters
     ----------
     path : str or Path
         The model file.
+    trust_pickle : bool
+        Also read a joblib pickle of an earlier version (only from a source you trust).
 
     Returns
     -------
     DriftCompensator
-        With ``features_mode="offline"`` when the file predates the features modes (its
+        With ``features_mode="offline"`` when a pickle predates the features modes (its
         rates were the centred Savitzky-Golay ones).
+
+    Raises
+    ------
+    ModelFileError
+        A missing, foreign or corrupt file, or an untrusted pickle, in one line.
     """
     path = Path(path)
-    if not path.is_file():
-        raise NfsError(f"{path}: model file not found")
+    if trust_pickle and model_file_kind(path) not in ("nfs-model", "missing"):
+        return _load_pickle(path)
+    header, estimator = read_model_file(path)
+    try:
+        kwargs = {name: header[name] for name in _HEADER_FIELDS}
+    except KeyError as exc:
+        raise NfsError(f"{path}: model file without {exc.args[0]!r} in its header") from None
+    kwargs["feature_names"] = tuple(kwargs["feature_names"])
+    kwargs["trained_on"] = tuple(kwargs["trained_on"])
+    return DriftCompensator(estimator=estimator, **kwargs)
+
+
+def _load_pickle(path: Path) -> DriftCompensator:
+    """A compensator pickled by joblib (earlier versions' ``save``): runs the file's code."""
+    import joblib
     try:
         obj = joblib.load(path)
     except Exception as exc:  # a corrupt or foreign file
         raise NfsError(f"{path}: not a compensator model file ({type(exc).__name__}: {exc})") \
             from None
-    if not isinstance(obj, dict) or obj.get("format") != FORMAT:
-        raise NfsError(f"{path}: not a compensator model file (expected format {FORMAT})")
-    comp = obj["compensator"]
-    if "features_mode" not in vars(comp):
-        comp = replace(comp, features_mode="offline")
-    return comp
+    if not isinstance(obj, dict) or obj.get("format") != PICKLE_FORMAT or \
+            not isinstance(obj.get("compensator"), DriftCompensator):
+        raise NfsError(f"{path}: not a compensator model file (a pickle without a "
+                       f"{PICKLE_FORMAT} compensator)")
+    state = vars(obj["compensator"])
+    # fields added since: a pickle without the features modes was trained offline
+    defaults = {"features_mode": "offline", "provenance": {}}
+    return DriftCompensator(**{f.name: state[f.name] if f.name in state else defaults[f.name]
+                               for f in fields(DriftCompensator)})
 
 
 def train_compensator(method: str, runs: Sequence[Run] | DriftDataset, *,
@@ -292,6 +328,7 @@ def train_compensator(method: str, runs: Sequence[Run] | DriftDataset, *,
     spec = get_method(method)
     if isinstance(runs, DriftDataset):
         data = runs
+        provenance = {"runs": [{"name": name} for name in data.run_names]}
         if features_mode is not None and check_features_mode(features_mode) != \
                 data.features_mode:
             raise FeatureModeError(f"features mode {features_mode!r} differs from the training "
@@ -300,6 +337,7 @@ def train_compensator(method: str, runs: Sequence[Run] | DriftDataset, *,
         data = drift_dataset(runs, features, decimate_s=decimate_s,
                              cutoff_period_s=cutoff_period_s, rate_window_s=rate_window_s,
                              features_mode=features_mode or DEFAULT_FEATURE_MODE)
+        provenance = {"runs": runs_provenance(runs)}
     if spec.tuned and len(set(data.groups.tolist())) < 2:
         raise NfsError(f"{spec.name} tunes by leaving whole runs out: it needs at least "
                        "2 training runs")
@@ -318,4 +356,5 @@ def train_compensator(method: str, runs: Sequence[Run] | DriftDataset, *,
         settings={"decimate_s": decimate_s, "cutoff_period_s": cutoff_period_s,
                   "budget": budget if spec.tuned else None, "random_state": random_state,
                   "n_samples": int(data.X.shape[0]), "features_mode": data.features_mode},
-        trained_on=data.run_names, fit_time_s=dt, versions=library_versions())
+        trained_on=data.run_names, fit_time_s=dt, versions=library_versions(),
+        provenance=provenance)

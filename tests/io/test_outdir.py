@@ -132,7 +132,7 @@ def test_folder_commands_refuse_an_existing_file_as_output(tmp_path, cli, scenar
     if command[0] in ("compare", "compensate"):
         assert cli("simulate", scen, "-o", tmp_path / "runs", "-q")[0] == 0
     if command[0] == "compensate":
-        args[3] = tmp_path / "model.joblib"
+        args[3] = tmp_path / "model.npz"
         assert cli("train", tmp_path / "runs", "--method", "ls", "-o", args[3], "-q")[0] == 0
     code, _, err = cli(*args, "-o", f)
     assert code == 2 and "Traceback" not in err and len(err.strip().splitlines()) == 1

@@ -1,0 +1,261 @@
+"""Model files (nfs-model/1): every method round-trips exactly, and loading runs no code.
+
+Oracles: invariants.  A model file holds the fitted arrays and is read back onto the same
+classes, so the loaded model predicts bit for bit as the one saved, and saving it again gives
+the same bytes.  A file whose unpickling would create a marker file (``__reduce__`` calling
+``os.system``; a control shows the marker appears when the bytes are unpickled) is refused
+by ``nfs compensate`` with one line and exit 2, and the marker does not appear.
+"""
+
+import io
+import json
+import os
+import pickle
+import shlex
+import warnings
+import zipfile
+
+import joblib
+import numpy as np
+import pytest
+
+from nfs.cli import main
+from nfs.compensate import (CubicLeastSquares, DriftCompensator, IRLSSVMRegressor,
+                            load_compensator, train_compensator)
+from nfs.compensate.methods import METHODS
+from nfs.compensate.model_file import (ESTIMATORS, FORMAT, ModelFileError, model_file_kind,
+                                       read_model_file, write_model_file)
+from nfs.io.measurement import read_runs
+from nfs.io.provenance import sha256_of_file
+
+
+def _data(n=60, seed=0):
+    """A smooth drift of three features, three runs (validation groups) of n / 3 samples."""
+    rng = np.random.default_rng(seed)
+    X = rng.normal(size=(n, 3))
+    y = np.sin(X[:, 0]) + 0.1 * X[:, 1] * X[:, 2]
+    return X, y, np.repeat(np.arange(3), n // 3), rng.normal(size=(40, 3))
+
+
+@pytest.mark.parametrize("key", list(METHODS))
+def test_every_method_round_trips_bit_for_bit(tmp_path, key):
+    spec = METHODS[key]
+    if spec.tuner == "tpe":
+        pytest.importorskip("optuna")
+    X, y, groups, X_new = _data()
+    est = spec.build(budget=6, random_state=0, n_jobs=1)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")          # a 6-candidate search on 60 samples
+        est.fit(X, y, groups=groups) if spec.tuned else est.fit(X, y)
+    comp = DriftCompensator(method=spec.name, estimator=est, feature_names=("a", "b", "c"),
+                            features_mode="causal", settings={"budget": 6})
+    path = comp.save(tmp_path / "model.npz")
+    assert model_file_kind(path) == "nfs-model"
+    loaded = load_compensator(path)
+    assert type(loaded.estimator) is type(est)
+    assert loaded.estimator.predict(X_new).tobytes() == est.predict(X_new).tobytes()
+    assert (loaded.method, loaded.feature_names, loaded.features_mode, loaded.settings) == \
+        (spec.name, ("a", "b", "c"), "causal", {"budget": 6})
+    again = loaded.save(tmp_path / "again.npz")
+    assert again.read_bytes() == path.read_bytes()
+    if spec.tuned:
+        assert loaded.estimator.best_params_ == est.best_params_
+
+
+def test_the_header_names_the_class_its_parameters_the_features_and_the_runs(tmp_path):
+    X, y, _, _ = _data()
+    comp = DriftCompensator(method="LS", estimator=CubicLeastSquares(degree=2).fit(X, y),
+                            feature_names=("T_fog", "dT_fog", "G"), trained_on=("r1",),
+                            provenance={"runs": [{"name": "r1", "sha256": "ab"}]})
+    path = comp.save(tmp_path / "model.npz")
+    with zipfile.ZipFile(path) as zf:
+        doc = json.loads(zf.read("header.json"))
+        assert all(n == "header.json" or n.endswith(".npy") for n in zf.namelist())
+    assert doc["format"] == FORMAT and doc["features_mode"] == "cycle"
+    assert doc["feature_names"] == ["T_fog", "dT_fog", "G"]
+    assert doc["provenance"]["runs"][0]["sha256"] == "ab"
+    assert doc["estimator"]["$estimator"] == "nfs.compensate.regression.CubicLeastSquares"
+    assert doc["estimator"]["params"] == {"degree": 2, "include_interactions": True,
+                                          "alpha": 0.0}
+    with np.load(path, allow_pickle=False) as npz:   # the arrays need no pickle
+        assert all(npz[k].dtype != object for k in npz.files if k != "header.json")
+
+
+def test_an_object_not_on_the_lists_is_not_written(tmp_path):
+    X, y, _, _ = _data()
+    est = IRLSSVMRegressor(weight=lambda r: np.ones_like(r)).fit(X, y)
+    comp = DriftCompensator(method="mine", estimator=est, feature_names=("a", "b", "c"))
+    with pytest.raises(ModelFileError, match=r"^estimator\.weight: a builtins\.function "
+                                             "cannot be written"):
+        comp.save(tmp_path / "model.npz")
+    assert not (tmp_path / "model.npz").exists()
+
+
+@pytest.fixture(scope="module")
+def runs(tmp_path_factory):
+    """Two short simulated runs and an LS model trained on them (nfs train)."""
+    from tests.conftest import _scenario_text
+    d = tmp_path_factory.mktemp("runs")
+    (d / "s.toml").write_text(_scenario_text("small", 5, (-20.0, 40.0), 700.0))
+    assert main(["simulate", str(d / "s.toml"), "-o", str(d / "runs"), "-q"]) == 0
+    assert main(["train", str(d / "runs"), "--method", "ls", "-o", str(d / "ls.npz"),
+                 "-q"]) == 0
+    return d
+
+
+def test_train_records_the_runs_it_read_by_hash(runs):
+    comp = load_compensator(runs / "ls.npz")
+    files = sorted((runs / "runs").glob("*.csv"))
+    assert sorted(r["sha256"] for r in comp.provenance["runs"]) == \
+        sorted(sha256_of_file(f) for f in files)
+    assert comp.versions["nfs"] and comp.fit_time_s >= 0
+
+
+class _Touch:
+    """Unpickling this calls os.system('touch MARKER')."""
+
+    def __init__(self, marker):
+        self.marker = marker
+
+    def __reduce__(self):
+        return os.system, (f"touch {shlex.quote(str(self.marker))}",)
+
+
+def _pickle(path, marker):
+    path.write_bytes(pickle.dumps(_Touch(marker), protocol=4))
+
+
+def _pickle_v2(path, marker):
+    path.write_bytes(pickle.dumps(_Touch(marker), protocol=2))
+
+
+def _joblib(compress):
+    def write(path, marker):
+        joblib.dump(_Touch(marker), path, compress=compress)
+    return write
+
+
+def _zip_with_pickle(path, marker):
+    """A zip holding a pickle, as PyTorch's checkpoints are."""
+    with zipfile.ZipFile(path, "w") as zf:
+        zf.writestr("archive/data.pkl", pickle.dumps(_Touch(marker)))
+
+
+def _model_with_pickled_array(path, marker):
+    """A model file whose array member is an object array: a pickle inside the .npy."""
+    X, y, _, _ = _data()
+    comp = DriftCompensator(method="LS", estimator=CubicLeastSquares().fit(X, y),
+                            feature_names=("a", "b", "c"))
+    comp.save(path)
+    evil = io.BytesIO()
+    np.save(evil, np.array([_Touch(marker)], dtype=object), allow_pickle=True)
+    with zipfile.ZipFile(path) as zf:
+        members = {n: zf.read(n) for n in zf.namelist()}
+    members["a0.npy"] = evil.getvalue()
+    with zipfile.ZipFile(path, "w") as zf:
+        for name, data in members.items():
+            zf.writestr(name, data)
+
+
+def _model_naming_a_foreign_class(path, marker):
+    """A model file whose header names os.system as the estimator's class."""
+    X, y, _, _ = _data()
+    header = {"method": "LS"}
+    write_model_file(path, header, CubicLeastSquares().fit(X, y))
+    with zipfile.ZipFile(path) as zf:
+        members = {n: zf.read(n) for n in zf.namelist()}
+    doc = json.loads(members["header.json"])
+    doc["estimator"]["$estimator"] = "posix.system"
+    doc["estimator"]["params"] = {"command": f"touch {marker}"}
+    members["header.json"] = json.dumps(doc).encode()
+    with zipfile.ZipFile(path, "w") as zf:
+        for name, data in members.items():
+            zf.writestr(name, data)
+
+
+@pytest.mark.parametrize("write, why", [
+    (_pickle, "a pickle, not a nfs-model/1 model file"),
+    (_pickle_v2, "a pickle, not a nfs-model/1 model file"),
+    (_joblib(("zlib", 3)), "a pickle"), (_joblib(("gzip", 3)), "a pickle"),
+    (_joblib(("bz2", 3)), "a pickle"), (_joblib(("lzma", 3)), "a pickle"),
+    (_joblib(("xz", 3)), "a pickle"),
+    (_zip_with_pickle, "a zip archive without header.json"),
+    (_model_with_pickled_array, "corrupt model file"),
+    (_model_naming_a_foreign_class, "estimator class 'posix.system' is not one"),
+])
+def test_a_file_that_would_run_code_is_refused_before_it_runs(runs, tmp_path, capsys, write,
+                                                               why):
+    marker = tmp_path / "marker"
+    evil = tmp_path / "model.joblib"
+    write(evil, marker)
+    assert not marker.exists()
+    code = main(["compensate", str(runs / "runs"), "--model", str(evil),
+                 "-o", str(tmp_path / "out")])
+    err = capsys.readouterr().err
+    assert code == 2 and len(err.strip().splitlines()) == 1 and "Traceback" not in err
+    assert err.startswith(f"nfs: error: {evil}: ") and why in err
+    assert not marker.exists() and not (tmp_path / "out").exists()
+
+
+def test_the_marker_appears_when_such_a_file_is_unpickled(tmp_path):
+    # The control of the test above: its pickles do run their code when unpickled.
+    marker = tmp_path / "marker"
+    _pickle(tmp_path / "evil", marker)
+    pickle.loads((tmp_path / "evil").read_bytes())
+    assert marker.exists()
+
+
+@pytest.mark.parametrize("content, why", [
+    (b"T_fog,gyro_dph\n1,2\n", "neither a model file nor a pickle"),
+    (b"", "neither a model file nor a pickle"),
+    (None, "model file not found"),
+])
+def test_a_foreign_or_missing_file_is_one_line(runs, tmp_path, capsys, content, why):
+    path = tmp_path / "model.npz"
+    if content is not None:
+        path.write_bytes(content)
+    code = main(["compensate", str(runs / "runs"), "--model", str(path),
+                 "-o", str(tmp_path / "out")])
+    err = capsys.readouterr().err
+    assert code == 2 and len(err.strip().splitlines()) == 1 and why in err
+
+
+def test_a_later_format_is_refused_by_name(tmp_path):
+    X, y, _, _ = _data()
+    path = write_model_file(tmp_path / "m.npz", {}, CubicLeastSquares().fit(X, y))
+    with zipfile.ZipFile(path) as zf:
+        members = {n: zf.read(n) for n in zf.namelist()}
+    members["header.json"] = members["header.json"].replace(FORMAT.encode(), b"nfs-model/2")
+    with zipfile.ZipFile(path, "w") as zf:
+        for name, data in members.items():
+            zf.writestr(name, data)
+    with pytest.raises(ModelFileError, match="model format 'nfs-model/2': this version of "
+                                             "nfs reads nfs-model/1"):
+        read_model_file(path)
+
+
+def test_a_trusted_pickle_of_an_earlier_version_still_loads(runs, tmp_path, capsys):
+    comp = load_compensator(runs / "ls.npz")
+    old = tmp_path / "old.joblib"
+    joblib.dump({"format": "nfs-compensator/1", "compensator": comp}, old)
+    code = main(["compensate", str(runs / "runs"), "--model", str(old),
+                 "-o", str(tmp_path / "out"), "--trust-pickle"])
+    err = capsys.readouterr().err
+    assert code == 0
+    assert err.startswith(f"nfs: warning: --trust-pickle: unpickling {old} runs any code")
+    assert len(list((tmp_path / "out").glob("*.csv"))) == 2
+    converted = load_compensator(old, trust_pickle=True).save(tmp_path / "new.npz")
+    assert converted.read_bytes() == comp.save(tmp_path / "same.npz").read_bytes()
+
+
+def test_every_estimator_on_the_list_is_the_packages_or_inside_one():
+    # The list is the package's estimators and the two scikit-learn models they hold.
+    outside = sorted(n for n in ESTIMATORS if not n.startswith("nfs.compensate."))
+    assert outside == ["sklearn.neural_network.MLPRegressor", "sklearn.svm.SVR"]
+
+
+def test_a_prepared_training_set_is_recorded_by_run_name(runs):
+    from nfs.compensate import drift_dataset
+    data = drift_dataset(read_runs(runs / "runs"), "seed004")
+    comp = train_compensator("ls", data)
+    assert comp.provenance == {"runs": [{"name": n} for n in data.run_names]}
