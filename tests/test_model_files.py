@@ -23,8 +23,8 @@ from nfs.cli import main
 from nfs.compensate import (CubicLeastSquares, DriftCompensator, IRLSSVMRegressor,
                             load_compensator, train_compensator)
 from nfs.compensate.methods import METHODS
-from nfs.compensate.model_file import (ESTIMATORS, FORMAT, ModelFileError, model_file_kind,
-                                       read_model_file, write_model_file)
+from nfs.compensate.model_file import (ESTIMATORS, FORMAT, ModelFileError, ModelVersionWarning,
+                                       model_file_kind, read_model_file, write_model_file)
 from nfs.io.measurement import read_runs
 from nfs.io.provenance import sha256_of_file
 
@@ -259,3 +259,16 @@ def test_a_prepared_training_set_is_recorded_by_run_name(runs):
     data = drift_dataset(read_runs(runs / "runs"), "seed004")
     comp = train_compensator("ls", data)
     assert comp.provenance == {"runs": [{"name": n} for n in data.run_names]}
+
+
+def test_a_file_of_another_scikit_learn_version_loads_with_one_warning(tmp_path, runs,
+                                                                       capsys):
+    comp = load_compensator(runs / "ls.npz")
+    path = DriftCompensator(**{**vars(comp), "versions": {"scikit-learn": "0.0"}}).save(
+        tmp_path / "old_sklearn.npz")
+    with pytest.warns(ModelVersionWarning, match="written with scikit-learn 0.0, read with"):
+        load_compensator(path)
+    code = main(["compensate", str(runs / "runs"), "--model", str(path),
+                 "-o", str(tmp_path / "out")])
+    err = capsys.readouterr().err
+    assert code == 0 and err.startswith("nfs: warning: ") and err.count("\n") == 1
