@@ -61,8 +61,7 @@ class Progress:
 
 def _cmd_table(args) -> int:
     from .compensate.modes import check_features_mode
-    from .compensate.study import errors_by_temperature
-    from .scenario_runs import run_scenario, uncompensated_table
+    from .scenario_runs import run_scenario, stage_errors_by_temperature, uncompensated_table
     from .io.scenario import load_scenario
     from .report import write_table
     if args.features_mode is not None:
@@ -83,9 +82,10 @@ def _cmd_table(args) -> int:
         from .compensate.study import test_scenario
         progress.what = "simulating"
         res = run_scenario(test_scenario(scenario, settings), progress=progress)
-        table = uncompensated_table(res).with_intervals(
-            {"before": errors_by_temperature(res), "stable": errors_by_temperature(res, stage=1)},
-            random_state=scenario.seed)
+        table = uncompensated_table(res)
+        table = table.with_intervals(
+            {n: e for n, e in stage_errors_by_temperature(res).items()
+             if n in [r.method for r in table.rows]}, random_state=scenario.seed)
         table = dataclasses.replace(table, provenance=provenance)
         paths = write_table(table, args.output, json_path=args.json, title=title)
         text = table.to_markdown()

@@ -13,6 +13,7 @@ from .experiment import SimulationResult, simulate_runs
 from .variability import describe_units
 
 __all__ = ["ScenarioResult", "run_scenario", "run_scenarios", "northfind_runs", "stage_errors",
+           "chamber_moves", "stage_names", "run_stage_errors", "stage_errors_by_temperature",
            "floor_deg", "uncompensated_table"]
 
 
@@ -78,12 +79,89 @@ def run_scenarios(scenarios, *, progress: Callable[[int, int, str], None] | None
     return out
 
 
-def stage_errors(result, settings) -> tuple[np.ndarray, np.ndarray]:
-    """Heading errors of a NorthFindResult's start-up and stable cycles [deg]."""
+def stage_errors(result, settings, moving=None) -> tuple[np.ndarray, ...]:
+    """Heading errors of a NorthFindResult's start-up and stable cycles [deg].
+
+    With ``moving`` (one flag per cycle, :func:`chamber_moves`) the cycles during which the
+    chamber program moves the chamber leave both stages and form a third: (start-up with the
+    chamber held, stable with the chamber held, ramping), the stages of
+    :func:`stage_names`.
+    """
     err = np.asarray(result.error_deg)
     up = np.asarray(result.t_end_s) <= settings.startup_end_s
     st = np.asarray(result.t_start_s) >= settings.stable_start_s
-    return err[up], err[st]
+    if moving is None:
+        return err[up], err[st]
+    m = np.asarray(moving, dtype=bool)
+    return err[up & ~m], err[st & ~m], err[m]
+
+
+def chamber_moves(scenario, start_temperature_c: float, t_start_s, t_end_s) -> np.ndarray:
+    """Whether the scenario's chamber program changes the chamber temperature within each
+    interval [t_start_s, t_end_s] (times from power-on [s]): a ramp or a step inside it or
+    across its ends.  All False without a program; the chamber's ripple and the controller's
+    wander (``[variability]``) are not the program and do not count.
+    """
+    a = np.atleast_1d(np.asarray(t_start_s, dtype=float))
+    b = np.atleast_1d(np.asarray(t_end_s, dtype=float))
+    prog = scenario.chamber.program
+    if prog is None:
+        return np.zeros(a.shape, dtype=bool)
+    sample_s = 1.0 / scenario.sample_rate_hz
+    t_c, temp_c = prog.corners(start_temperature_c, sample_s)
+    t_c = t_c - prog.power_on_s(start_temperature_c, sample_s)
+    at_a = np.interp(a, t_c, temp_c)
+    out = np.abs(np.interp(b, t_c, temp_c) - at_a) > _HELD_K
+    for k in range(a.size):
+        inside = temp_c[(t_c > a[k]) & (t_c < b[k])]
+        out[k] |= bool(np.any(np.abs(inside - at_a[k]) > _HELD_K))
+    return out
+
+
+#: A program whose temperature changes by less than this over a cycle holds it [K].
+_HELD_K = 1e-9
+
+
+def stage_names(scenario) -> tuple[str, ...]:
+    """The heading table's stage rows of a scenario's runs.
+
+    ``("before", "stable")``: the start-up stage (cycles ending within
+    ``northfind.startup_end_s``) and the stable stage (cycles starting after
+    ``northfind.stable_start_s``).  When a chamber program moves the chamber while the runs
+    are recorded, a stage is named for what the chamber does: ``("before", "held",
+    "ramping")``, the start-up cycles with the chamber held, the cycles after
+    ``stable_start_s`` with the chamber held (the unit may still be settling after a ramp:
+    not "stable"), and every cycle during which the chamber ramps or steps.
+    """
+    prog = scenario.chamber.program
+    if prog is not None and any(
+            chamber_moves(scenario, t0, 0.0, scenario.run_duration_s(t0))[0]
+            for t0 in scenario.start_temperatures_c):
+        return ("before", "held", "ramping")
+    return ("before", "stable")
+
+
+def run_stage_errors(result: ScenarioResult, k: int, northfind=None) -> tuple[np.ndarray, ...]:
+    """Heading errors [deg] of run ``k`` of ``result`` by stage, in the order of
+    :func:`stage_names` (``northfind``: the north-finding of every run, default the
+    result's own, uncompensated)."""
+    sc = result.scenario
+    nf = (result.northfind if northfind is None else northfind)[k]
+    if len(stage_names(sc)) == 2:
+        return stage_errors(nf, sc.northfind)
+    t0 = sc.start_temperatures_c[k // sc.repeats]
+    return stage_errors(nf, sc.northfind, chamber_moves(sc, t0, nf.t_start_s, nf.t_end_s))
+
+
+def stage_errors_by_temperature(result: ScenarioResult, northfind=None) -> dict:
+    """Stage row name (:func:`stage_names`) -> ``errors[column][run]``: the heading errors
+    [deg] of that stage of every run, by start temperature (the input of
+    :meth:`~nfs.report.table.HeadingTable.with_intervals`)."""
+    sc = result.scenario
+    per_run = [run_stage_errors(result, k, northfind) for k in range(len(result.northfind))]
+    return {name: [[per_run[k][j] for k in result.runs_at(i)]
+                   for i in range(len(sc.start_temperatures_c))]
+            for j, name in enumerate(stage_names(sc))}
 
 
 def _two_positions(schedule) -> bool:
@@ -111,11 +189,8 @@ def uncompensated_table(res: ScenarioResult):
     """Rows ``before`` (start-up, uncompensated), ``stable`` and ``floor`` by T0."""
     from .report import HeadingTable, TableRow, pooled_rmse
     sc = res.scenario
-    before, stable = [], []
-    for i in range(len(sc.start_temperatures_c)):
-        errs = [stage_errors(res.northfind[k], sc.northfind) for k in res.runs_at(i)]
-        before.append(pooled_rmse(e[0] for e in errs))
-        stable.append(pooled_rmse(e[1] for e in errs))
+    errors = stage_errors_by_temperature(res)
+    rmse = {name: tuple(pooled_rmse(runs) for runs in cols) for name, cols in errors.items()}
     n_t = len(sc.start_temperatures_c)
     fl = floor_deg(sc)
     nf = sc.northfind
@@ -124,19 +199,69 @@ def uncompensated_table(res: ScenarioResult):
                   "true heading (two positions; the true heading is the hint that picks the "
                   "sign of each cycle's solution)" if two else
                   "sqrt(2/N) (ARW / sqrt(dwell)) / (Omega_ie cos L)")
+    held = "with the chamber held, " if "held" in rmse else ""
+    stages = (f"before: start-up stage (cycles ending within {nf.startup_end_s:g} s), "
+              f"{held}uncompensated; " + (
+                  f"held: cycles starting after {nf.stable_start_s:g} s with the chamber held "
+                  "by its program; ramping: every cycle during which the program ramps or "
+                  f"steps the chamber ({_program_rates(sc)}); " if held else
+                  f"stable: cycles starting after {nf.stable_start_s:g} s; ")
+              + f"floor: white-noise limit {floor_note}.")
     notes = (
         f"Heading RMSE [deg], {sc.repeats} run(s) per start temperature, seed {sc.seed}, "
         f"latitude {sc.latitude_deg:g} deg, {len(sc.schedule.cycle_positions_deg)}-position "
         f"{sc.schedule.order} schedule, dwell {sc.schedule.dwell_s:g} s, "
         f"move {sc.schedule.move_s:g} s.",
-        f"before: start-up stage (cycles ending within {nf.startup_end_s:g} s), uncompensated; "
-        f"stable: cycles starting after {nf.stable_start_s:g} s; floor: white-noise limit "
-        f"{floor_note}.",
+        stages,
     )
     var = sc.variability
     if sc.units > 1 or var.active:
         notes += (f"Start-ups made by {describe_units(sc.units, sc.unit_ids)}; variability "
                   f"{var.describe()}.",)
-    rows = (TableRow("before", tuple(before)), TableRow("stable", tuple(stable)),
-            TableRow("floor", (fl,) * n_t))
-    return HeadingTable(tuple(sc.start_temperatures_c), rows, notes)
+    rows = []
+    for name, values in rmse.items():
+        if any(np.isfinite(values)):
+            rows.append(TableRow(name, values))
+        elif name == "before":                # the row every table compares with: kept
+            rows.append(TableRow(name, values))
+            notes += (f"before: - at every start temperature: {_why_empty(sc, name)}.",)
+        else:
+            notes += (f"No {name} row: {_why_empty(sc, name)}.",)
+    rows.append(TableRow("floor", (fl,) * n_t))
+    return HeadingTable(tuple(sc.start_temperatures_c), tuple(rows), notes)
+
+
+def _program_rates(sc) -> str:
+    """How the program moves the chamber after power-on, e.g. ``ramps of 1 C/min``."""
+    prog = sc.chamber.program
+    sample_s = 1.0 / sc.sample_rate_hz
+    rates, steps = set(), False
+    for t0 in sc.start_temperatures_c:
+        t_c, temp_c = prog.corners(t0, sample_s)
+        dt, dtemp = np.diff(t_c), np.diff(temp_c)
+        powered = t_c[1:] > prog.power_on_s(t0, sample_s)
+        moving = powered & (np.abs(dtemp) > _HELD_K)
+        step = moving & (dt <= sample_s * (1.0 + 1e-9))
+        steps |= bool(np.any(step))
+        rates |= {float(f"{v:.2g}") for v in 60.0 * np.abs(dtemp / dt)[moving & ~step]}
+    text = ("ramps of " + ", ".join(f"{v:g}" for v in sorted(rates)) + " C/min") if rates \
+        else ""
+    return text + (" and " if text and steps else "") + ("steps" if steps else "")
+
+
+def _why_empty(sc, name: str) -> str:
+    """Why a stage has no cycle in any run (a line of the table's notes)."""
+    nf = sc.northfind
+    longest = max(sc.run_duration_s(t0) for t0 in sc.start_temperatures_c)
+    if name == "before":
+        if "held" in stage_names(sc):
+            return (f"no cycle ends within {nf.startup_end_s:g} s with the chamber held (the "
+                    "program moves it from power-on: those cycles are under ramping)")
+        return f"no cycle ends within {nf.startup_end_s:g} s of power-on"
+    if name == "ramping":
+        return "the program moves the chamber only between north-finding cycles"
+    if longest <= nf.stable_start_s:
+        return (f"the runs ({longest:g} s) end before the stable stage starts "
+                f"({nf.stable_start_s:g} s)")
+    held = " with the chamber held" if name == "held" else ""
+    return f"no cycle starts after {nf.stable_start_s:g} s{held}"

@@ -56,7 +56,7 @@ from sklearn.model_selection import KFold
 from ..constants import earth_rate_components_dph
 from ..errors import NfsError
 from ..experiment import simulate_runs
-from ..scenario_runs import northfind_runs
+from ..scenario_runs import chamber_moves, northfind_runs
 from ..io.measurement import Run
 from ..northfind.known_bias import north_find_known_bias
 from ..northfind.solve import _distinct_angles
@@ -166,6 +166,10 @@ class ParameterStudy:
     """Parameter -> (description, unit, thermometer column): :data:`PARAMETERS`."""
     block_cycles: int = BLOCK_CYCLES
     """Consecutive test cycles per bootstrap block."""
+    startup_stage: str = "start-up"
+    """Name of the start-up stage of the heading table: ``start-up``, or ``start-up, chamber
+    ramping`` when the chamber program moves the chamber during a start-up cycle of a test run
+    (:func:`~nfs.scenario_runs.chamber_moves`)."""
 
 
 def _schedule_angles(result) -> np.ndarray:
@@ -338,7 +342,19 @@ def run_parameter_study(scenario, settings=None, *, n_boot: int = 2000,
     tick("done")
     return ParameterStudy(scenario=scenario, settings=s, train=train, test=test,
                           parameters=tuple(rows), headings=tuple(headings), models=models,
-                          n_boot=n_boot)
+                          n_boot=n_boot, startup_stage=_startup_stage(test_sc, test_nf))
+
+
+def _startup_stage(test_sc, test_nf) -> str:
+    """``start-up``, or ``start-up, chamber ramping`` when the program moves the chamber in a
+    start-up cycle of a test run."""
+    end = test_sc.northfind.startup_end_s
+    for k, nf in enumerate(test_nf):
+        t0 = test_sc.start_temperatures_c[k // test_sc.repeats]
+        up = np.asarray(nf.t_end_s) <= end
+        if np.any(chamber_moves(test_sc, t0, nf.t_start_s, nf.t_end_s)[up]):
+            return "start-up, chamber ramping"
+    return "start-up"
 
 
 def _heading_rows(scenario, test_nf, test, predicted, sample_nf, specs, block, n_blocks,

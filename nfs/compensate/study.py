@@ -38,7 +38,8 @@ from ..denoise import separate_drift
 from ..errors import NfsError
 from ..io.provenance import output_provenance
 from ..experiment import simulate_runs
-from ..scenario_runs import northfind_runs, run_scenario, stage_errors, uncompensated_table
+from ..scenario_runs import (northfind_runs, run_scenario, run_stage_errors, stage_names,
+                             uncompensated_table)
 from ..report.table import TableRow, pooled_rmse
 from .compensator import DriftCompensator, PredictionPlan, prediction_plan, train_compensator
 from .dataset import DriftDataset, drift_dataset
@@ -178,11 +179,12 @@ class CompensationStudy:
     """STD of the separated start-up drift of the test runs."""
 
     def startup_errors(self, method: str) -> list[list[np.ndarray]]:
-        """Start-up heading errors [deg] of ``method``'s compensated test runs (``before``:
-        uncompensated; ``stable``: the stable stage, uncompensated), by start temperature,
-        one array per run."""
-        if method in ("before", "stable"):
-            return errors_by_temperature(self.test, stage=int(method == "stable"))
+        """Start-up heading errors [deg] of ``method``'s compensated test runs (a stage row
+        of :func:`~nfs.scenario_runs.stage_names`, ``before``, ``stable``, ...: that stage,
+        uncompensated), by start temperature, one array per run."""
+        stages = stage_names(self.test.scenario)
+        if method in stages:
+            return errors_by_temperature(self.test, stage=stages.index(method))
         return errors_by_temperature(self.test, self.results[method].northfind)
 
     def heading_table(self, *, n_boot: int | None = None):
@@ -222,7 +224,8 @@ class CompensationStudy:
         for ref in ("SSA-SVR", best):
             if ref in names:
                 pairs += [(ref, m) for m in names if m != ref]
-        errors = {n: self.startup_errors(n) for n in ("before", *names, "stable")}
+        stages = [r.method for r in base.rows if r.method in stage_names(sc)]
+        errors = {n: self.startup_errors(n) for n in (*stages[:1], *names, *stages[1:])}
         variants = {n: [r.startup_errors_deg for r in res.seeds]
                     for n, res in self.results.items() if len(res.seeds) > 1}
         return table.with_intervals(errors, pairs=pairs, variants=variants,
@@ -296,11 +299,12 @@ def errors_by_temperature(result, northfind=None, *, stage: int = 0
     northfind : sequence of NorthFindResult, optional
         North-finding of each run (default: the result's own, uncompensated).
     stage : int
-        0: the start-up stage; 1: the stable stage.
+        Index into :func:`~nfs.scenario_runs.stage_names`: 0 the start-up stage; 1 the
+        stable stage (with a chamber program that moves the chamber: the held stage, 2 the
+        ramping one).
     """
     sc = result.scenario
-    nf = result.northfind if northfind is None else northfind
-    return [[stage_errors(nf[k], sc.northfind)[stage] for k in result.runs_at(i)]
+    return [[run_stage_errors(result, k, northfind)[stage] for k in result.runs_at(i)]
             for i in range(len(sc.start_temperatures_c))]
 
 

@@ -13,10 +13,11 @@ import numpy as np
 from ..compensate.modes import FEATURE_MODE_NOTES
 from ..denoise import separate_drift
 from ..io.atomic import atomic_write_bytes, atomic_write_text
+from .intervals import json_number
 from .reference import (SEED004_TABLE1_SVR, SEED004_TABLE2_DRIFT_DPH,
                         SEED004_TABLE3_HEADING_RMSE_DEG, SEED004_TEMPERATURES_C)
 from .startup import plot_error_vs_time, time_to_spec_table
-from .table import HeadingTable, write_table
+from .table import NOT_APPLICABLE, REFERENCE_ROWS, HeadingTable, write_table
 
 __all__ = ["ShapeCheck", "shape_checks", "paper_comparison_markdown", "drift_table_markdown",
            "write_study", "plot_drift_vs_compensated"]
@@ -51,7 +52,7 @@ def shape_checks(table: HeadingTable) -> list[ShapeCheck]:
       at every start temperature (the paper misses this at 28 C).
     """
     names = [r.method for r in table.rows]
-    comp = [r for r in table.rows if r.method not in ("before", "stable", "floor")]
+    comp = [r for r in table.rows if r.method not in REFERENCE_ROWS]
     out = []
     before = table.row("before").mean_deg
     if "SSA-SVR" in names:
@@ -120,7 +121,7 @@ def paper_comparison_markdown(table: HeadingTable) -> str:
 
 
 def _f(v: float) -> str:
-    return "nan" if not math.isfinite(v) else f"{v:.4f}"
+    return NOT_APPLICABLE if not math.isfinite(v) else f"{v:.4f}"
 
 
 def drift_table_markdown(rows, features_mode: str | None = None) -> str:
@@ -141,6 +142,11 @@ def drift_table_markdown(rows, features_mode: str | None = None) -> str:
     lines = ["| method | MAE [deg/h] | STD [deg/h] |", "|---|---:|---:|"]
     for r in rows:
         lines.append(f"| {r.method} | {_f(r.mae_dph)} | {_f(r.std_dph)} |")
+    if any(not math.isfinite(r.mae_dph) for r in rows[:1]):
+        lines += ["", f"{rows[0].method}: MAE {NOT_APPLICABLE}, as in the FOG start-up "
+                  "paper: the drift's mean level over a run is no error a compensator is asked "
+                  "to remove (a rotating north-finding cycle cancels it), so only its spread "
+                  "(STD within each run) compares with the compensated rows."]
     if features_mode:
         lines += ["", f"Features mode: {features_mode}."]
     lines += ["", "The FOG start-up paper, Table 2: " + "; ".join(
@@ -239,8 +245,8 @@ def write_study(study, out_dir, *, json_path=None, title: str = "",
                       + "".join(f"{r.method},{_f(r.mae_dph)},{_f(r.std_dph)},{m}\n"
                                 for r, m in zip(drift, modes)))
     atomic_write_text(out / "drift_residual.json", json.dumps(
-        [{"method": r.method, "mae_dph": None if math.isnan(r.mae_dph) else r.mae_dph,
-          "std_dph": r.std_dph, "features_mode": m or None}
+        [{"method": r.method, "mae_dph": json_number(r.mae_dph),
+          "std_dph": json_number(r.std_dph), "features_mode": m or None}
          for r, m in zip(drift, modes)], indent=2) + "\n")
     params = study.tuned_parameters()
     keys = sorted({k for p in params.values() for k in p})

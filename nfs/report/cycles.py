@@ -18,6 +18,7 @@ from pathlib import Path
 
 from ..io.atomic import atomic_write_text
 from .intervals import json_number
+from .table import NOT_APPLICABLE
 from .reference import CHENG2015_TABLE2_MSD, TAO2019_BIAS_STABILITY
 
 __all__ = ["cycle_table_markdown", "cycle_table_json", "write_cycle_study", "intervals_csv",
@@ -33,7 +34,7 @@ _RAMPS = (("up_rmse_dph", "up-ramp RMSE [deg/h]"), ("up_mean_dph", "up-ramp mean
 
 def _cell(v: float, ci, digits: int) -> str:
     if not math.isfinite(v):
-        return "-"
+        return NOT_APPLICABLE
     if ci is None or not all(math.isfinite(c) for c in ci) or ci[0] == ci[1]:
         return f"{v:.{digits}f}"
     return f"{v:.{digits}f} ({ci[0]:.{digits}f} .. {ci[1]:.{digits}f})"
@@ -89,14 +90,10 @@ def cycle_table_markdown(study) -> str:
     for r in study.rows:
         cells = [_cell(r.values[k], r.intervals.get(k), d) for k, _, d in _METRICS]
         pub = None if _runs(study) else _paper(r.method)
-        cells += [f"{r.heading_rmse_deg:.4f}",
+        cells += [_cell(r.heading_rmse_deg, None, 4),
                   f"{pub[0]:.5f} deg/h, {pub[1]:.2f} %" if pub else ""]
         lines.append(f"| {r.method} | " + " | ".join(cells) + " |")
-    ramp = ["| method | " + " | ".join(h for _, h in _RAMPS) + " |",
-            "|---|" + "---:|" * len(_RAMPS)]
-    for r in study.rows:
-        ramp.append(f"| {r.method} | " + " | ".join(
-            _cell(r.values[k], r.intervals.get(k), 4) for k, _ in _RAMPS) + " |")
+    ramp = _ramp_table(study)
     best = min((r for r in study.rows[1:]), key=lambda r: r.values["bias_stability_dph"],
                default=None)
     shape = []
@@ -121,6 +118,26 @@ def cycle_table_markdown(study) -> str:
             + "\n".join(f"- {n}" for n in notes) + "\n")
 
 
+def _ramp_table(study) -> list[str]:
+    """The up- and down-ramp residuals as Markdown lines; a side the chamber never takes in
+    the test parts is left out, and a line says so."""
+    moves = {"up": "rises", "down": "falls"}
+    missing = [side for side in moves
+               if not any(math.isfinite(r.values[f"{side}_rmse_dph"]) for r in study.rows)]
+    part = "run" if _runs(study) else "cycle"
+    why = (f"No {' or '.join(missing)}-ramp residual: the chamber never "
+           f"{' or '.join(moves[m] for m in missing)} faster than 0.006 C/min in the test "
+           f"{part}s.") if missing else ""
+    cols = [(k, h) for k, h in _RAMPS if k.split("_")[0] not in missing]
+    if not cols:
+        return [why]
+    lines = ["| method | " + " | ".join(h for _, h in cols) + " |", "|---|" + "---:|" * len(cols)]
+    for r in study.rows:
+        lines.append(f"| {r.method} | " + " | ".join(
+            _cell(r.values[k], r.intervals.get(k), 4) for k, _ in cols) + " |")
+    return lines + ([""] + [why] if why else [])
+
+
 def _msd_table(study) -> str:
     """Mean square deviation of every test run by row (Cheng et al. 2015, Table 2), with the
     paper's before/after figures beside the first five runs."""
@@ -129,10 +146,14 @@ def _msd_table(study) -> str:
     lines = ["| " + " | ".join(head) + " |", "|---|" + "---:|" * (len(head) - 1)]
     for i, run in enumerate(study.test_runs):
         pub = CHENG2015_TABLE2_MSD[i] if i < len(CHENG2015_TABLE2_MSD) else None
-        lines.append(f"| {run.name} | " + " | ".join(f"{r.msd_by_part[i]:.3g}"
+        lines.append(f"| {run.name} | " + " | ".join(_g(r.msd_by_part[i])
                                                       for r in study.rows)
                      + (f" | {pub[0]:.3g}, {pub[1]:.3g} |" if pub else " | |"))
     return "\n".join(lines) + "\n"
+
+
+def _g(v: float) -> str:
+    return f"{v:.3g}" if math.isfinite(v) else NOT_APPLICABLE
 
 
 def _cheng_shape(study) -> list[str]:
@@ -182,15 +203,16 @@ def cycle_table_json(study, title: str = "", provenance: dict | None = None) -> 
 
 def intervals_csv(rows: list[dict], skip=()) -> str:
     """CSV of JSON rows whose ``*_ci`` [low, high] pairs become ``*_ci_low`` and
-    ``*_ci_high`` columns (null as an empty cell); the keys in ``skip`` (lists) left out."""
+    ``*_ci_high`` columns (null, nothing applies, as ``-``, as in the Markdown); the keys in
+    ``skip`` (lists) left out."""
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
     keys = [k for k in rows[0] if not k.endswith("_ci") and k not in skip]
     cis = [k for k in rows[0] if k.endswith("_ci")]
     w.writerow(keys + [f"{k}_{e}" for k in cis for e in ("low", "high")])
     for r in rows:
-        w.writerow([("" if r[k] is None else r[k]) for k in keys]
-                   + [("" if v is None else v) for k in cis for v in r[k]])
+        w.writerow([(NOT_APPLICABLE if r[k] is None else r[k]) for k in keys]
+                   + [(NOT_APPLICABLE if v is None else v) for k in cis for v in r[k]])
     return buf.getvalue()
 
 

@@ -41,6 +41,17 @@ with G the replicates' distribution: an RMSE of few terms is biased low (Jensen)
 are its replicates around it; the correction moves the interval up accordingly, which matters most for a row
 mean, where the bias of seven cells adds up while their spread averages down.
 
+An interval holds its estimate.  The estimate's own rank among the replicates is Phi(z0), and
+the bounds' ranks are Phi(2 z0 -+ z_{1-a/2}): the estimate stays inside while |z0| <=
+z_{1-a/2}.  Beyond that, more than 97.5 % of the replicates fall on one side of the estimate:
+a statistic at or near a bound of its range (the R^2 of a constant prediction c is
+-n (ybar - c)^2 / SST <= 0 with ybar - c close to 0: resampling moves ybar* - c and SST*
+together and the replicates pile up on one side), where the bootstrap distribution is no
+shifted copy of the estimate's and the correction would carry both bounds past it.  There z0
+is limited to +-z_{1-a/2} (the bound on the estimate's side falls on the estimate's rank),
+and a bound that no replicate reaches (the estimate beyond every replicate; the
+interpolation between the two replicates around it) is the estimate itself.
+
 Paired comparisons: two rows scored on the same start-ups are resampled with the same draws
 (common random numbers), so the replicates of the difference of their row means carry the
 pairing.  A row trained several times (a tuner run with several seeds, the row showing one
@@ -96,17 +107,18 @@ def bc_interval(replicates: np.ndarray, estimate: float, level: float = LEVEL, *
     Returns
     -------
     (low, high) : tuple of float
-        NaN when there are fewer finite replicates than ``min_replicates`` (or none) or the
-        estimate is not finite.
+        low <= estimate <= high (module docstring: the correction limited to
+        |z0| <= z_{(1+level)/2}); NaN when there are fewer finite replicates than
+        ``min_replicates`` (or none) or the estimate is not finite.
     """
     b = np.asarray(replicates, dtype=float)
     b = b[np.isfinite(b)]
     if b.size < max(1, min_replicates) or not math.isfinite(estimate):
         return math.nan, math.nan
-    z0 = _z0(b, estimate)
-    a = norm.cdf(2.0 * z0 + norm.ppf([(1.0 - level) / 2.0, (1.0 + level) / 2.0]))
-    lo, hi = np.quantile(b, a)
-    return float(lo), float(hi)
+    z = float(norm.ppf((1.0 + level) / 2.0))
+    z0 = min(max(_z0(b, estimate), -z), z)
+    lo, hi = np.quantile(b, norm.cdf(2.0 * z0 + np.array([-z, z])))
+    return float(min(lo, estimate)), float(max(hi, estimate))
 
 
 def bc_pvalue(replicates: np.ndarray, estimate: float, null: float = 0.0) -> float:
@@ -359,7 +371,7 @@ class Comparison:
 
 def _p(p: float) -> str:
     if not math.isfinite(p):
-        return "nan"
+        return "-"
     return f"{p:.2g}" if p >= 1e-3 else "< 0.001"
 
 

@@ -63,6 +63,11 @@ def _notes(study) -> list[str]:
         "(samples): the gyro compensated sample by sample with the scenario's features, the "
         "accelerometers and scale factor by the constant. One position takes the sign of psi "
         "from the run's true heading, as from a compass.",
+        f"{study.startup_stage} RMSE: the test cycles ending within "
+        f"{study.scenario.northfind.startup_end_s:g} s of power-on"
+        + (" (the chamber program moves the chamber during them)."
+           if study.startup_stage != "start-up" else ".")
+        + " No interval where one bootstrap block or fewer holds those cycles.",
         "A schedule of three or more positions cancels a constant bias error within a cycle, "
         "so every bias-known row equals the fitted one there; two positions 90 deg apart and "
         "one position do not, and show what the predicted biases are worth.",
@@ -96,7 +101,7 @@ def parameter_table_markdown(study) -> str:
         lines.append(f"| {desc} [{unit}] | {r.method} | " + " | ".join(
             _cell(r.values[k], r.intervals.get(k)) for k, _ in _METRICS) + " |")
     heads = ["| schedule | positions [deg] | biases from | heading RMSE [deg] | "
-             "start-up RMSE [deg] | versus best |", "|---|---|---|---:|---:|---|"]
+             f"{study.startup_stage} RMSE [deg] | versus best |", "|---|---|---|---:|---:|---|"]
     for h in study.headings:
         heads.append(f"| {h.schedule} | {', '.join(f'{v:g}' for v in h.positions_deg)} | "
                      f"{h.method} | {_cell(h.rmse_deg, h.interval)} | "
@@ -124,7 +129,8 @@ def parameter_table_json(study, title: str = "", provenance: dict | None = None)
               "startup_rmse_deg_ci": [json_number(v) for v in h.startup_interval],
               "versus_best": h.versus_best} for h in study.headings]
     doc = {"title": title, "scenario": study.scenario.name, "protocol": "parameters",
-           "n_boot": study.n_boot, "parameters": params, "headings": heads,
+           "n_boot": study.n_boot, "startup_stage": study.startup_stage,
+           "parameters": params, "headings": heads,
            "published": "Liang, Tao, Wang, Guo and Zhao, Journal of Sensors 2021, 6613574, "
                         "section 4.2: HHO-RVR over LS, average over 15 parameters [%]",
            "published_rvr_over_ls_pct": dict(LIANG2021_RVR_OVER_LS_PCT),

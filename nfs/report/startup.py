@@ -54,7 +54,7 @@ class TimeToSpecTable:
                     for m, vals in rows.items()]
             out.append("")
         out.append(f"Median over the {self.n_runs} test start-up(s) at each start temperature; "
-                   "never: not within spec by the end of the run; n/a: no cycle to judge. "
+                   "never: not within spec by the end of the run; -: no cycle to judge. "
                    "The time is a cycle's output time, so it moves in steps of one cycle; the "
                    f"RMSE of the last {self.window} cycles exists from the {self.window}th "
                    "cycle on.")
@@ -63,7 +63,7 @@ class TimeToSpecTable:
 
 def _minutes(v: float) -> str:
     if math.isnan(v):
-        return "n/a"
+        return "-"
     return "never" if math.isinf(v) else f"{v / 60.0:.1f}"
 
 

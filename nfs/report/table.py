@@ -27,12 +27,23 @@ from ..io.atomic import atomic_write_bytes, atomic_write_text
 from .intervals import DEFAULT_N_BOOT, Comparison, cluster_bootstrap, compare_rows, json_number
 
 __all__ = ["TableRow", "HeadingTable", "pooled_rmse", "write_table", "plot_heading_table",
-           "REFERENCE_ROWS"]
+           "REFERENCE_ROWS", "STAGE_ROWS", "NOT_APPLICABLE"]
 
 _NAN2 = (math.nan, math.nan)
 
-#: Rows that are not a compensator: the uncompensated start-up, the stable stage, the floor.
-REFERENCE_ROWS = ("before", "stable", "floor")
+#: Rows of the uncompensated stages (:func:`nfs.scenario_runs.stage_names`): the start-up,
+#: the stable stage, or under a chamber program that moves, the cycles with the chamber held
+#: after the start-up and those with it ramping.
+STAGE_ROWS = ("before", "stable", "held", "ramping")
+#: Rows that are not a compensator: the uncompensated stages and the white-noise floor.
+REFERENCE_ROWS = STAGE_ROWS + ("floor",)
+#: How the figure and the notes name each stage row.
+STAGE_LABELS = {"before": "before (uncompensated start-up)",
+                "stable": "stable stage (uncompensated)",
+                "held": "chamber held, after the start-up (uncompensated)",
+                "ramping": "chamber ramping (uncompensated)"}
+#: What a Markdown or CSV cell holds where nothing applies (JSON: null).
+NOT_APPLICABLE = "-"
 
 
 def pooled_rmse(errors_deg: Iterable[np.ndarray]) -> float:
@@ -204,7 +215,8 @@ class HeadingTable:
 
     def with_rows(self, rows: Sequence[TableRow], notes: Sequence[str] = (),
                   features_mode: str | None = None) -> "HeadingTable":
-        """A table with ``rows`` inserted before ``stable`` and ``floor``.
+        """A table with ``rows`` inserted after ``before`` and before the other reference
+        rows (``stable`` or ``held`` and ``ramping``, ``floor``).
 
         Parameters
         ----------
@@ -219,8 +231,9 @@ class HeadingTable:
         -------
         HeadingTable
         """
-        tail = [r for r in self.rows if r.method in ("stable", "floor")]
-        head = [r for r in self.rows if r.method not in ("stable", "floor")]
+        later = set(REFERENCE_ROWS) - {"before"}
+        tail = [r for r in self.rows if r.method in later]
+        head = [r for r in self.rows if r.method not in later]
         return dataclasses.replace(self, rows=tuple(head + list(rows) + tail),
                                    notes=self.notes + tuple(notes),
                                    features_mode=features_mode or self.features_mode)
@@ -232,7 +245,8 @@ class HeadingTable:
         return any(r.mean_ci_deg is not None for r in self.rows)
 
     def to_markdown(self, digits: int = 4) -> str:
-        """A Markdown table: method, one column per T0, mean; with intervals also the mean's
+        """A Markdown table (``-`` where nothing applies): method, one column per T0, mean;
+        with intervals also the mean's
         95 % interval, the spread of the tuned rows over their seeds and the verdict against
         the best row; notes and the key comparisons below (cells' intervals: CSV, JSON)."""
         ci = self._has_ci()
@@ -264,7 +278,8 @@ class HeadingTable:
         return text
 
     def to_csv(self) -> str:
-        """CSV: header ``method,<T0>...,mean``, one line per row, values in deg.
+        """CSV: header ``method,<T0>...,mean``, one line per row, values in deg (``-``
+        where nothing applies: a stage without cycles at that start temperature).
 
         With intervals, then ``mean_ci_low,mean_ci_high``, ``<T0>_ci_low,<T0>_ci_high`` per
         start temperature, ``seeds_min,seeds_max,n_seeds`` (tuned rows) and ``vs_best``
@@ -341,14 +356,21 @@ class HeadingTable:
 
 
 def _fmt(v: float, digits: int) -> str:
-    return "nan" if not math.isfinite(v) else f"{v:.{digits}f}"
+    """A number of the Markdown and CSV tables; ``-`` where nothing applies (a stage without
+    cycles, as the papers print it)."""
+    return NOT_APPLICABLE if not math.isfinite(v) else f"{v:.{digits}f}"
+
+
+#: Bar colour and hatch of each stage row: greys, apart from the compensated rows' hues.
+_STAGE_STYLE = {"before": ("0.3", None), "stable": ("0.75", None), "held": ("0.75", None),
+                "ramping": ("0.55", "..")}
 
 
 def plot_heading_table(table: HeadingTable, title: str = ""):
     """Heading RMSE by start temperature as grouped bars, one panel per group of rows.
 
-    Each panel holds the uncompensated ``before`` and the ``stable`` rows (greys) beside at
-    most seven compensated rows of one group (:attr:`TableRow.group`), in colours far apart
+    Each panel holds the uncompensated stage rows (``before``, ``stable``, or ``held`` and
+    ``ramping`` under a chamber program; greys) beside at most seven compensated rows of one group (:attr:`TableRow.group`), in colours far apart
     (a 14-row table in one panel needs near-identical colours); the white-noise ``floor`` is
     a dashed line. Bars start from zero and carry their 95 % intervals when computed.
     Returns a matplotlib Figure (made without pyplot, so no display is needed).
@@ -356,7 +378,7 @@ def plot_heading_table(table: HeadingTable, title: str = ""):
     from matplotlib import colormaps
     from matplotlib.figure import Figure
 
-    refs = [r for r in table.rows if r.method in ("before", "stable")]   # in every panel
+    refs = [r for r in table.rows if r.method in STAGE_ROWS]   # in every panel
     methods = [r for r in table.rows if r.method not in REFERENCE_ROWS]
     groups: dict[str, list[TableRow]] = {}
     for r in methods:
@@ -374,10 +396,8 @@ def plot_heading_table(table: HeadingTable, title: str = ""):
         width = 0.84 / max(1, len(drawn))
         k = 0
         for i, r in enumerate(drawn):
-            if r.method == "before":
-                color, hatch = "0.3", None
-            elif r.method == "stable":
-                color, hatch = "0.75", None
+            if r.method in _STAGE_STYLE:
+                color, hatch = _STAGE_STYLE[r.method]
             else:
                 color, hatch, k = hues[k % len(hues)], ("//" if k >= len(hues) else None), k + 1
             yerr = None
@@ -386,8 +406,7 @@ def plot_heading_table(table: HeadingTable, title: str = ""):
                 v = np.asarray(r.rmse_deg, dtype=float)
                 lo_hi = np.asarray(r.cell_ci_deg, dtype=float)
                 yerr = np.nan_to_num(np.vstack([v - lo_hi[:, 0], lo_hi[:, 1] - v]).clip(0.0))
-            label = {"before": "before (uncompensated start-up)",
-                     "stable": "stable stage (uncompensated)"}.get(r.method, r.method)
+            label = STAGE_LABELS.get(r.method, r.method)
             ax.bar(x - 0.42 + width * (i + 0.5), r.rmse_deg, width, label=label, color=color,
                    hatch=hatch, yerr=yerr,
                    error_kw={"elinewidth": 0.6, "capsize": 0.0, "ecolor": "0.15"})
@@ -395,7 +414,7 @@ def plot_heading_table(table: HeadingTable, title: str = ""):
             ax.axhline(floor.mean_deg, color="k", ls="--", lw=1.0,
                        label=f"white-noise floor ({floor.mean_deg:.4f} deg)")
         ax.set_xticks(x, [f"{t:g}" for t in table.temperatures_c])
-        ax.set_ylabel("start-up heading RMSE [deg]")
+        ax.set_ylabel("heading RMSE [deg]")
         ax.set_ylim(bottom=0.0)
         if name:
             ax.set_title(name, fontsize=9, loc="left")

@@ -8,10 +8,11 @@ Columns, in order:
 - ``method`` (``none``: uncompensated; else the compensation method's key) and ``stage``
   (``startup``: cycles ending within ``northfind.startup_end_s``; ``stable``: cycles
   starting after ``northfind.stable_start_s``; as in the heading-RMSE table);
-- ``heading_rmse_deg`` of the stage's cycles and their number ``n_cycles``;
+- ``heading_rmse_deg`` of the stage's cycles and their number ``n_cycles`` (``-`` when the
+  stage has no cycle: a run that ends before the stable stage);
 - ``time_to_spec_s`` and ``time_to_spec_rmse_s`` [s after power-on] of the whole run at the
-  sweep's ``spec_deg`` (:mod:`nfs.northfind.spec`: ``inf`` never within spec up to the run's end, ``nan`` no
-  error to judge), the same in both stage rows of a run and method;
+  sweep's ``spec_deg`` (:mod:`nfs.northfind.spec`: ``inf`` never within spec up to the run's
+  end, ``-`` no error to judge), the same in both stage rows of a run and method;
 - ``floor_deg``, the white-noise floor sqrt(2/N) (ARW / sqrt(dwell)) / (Omega_ie cos L) of
   the cell's schedule and latitude (:func:`nfs.northfind.white_noise_floor_deg`);
 - ``drift_mean_dph``, ``drift_std_dph``, ``drift_ptp_dph``: the simulated thermal drift (sum
@@ -21,18 +22,22 @@ Columns, in order:
 
 Rows come in cell order (point-major, then seed), then run, method, stage.  Numbers are
 written exactly (``repr``), so the bytes depend only on the cells' inputs: the same whatever
-executor or worker count computed them.
+executor or worker count computed them.  Where nothing applies (a stage without cycles or
+samples, a floor without a closed form) the CSV holds ``-``, as every table of the package
+does, and Parquet a null.
 """
 
 from __future__ import annotations
 
 import csv
 import json
+import math
 from pathlib import Path
 from typing import Any, Iterator
 
 from ..io.atomic import atomic_output
 from ..northfind.spec import run_time_to_spec_s
+from ..report.table import NOT_APPLICABLE
 from .cells import STAGES, cell_tasks
 from .spec import SweepSpec
 from .store import CellStore
@@ -79,11 +84,12 @@ def iter_rows(spec: SweepSpec, store: CellStore) -> Iterator[dict[str, Any]]:
 
 
 def format_value(v: Any) -> str:
-    """A cell of the CSV: floats exact (``repr``), lists as JSON, the rest as text."""
+    """A cell of the CSV: floats exact (``repr``), NaN (nothing applies) as ``-``, lists as
+    JSON, the rest as text."""
     if isinstance(v, bool):
         return "true" if v else "false"
     if isinstance(v, float):
-        return repr(v)
+        return NOT_APPLICABLE if math.isnan(v) else repr(v)
     if isinstance(v, (list, tuple, dict)):
         return json.dumps(v)
     return str(v)
@@ -130,7 +136,9 @@ def write_parquet(spec: SweepSpec, store: CellStore, path: str | Path,
 
     def value(row, c):
         v = row[c]
-        return format_value(v) if c in text else v
+        if c in text:
+            return format_value(v)
+        return None if isinstance(v, float) and math.isnan(v) else v
 
     with atomic_output(path, "wb") as fh:
         with pq.ParquetWriter(fh, schema) as writer:

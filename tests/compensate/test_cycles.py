@@ -191,6 +191,14 @@ def test_runs_protocol_scores_whole_test_runs_with_their_msd(tmp_path, cli):
     assert ls["bias_stability_dph"] < unc["bias_stability_dph"]
     assert "| test run | MSD uncompensated" in out and "Cheng et al. 2015" in out
     assert doc["rows"][0]["published_bias_stability_dph"] is None
+    # the chamber only rises: no column of "-" for the down-ramps, a line says why; nothing
+    # prints nan, and the CSV holds "-" where the JSON holds null
+    assert "down-ramp" not in out.split("No down-ramp")[0] and "nan" not in out
+    assert "No down-ramp residual: the chamber never falls faster than 0.006 C/min" in out
+    assert doc["rows"][0]["down_rmse_dph"] is None
+    with open(tmp_path / "out" / "drift_table.csv") as fh:
+        row = next(csv.DictReader(fh))
+    assert row["down_rmse_dph"] == "-" and row["down_rmse_dph_ci_low"] == "-"
 
 
 def test_runs_protocol_refuses_a_tuned_method_at_load(tmp_path):

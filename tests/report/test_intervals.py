@@ -139,3 +139,26 @@ def test_a_seed_spread_larger_than_the_gap_is_not_distinguishable():
     assert c_plain.difference_deg == c_mixed.difference_deg < 0
     assert c_plain.distinguishable and not c_mixed.distinguishable
     assert c_mixed.ci_low_deg < 0 < c_mixed.ci_high_deg
+
+
+def test_an_interval_holds_its_estimate_when_the_replicates_pile_up_on_one_side():
+    # Oracle (invariant): low <= estimate <= high.  The R^2 of a constant prediction c on
+    # test data y, -n (ybar - c)^2 / SST <= 0, with c the training mean close to ybar: block
+    # replicates pile up on one side, z0 beyond z_0.975, and the uncorrected BC interval
+    # (Efron & Tibshirani eq. (14.10)) lay entirely on the other side of the estimate.
+    rng = np.random.default_rng(3)
+    y = np.sin(np.linspace(0.0, 6.0, 60)) + rng.normal(0.0, 0.1, 60)
+    c = y.mean() + 1e-3
+    est = -y.size * (y.mean() - c) ** 2 / np.sum((y - y.mean()) ** 2)
+    idx = rng.integers(0, y.size, (2000, y.size))
+    ys = y[idx]
+    reps = -y.size * (ys.mean(axis=1) - c) ** 2 / np.sum(
+        (ys - ys.mean(axis=1, keepdims=True)) ** 2, axis=1)
+    assert np.mean(reps < est) > 0.975           # the case the correction cannot carry
+    lo, hi = bc_interval(reps, est)
+    assert lo <= est <= hi and lo < hi
+    # the estimate beyond every replicate: the bound on its side is the estimate
+    lo, hi = bc_interval(np.linspace(1.0, 2.0, 500), 3.0)
+    assert hi == 3.0 and 1.0 <= lo < 3.0
+    lo, hi = bc_interval(np.linspace(1.0, 2.0, 500), 0.5)
+    assert lo == 0.5 and 0.5 < hi <= 2.0
