@@ -479,12 +479,23 @@ def _noise_of(model: Instrument, data_d: list[_DriftRun]) -> GyroNoiseEstimate:
 FAR_FACTOR = 3.0
 
 
-def far_from_start(start: float, value: float, prior_shift: float | None) -> str:
+def _has_scale(path: str, kind: str) -> bool:
+    """A parameter whose size, not only its sign, is physics: a capacity, conductance,
+    power, lag or an effect coefficient (an offset, a bias or a tilt is a zero-centred
+    number, judged by its prior width only)."""
+    leaf = path.rsplit(".", 1)[-1]
+    if kind in ("thermal", "thermometer"):
+        return leaf != "offset_c"
+    return path.startswith("effects.")
+
+
+def far_from_start(start: float, value: float, prior_shift: float | None,
+                   by_ratio: bool = True) -> str:
     """'from a to b (k times; s prior widths)' when ``value`` is far from ``start``
-    (:data:`FAR_FACTOR` times or its inverse, a change of sign, or that many prior widths),
-    else ''."""
+    (with ``by_ratio``: :data:`FAR_FACTOR` times or its inverse, or a change of sign; always:
+    that many prior widths), else ''."""
     ratio = value / start if start else math.nan
-    far = (start != 0 and (ratio > FAR_FACTOR or ratio < 1.0 / FAR_FACTOR)) or (
+    far = (by_ratio and start != 0 and (ratio > FAR_FACTOR or ratio < 1.0 / FAR_FACTOR)) or (
         prior_shift is not None and math.isfinite(prior_shift)
         and abs(prior_shift) > FAR_FACTOR)
     if not far:
@@ -708,7 +719,8 @@ def fit_model(inst: Instrument, runs: Sequence[Run], free: Iterable[str] | None 
     shifts = {} if pr is None else pr.shift([params[q] for q in pr.paths])
     for p in paths:
         if p not in at_bound and p not in unident:
-            far = far_from_start(initial_params[p], params[p], shifts.get(p))
+            far = far_from_start(initial_params[p], params[p], shifts.get(p),
+                                 by_ratio=_has_scale(p, kinds[p]))
             if far:
                 warnings.append(f"{p} moved {far}: the runs push it far from the model's "
                                 "value, where it may stand in for an effect the model lacks "

@@ -206,3 +206,15 @@ def test_a_run_without_a_chamber_record_says_what_is_assumed(scenario, runs):
     said = [w for w in res.warnings if "chamber record" in w]
     assert len(said) == 1 and bare.name in said[0] and "T0" in said[0], res.warnings
     assert runs[1].name not in said[0]
+
+
+def test_far_from_start():
+    """The rule of a parameter pushed far: 3x its start or a third of it, a change of sign
+    (for a parameter with a scale), or 3 prior widths away (for any)."""
+    from nfs.diagnose.fit import far_from_start
+    assert far_from_start(0.008, 0.061, 0.28) == "from 0.008 to 0.061 (7.6 times; +0.3 prior widths)"
+    assert far_from_start(380.0, 1636.0, 6.1).startswith("from 380 to 1636 (4.3 times")
+    assert far_from_start(1.0, 2.9, 1.0) == ""
+    assert far_from_start(1.0, -0.5, 0.5) != ""                 # a sign change
+    assert far_from_start(0.02, -0.012, 0.0, by_ratio=False) == ""   # a bias: prior only
+    assert far_from_start(0.0, 0.14, -19.8, by_ratio=False) == "from 0 to 0.14 (-19.8 prior widths)"
