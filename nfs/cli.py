@@ -25,6 +25,7 @@ import time
 from pathlib import Path
 
 from .errors import NfsError
+from .ranges import one_line_warnings
 
 __all__ = ["main"]
 
@@ -894,7 +895,8 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     args.argv = list(sys.argv[1:] if argv is None else argv)
     try:
-        return args.func(args)
+        with one_line_warnings():             # an unusual input value: one line, then on
+            return args.func(args)
     except NfsError as exc:
         print(f"nfs: error: {exc}", file=sys.stderr)
         return EXIT_USAGE

@@ -13,6 +13,7 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 from thermal import Link, Network, Node
 
 from .constants import T_REF_C
@@ -20,6 +21,7 @@ from .effects import EffectInstance, check_geometry, make_effect
 from .effects.thermometer import THERMOMETERS
 from .errors import EffectError, ScenarioError, ThermalError
 from .io.tomlio import (check_keys, dumps_toml, load_toml, number, string, table)
+from .ranges import check, check_tree, deferred_warnings
 from .sensors import ThermometerModel
 
 __all__ = [
@@ -370,8 +372,62 @@ def _check_effect_targets(inst: Instrument, file: Any) -> None:
                 raise ScenarioError(msg, file=file, key=where)
 
 
+def _check_heating(network: Network, file: Any) -> None:
+    """The steady-state rise of every node above the chamber under the nodes' constant
+    powers (G dT = P, the chamber as ground) against ``limits.steady_rise_k`` of
+    :mod:`nfs.ranges`; a powered part without a thermal path to the chamber would heat
+    without bound."""
+    names = list(network.node_names)
+    idx = {n: i for i, n in enumerate(names)}
+    n = len(names)
+    g = np.zeros((n, n))
+    for link in network.links:
+        ends = [idx[e] for e in (link.a, link.b) if e != CHAMBER]
+        c = link.conductance_w_per_k
+        for i in ends:
+            g[i, i] += c
+        if len(ends) == 2:
+            g[ends[0], ends[1]] -= c
+            g[ends[1], ends[0]] -= c
+    power = np.array([node.power_w for node in network.nodes])
+    # nodes with a path of non-zero conductance to the chamber
+    grounded = np.zeros(n, bool)
+    for link in network.links:
+        if CHAMBER in (link.a, link.b) and link.conductance_w_per_k > 0:
+            grounded[[idx[e] for e in (link.a, link.b) if e != CHAMBER]] = True
+    changed = True
+    while changed:
+        changed = False
+        for link in network.links:
+            if CHAMBER in (link.a, link.b) or link.conductance_w_per_k <= 0:
+                continue
+            a, b = idx[link.a], idx[link.b]
+            if grounded[a] != grounded[b]:
+                grounded[[a, b]] = True
+                changed = True
+    floating = [names[i] for i in range(n) if not grounded[i] and power[i] != 0.0]
+    if floating:
+        raise ScenarioError(f"node '{floating[0]}' dissipates {power[idx[floating[0]]]:g} W "
+                            "but has no thermal path to the chamber: it would heat without "
+                            "bound (add a link towards 'chamber')", file=file,
+                            key=f"thermal.nodes.{floating[0]}")
+    on = np.flatnonzero(grounded)
+    if on.size == 0:
+        return
+    rise = np.linalg.solve(g[np.ix_(on, on)], power[on])
+    worst = int(np.argmax(np.abs(rise)))
+    check("limits.steady_rise_k", float(rise[worst]), file=file,
+          key=f"thermal.nodes.{names[on[worst]]}", error=ScenarioError)
+
+
 def instrument_from_dict(d: dict[str, Any], file: Any = None) -> Instrument:
-    """Build an :class:`Instrument` from its TOML form, checking every key."""
+    """Build an :class:`Instrument` from its TOML form, checking every key and every value
+    against its range (:mod:`nfs.ranges`: impossible values refused, unusual ones warned)."""
+    with deferred_warnings():
+        return _instrument_from_dict(d, file)
+
+
+def _instrument_from_dict(d: dict[str, Any], file: Any) -> Instrument:
     check_keys(d, _TOP_KEYS, "", file, required=("thermal", "gyro", "accelerometers",
                                                   "thermometers"))
     network = _network(table(d, "thermal", "", file), "thermal", file)
@@ -389,6 +445,8 @@ def instrument_from_dict(d: dict[str, Any], file: Any = None) -> Instrument:
                       effects=effects, aux=aux, t_ref_c=number(d, "t_ref_c", "", file, T_REF_C),
                       description=string(d, "description", "", file, ""))
     _check_effect_targets(inst, file)
+    check_tree(d, file=file, error=ScenarioError)
+    _check_heating(network, file)
     return inst
 
 
@@ -416,4 +474,5 @@ def load_instrument(name_or_path: str | Path, base: Path | None = None) -> Instr
         path = Path(s)
         if base is not None and not path.is_absolute():
             path = base / path
-    return instrument_from_dict(load_toml(path), file=path)
+    with deferred_warnings():
+        return instrument_from_dict(load_toml(path), file=path)

@@ -34,7 +34,10 @@ corner by at most rate x interval / 4).
 
 Every value is checked before anything runs: unknown keys, a missing or non-positive rate or
 time, a negative rate (a ramp the wrong way would never reach its target), non-finite values,
-temperatures outside :data:`TEMPERATURE_RANGE_C`; the error names the file and the step
+temperatures outside :data:`TEMPERATURE_RANGE_C`, and every value against its range in
+:mod:`nfs.ranges` (a hold of more than 1e7 s, a ramp faster than 60 K/min, a program of more
+steps than ``limits.program_steps``, checked before its repeats are expanded; an unusual value
+warns); the error names the file and the step
 (``chamber.program[2].steps[0].rate_c_per_min``).
 """
 
@@ -47,14 +50,13 @@ from typing import Any
 import numpy as np
 
 from ..errors import ScenarioError
+from ..ranges import KELVIN_OFFSET, TEMPERATURE_RANGE_C, check, check_tree, find
 
 __all__ = ["ChamberStep", "ChamberProgram", "parse_program", "TEMPERATURE_RANGE_C",
            "check_temperature"]
 
-#: Chamber and start temperatures accepted [degC]: climatic chambers span about -70 to
-#: +150 C (IEC 60068-2-1 and -2-2 list test temperatures from -65 to +155 C); a value
-#: outside is most likely a unit mistake (kelvin).
-TEMPERATURE_RANGE_C = (-70.0, 150.0)
+# TEMPERATURE_RANGE_C: chamber and start temperatures accepted [degC] (nfs.ranges: climatic
+# chambers span about -70 to +150 C; a value outside is most likely a unit mistake, kelvin).
 
 _KEYS = {
     "hold": ("hold_s",),
@@ -152,8 +154,8 @@ def check_temperature(value: float, file: Any, key: str) -> None:
     lo, hi = TEMPERATURE_RANGE_C
     if lo <= value <= hi:
         return
-    hint = (f" (Kelvin? {value:g} K is {value - 273.15:.2f} C)"
-            if 200.0 <= value <= 450.0 else "")
+    hint = (f" (Kelvin? {value:g} K is {value - KELVIN_OFFSET:.2f} C)"
+            if lo <= value - KELVIN_OFFSET <= hi else "")
     raise ScenarioError(f"{value:g} C is outside the chamber range {lo:g} .. {hi:+g} C"
                         f"{hint}", file=file, key=key)
 
@@ -226,11 +228,22 @@ def _one(step: Any, where: str, file: Any, top: bool) -> list[ChamberStep] | str
     if isinstance(n, bool) or not isinstance(n, int) or n < 1:
         raise ScenarioError(f"must be an integer >= 1, got {n!r}", file=file,
                             key=f"{where}.repeat")
+    check("chamber.program.repeat", n, file=file, key=f"{where}.repeat", error=ScenarioError)
     if "steps" not in step:
         raise ScenarioError("required key is missing: a repeat needs its steps", file=file,
                             key=f"{where}.steps")
     inner = _steps(step["steps"], f"{where}.steps", file, top=False)[0]
+    _check_length(len(inner) * n, f"{where}.repeat", file)
     return list(inner) * n
+
+
+def _check_length(n_steps: int, key: str, file: Any) -> None:
+    """A program's steps, repeats expanded, against ``limits.program_steps`` (checked before
+    the repeats are expanded)."""
+    r = find("limits.program_steps")
+    if r.impossible(n_steps):
+        raise ScenarioError(f"expands to {n_steps:g} steps, more than the {r.hard[1]:g} a "
+                            f"program may hold ({r.source})", file=file, key=key)
 
 
 def _steps(value: Any, where: str, file: Any, top: bool
@@ -256,6 +269,7 @@ def _steps(value: Any, where: str, file: Any, top: bool
             power_on = len(out)
             continue
         out.extend(got)
+        _check_length(len(out), f"{where}[{i}]", file)
     if power_on is not None and power_on == len(out):
         raise ScenarioError("power_on is the last step: nothing would be recorded",
                             file=file, key=where)
@@ -268,6 +282,7 @@ def parse_program(value: Any, file: Any, key: str = "chamber.program") -> Chambe
     """The :class:`ChamberProgram` of a TOML ``program`` list (module docstring);
     :class:`~nfs.errors.ScenarioError` naming ``file`` and the step otherwise."""
     steps, power_on, cycles = _steps(value, key, file, top=True)
+    check_tree(value, file=file, error=ScenarioError, shown=key, canonical="chamber.program")
     if cycles and power_on > cycles[0][0]:
         raise ScenarioError("power_on comes after the start of the cycles (the first "
                             "repeat): the unit must be on for every cycle", file=file, key=key)

@@ -22,6 +22,14 @@ Values
     and ``NaN`` all load. A non-numeric value in any column, known or not, is an error
     naming the column and line.
 
+Units
+    A value the format's units cannot hold is refused, the file, column and likely unit
+    named (:func:`check_units`, ranges from :mod:`nfs.ranges`): thermometers that do not
+    start near ``start_temperature_c`` (kelvin, Fahrenheit), gyro dwell means whose span
+    across positions is not the Earth rate in deg/h (deg/s, rad/s, rad/h), specific forces
+    that are not in g (m/s^2); so is a sidecar value outside its range.  An unusual value
+    (outside its typical range) loads with one warning line.
+
 Writing
     :func:`write_run` writes both files atomically (:mod:`nfs.io.atomic`), required columns
     first, each float in its shortest exact form (``repr``), so reading a written run gives
@@ -42,11 +50,13 @@ from pathlib import Path
 
 import numpy as np
 
-from nfs.constants import ABSOLUTE_ZERO_C
+from nfs.constants import ABSOLUTE_ZERO_C, OMEGA_IE_DPH
 from nfs.docfields import document_fields
 from nfs.errors import MeasurementError
 from nfs.io.atomic import atomic_write_files
 from nfs.io.tomlio import toml_key, toml_value
+from nfs.ranges import (G_N_M_PER_S2, KELVIN_OFFSET, check_tree, deferred_warnings, find,
+                        warn_unusual)
 
 __all__ = [
     "FORMAT",
@@ -61,6 +71,8 @@ __all__ = [
     "find_runs",
     "write_run",
     "check_columns",
+    "check_units",
+    "MAX_TEMPERATURE_C",
 ]
 
 #: The format tag written to and required in ``NAME.toml``.
@@ -76,8 +88,12 @@ REQUIRED_COLUMNS: tuple[str, ...] = (
 #: and in the turntable schedule.
 NO_MISSING_COLUMNS: tuple[str, ...] = ("time_s", "position_deg", "moving")
 
-#: Largest physically possible |specific force| of an ``acc_*_g`` column [g] (the spec).
-MAX_ABS_ACC_G = 2.0
+#: Largest physically possible |specific force| of an ``acc_*_g`` column [g] (the spec;
+#: :mod:`nfs.ranges`, ``measurement.columns.acc_*_g``).
+MAX_ABS_ACC_G = find("measurement.columns.acc_x_g").hard[1]
+
+#: Highest temperature a ``temp_*_c`` column may read [degC] (:mod:`nfs.ranges`).
+MAX_TEMPERATURE_C = find("measurement.columns.temp_fog_c").hard[1]
 
 #: Relative tolerance between ``sample_rate_hz`` and the median step of ``time_s``.
 SAMPLE_RATE_RTOL = 0.01
@@ -223,8 +239,16 @@ def _number(doc: Mapping, key: str, file: Path, *, required: bool = False,
     return value
 
 
-def _meta_from_toml(doc: Mapping, file: Path) -> RunMeta:
-    """Check the parsed ``NAME.toml`` and turn it into a :class:`RunMeta`."""
+def _meta_from_toml(doc: Mapping, file: Path, warn: bool = True) -> RunMeta:
+    """Check the parsed ``NAME.toml`` and turn it into a :class:`RunMeta`; every number
+    against its range (:mod:`nfs.ranges`, ``measurement.*``; ``warn``: unusual values warn)."""
+    meta = _meta_fields(doc, file)
+    check_tree(dict(doc), file=file, error=MeasurementError, canonical="measurement",
+               quiet=not warn)
+    return meta
+
+
+def _meta_fields(doc: Mapping, file: Path) -> RunMeta:
     if "format" not in doc:
         raise MeasurementError(f'required key is missing; must be "{FORMAT}"',
                                file=file, key="format")
@@ -391,11 +415,145 @@ def check_columns(columns: Mapping[str, np.ndarray], *, file: str | os.PathLike 
             if i is not None:
                 raise fail(f"temperature {float(values[i])!r} C is below absolute zero "
                            f"({ABSOLUTE_ZERO_C} C)", name, i)
+            i = _first(values > MAX_TEMPERATURE_C)
+            if i is not None:
+                raise fail(f"temperature {float(values[i])!r} C is above the "
+                           f"{MAX_TEMPERATURE_C:g} C no working north finder reaches", name, i)
         elif _ACCELERATION_COLUMN.fullmatch(name):
             i = _first(np.abs(values) > MAX_ABS_ACC_G)
             if i is not None:
-                raise fail(f"|{float(values[i])!r}| g exceeds the physical limit of "
-                           f"{MAX_ABS_ACC_G} g", name, i)
+                v = float(values[i])
+                hint = (f"; m/s^2? ({v / G_N_M_PER_S2:.4g} g)"
+                        if abs(v) / G_N_M_PER_S2 <= MAX_ABS_ACC_G else "")
+                raise fail(f"|{v!r}| g exceeds the physical limit of "
+                           f"{MAX_ABS_ACC_G} g{hint}", name, i)
+
+
+# ---------------------------------------------------------------------------------------------
+# NAME.csv against NAME.toml: the units the samples must be in
+
+
+#: Positions closer than this (modulo 360 deg) are one position when the dwell means are
+#: grouped [deg] (the north-finding solver's tolerance).
+_POSITION_TOL_DEG = 0.5
+
+#: Thermometer samples from the first this many seconds are compared with
+#: ``start_temperature_c`` [s].
+_POWER_ON_WINDOW_S = 60.0
+
+
+def check_units(meta: RunMeta, columns: Mapping[str, np.ndarray], *,
+                file: str | os.PathLike | None = None, toml_file: str | os.PathLike | None = None,
+                warn: bool = True) -> None:
+    """Check that the samples are in the units of the format, given the sidecar: raise
+    :class:`MeasurementError` naming the file, the column and the likely unit otherwise.
+
+    - every thermometer (``temp_*_c``) reads, over its first minute, near
+      ``start_temperature_c`` (a soaked unit): more than 100 K away is impossible
+      (kelvin: a reading near T0 + 273.15; Fahrenheit), more than 20 K unusual;
+    - the gyro's dwell means (``moving`` = 0, pooled by position) span, across positions
+      that see the horizontal Earth rate whatever the heading, what Omega_ie cos L in deg/h
+      gives: at least ``g`` Omega_ie cos L, where ``g`` is the least spread of cos(psi +
+      theta_k) over every heading psi (sqrt(2) for 0/90/180/270).  A span 3600x too small
+      is deg/s, 206265x rad/s, 57x rad/h (``measurement.columns.gyro_dph.earth_rate``);
+      skipped for positions on one line and within 6 deg of a pole;
+    - the median |specific force| of each ``acc_*_g`` column on a levelled table: above
+      0.5 g impossible, above 0.05 g (a 3 deg tilt) unusual; m/s^2 is 9.81x.
+    """
+    t0 = meta.start_temperature_c
+    time = np.asarray(columns["time_s"], dtype=float)
+    first = time <= time[0] + _POWER_ON_WINDOW_S
+    for name, values in columns.items():
+        if not _TEMPERATURE_COLUMN.fullmatch(name):
+            continue
+        v = values[first]
+        v = v[np.isfinite(v)]
+        if not v.size:
+            continue
+        reading = float(np.median(v))
+        r = find(f"measurement.columns.{name}.at_power_on")
+        d = reading - t0
+        if not (r.impossible(d) or (warn and r.unusual(d))):
+            continue
+        if abs(reading - KELVIN_OFFSET - t0) <= 30.0:
+            hint = f"kelvin? ({reading:g} K is {reading - KELVIN_OFFSET:.2f} C)"
+        elif abs((reading - 32.0) * 5.0 / 9.0 - t0) <= 10.0:
+            hint = f"Fahrenheit? ({reading:g} F is {(reading - 32.0) * 5.0 / 9.0:.1f} C)"
+        else:
+            hint = "is start_temperature_c right?"
+        msg = (f"reads {reading:g} C over its first minute, {d:+g} K from "
+               f"start_temperature_c = {t0:g} C"
+               + (f" of {Path(toml_file).name}" if toml_file is not None else "")
+               + f" (a soaked unit starts within {r.typical[1]:g} K of it, never "
+               f"{r.hard[1]:g} K away); {hint}")
+        if r.impossible(d):
+            raise MeasurementError(msg, file=file, column=name)
+        warn_unusual(msg + "; running anyway", file=file, column=name)
+    _check_gyro_units(meta, columns, file, warn)
+    moving = np.asarray(columns["moving"]) != 0.0
+    for name, values in columns.items():
+        if not _ACCELERATION_COLUMN.fullmatch(name):
+            continue
+        v = np.abs(values[~moving])
+        v = v[np.isfinite(v)]
+        if not v.size:
+            continue
+        median = float(np.median(v))
+        r = find(f"measurement.columns.{name}.median")
+        if not (r.impossible(median) or (warn and r.unusual(median))):
+            continue
+        hint = (f"; m/s^2? ({median / G_N_M_PER_S2:.3g} g)"
+                if not r.unusual(median / G_N_M_PER_S2) else "")
+        msg = (f"median |{median:.4g}| g while turned about a vertical axis: {r.what} "
+               f"{r.typical_text()} (never {r.hard[1]:g} g){hint}")
+        if r.impossible(median):
+            raise MeasurementError(msg, file=file, column=name)
+        warn_unusual(msg + "; running anyway", file=file, column=name)
+
+
+def _least_spread(angles_deg: np.ndarray) -> float:
+    """min over headings psi of max_k cos(psi + theta_k) - min_k cos(psi + theta_k)."""
+    psi = np.radians(np.arange(0.0, 360.0, 0.5))[:, None]
+    c = np.cos(psi + np.radians(angles_deg)[None, :])
+    return float(np.min(c.max(axis=1) - c.min(axis=1)))
+
+
+def _check_gyro_units(meta: RunMeta, columns: Mapping[str, np.ndarray], file,
+                      warn: bool) -> None:
+    """The span of the gyro's dwell means across positions against the horizontal Earth
+    rate in deg/h (:func:`check_units`)."""
+    omega_h = OMEGA_IE_DPH * math.cos(math.radians(meta.latitude_deg))
+    if omega_h < OMEGA_IE_DPH * 0.1:
+        return
+    gyro = np.asarray(columns["gyro_dph"], dtype=float)
+    still = (np.asarray(columns["moving"]) == 0.0) & np.isfinite(gyro)
+    if np.count_nonzero(still) < 2:
+        return
+    key = np.round(np.mod(columns["position_deg"][still], 360.0) / _POSITION_TOL_DEG)
+    key = np.mod(key, round(360.0 / _POSITION_TOL_DEG))
+    groups, inverse = np.unique(key, return_inverse=True)
+    if len(groups) < 2:
+        return
+    means = np.bincount(inverse, weights=gyro[still]) / np.bincount(inverse)
+    g = _least_spread(groups * _POSITION_TOL_DEG)
+    if g < 0.5:
+        return
+    spread = float(means.max() - means.min())
+    ratio = spread / (g * omega_h)
+    r = find("measurement.columns.gyro_dph.earth_rate")
+    if not (r.impossible(ratio) or (warn and r.unusual(ratio))):
+        return
+    hint = ""
+    for factor, _, unit in r.slips:
+        if not r.unusual(ratio * factor):
+            hint = f"; {unit}? (x{factor:.6g}: a span of {spread * factor:.4g} deg/h)"
+            break
+    msg = (f"the dwell means span {spread:.4g} deg/h across {len(groups)} positions, where "
+           f"the Earth rate alone spans {g * omega_h:.4g}-{2 * omega_h:.4g} deg/h "
+           f"(15.041 cos L at latitude {meta.latitude_deg:g} deg): not deg/h{hint}")
+    if r.impossible(ratio):
+        raise MeasurementError(msg, file=file, column="gyro_dph")
+    warn_unusual(msg + "; running anyway", file=file, column="gyro_dph")
 
 
 def _check_sample_rate(meta: RunMeta, time: np.ndarray, toml_file: Path,
@@ -620,9 +778,11 @@ def read_run(path: str | os.PathLike) -> Run:
     if not toml_path.is_file():
         raise MeasurementError(f"run has no metadata file {toml_path.name} "
                                f"({FORMAT} needs NAME.csv and NAME.toml)", file=csv_path)
-    meta = _read_meta(toml_path)
-    columns = _read_columns(csv_path)
-    _check_sample_rate(meta, columns["time_s"], toml_path, csv_path)
+    with deferred_warnings():
+        meta = _read_meta(toml_path)
+        columns = _read_columns(csv_path)
+        _check_sample_rate(meta, columns["time_s"], toml_path, csv_path)
+        check_units(meta, columns, file=csv_path, toml_file=toml_path)
     return Run(name=csv_path.stem, columns=columns, meta=meta, path=csv_path)
 
 
@@ -636,7 +796,8 @@ def read_runs(paths: str | os.PathLike | Iterable[str | os.PathLike]) -> list[Ru
     """Read every run that *paths* name (files, stems or folders; see :func:`find_runs`),
     ordered by start temperature, then by name (digit groups as numbers), so that tables,
     reports and figures list -32 C before -5 C before +17 C whatever the file names."""
-    runs = [read_run(csv_path) for csv_path in find_runs(paths)]
+    with deferred_warnings():
+        runs = [read_run(csv_path) for csv_path in find_runs(paths)]
     return sorted(runs, key=lambda r: (r.meta.start_temperature_c, _natural_key(r.name)))
 
 
@@ -751,10 +912,11 @@ def write_run(run: Run, target: str | os.PathLike) -> Path:
     columns = _columns_for_writing(run, csv_path)
     toml_text = _format_meta(run.meta, toml_path)
     try:
-        meta = _meta_from_toml(tomllib.loads(toml_text), toml_path)
+        meta = _meta_from_toml(tomllib.loads(toml_text), toml_path, warn=False)
     except tomllib.TOMLDecodeError as exc:  # a bug of _format_meta, not of the run
         raise AssertionError(f"nfs wrote invalid TOML for {toml_path}: {exc}") from exc
     _check_sample_rate(meta, columns["time_s"], toml_path, csv_path)
+    check_units(meta, columns, file=csv_path, toml_file=toml_path, warn=False)
     csv_text = _format_csv(columns)
     csv_path.parent.mkdir(parents=True, exist_ok=True)
     atomic_write_files({csv_path: csv_text, toml_path: toml_text})

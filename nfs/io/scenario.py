@@ -38,6 +38,7 @@ from __future__ import annotations
 
 import copy
 import dataclasses
+import math
 from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
@@ -51,6 +52,7 @@ from ..errors import EffectError, NfsError, ScenarioError
 from ..instrument import (Instrument, _aux, _check_effect_targets, load_instrument,
                           parse_effects)
 from ..parameters import ParameterError, expand_paths
+from ..ranges import check_tree, deferred_warnings, find, warn_unusual
 from ..sensors import ORDERS, Schedule
 from ..variability import (CYCLING_SHAPES, NO_VARIABILITY, VARIABILITY_KEYS,
                            VARIABILITY_PRESETS, Variability)
@@ -516,6 +518,71 @@ def _check_geometry(inst: Instrument, schedule: Schedule, file, own_effects: boo
             raise ScenarioError(str(exc), file=file, key=where) from None
 
 
+#: Positions closer than this (modulo 360 deg) are one position [deg] (the north-finding
+#: solver's tolerance, nfs.northfind.solve).
+POSITION_TOL_DEG = 0.5
+
+
+def _check_schedule(schedule: Schedule, settings: NorthFindSettings, fs: float, file) -> None:
+    """What a north-finding cycle needs, before anything runs: distinct positions that
+    determine the heading (three or more, or two 180 deg apart), samples in every dwell
+    after the settling skip, and a cycle that ends inside the start-up stage."""
+    pos = schedule.positions_deg
+    for i, a in enumerate(pos):
+        for j in range(i):
+            if abs(math.remainder(a - pos[j], 360.0)) <= POSITION_TOL_DEG:
+                raise ScenarioError(
+                    f"positions {j} and {i} ({pos[j]:g} and {a:g} deg) are the same "
+                    "position (modulo 360 deg); each position is listed once (order = "
+                    "\"forward-reverse\" visits them back again)", file=file,
+                    key="schedule.positions_deg")
+    if len(pos) < 3 and not (len(pos) == 2 and abs(abs(math.remainder(
+            pos[1] - pos[0], 360.0)) - 180.0) <= POSITION_TOL_DEG):
+        raise ScenarioError(f"{len(pos)} position{'s' if len(pos) > 1 else ''} "
+                            f"({', '.join(f'{p:g}' for p in pos)} deg) cannot determine the "
+                            "heading: north finding needs three distinct positions, or two "
+                            "180 deg apart", file=file, key="schedule.positions_deg")
+    if settings.settle_s >= schedule.dwell_s:
+        raise ScenarioError(f"{settings.settle_s:g} s skips the whole dwell of "
+                            f"{schedule.dwell_s:g} s (schedule.dwell_s): no sample would be "
+                            "left to north-find", file=file, key="northfind.settle_s")
+    r = find("limits.samples_per_dwell")
+    n = (schedule.dwell_s - settings.settle_s) * fs
+    if r.impossible(n):
+        raise ScenarioError(f"a dwell of {schedule.dwell_s:g} s"
+                            + (f" less {settings.settle_s:g} s settling"
+                               if settings.settle_s else "")
+                            + f" at {fs:g} Hz holds {n:.3g} samples, fewer than the "
+                            f"{r.hard[0]:g} a dwell mean needs", file=file,
+                            key="schedule.dwell_s")
+    if settings.startup_end_s < schedule.cycle_s:
+        raise ScenarioError(f"{settings.startup_end_s:g} s ends the start-up stage before the "
+                            f"first north-finding cycle ends ({schedule.cycle_s:g} s): the "
+                            "start-up row would be empty", file=file,
+                            key="northfind.startup_end_s")
+
+
+def _check_work(temps, duration: float | None, chamber: ChamberProfile, fs: float,
+                file) -> None:
+    """The samples each run will hold (a program's unpowered soak included) against
+    ``limits.samples_per_run`` of :mod:`nfs.ranges`, before any array is allocated."""
+    r = find("limits.samples_per_run")
+    key = "duration_s" if duration is not None else "chamber.program"
+    for t0 in temps:
+        soak = chamber.soak_s(t0, 1.0 / fs)
+        length = duration if duration is not None else chamber.powered_s(t0, 1.0 / fs)
+        n = (soak + length) * fs
+        what = (f"{length:g} s" + (f" after a soak of {soak:g} s" if soak else "")
+                + f" at {fs:g} Hz is {n:.3g} samples per run")
+        if r.impossible(n):
+            raise ScenarioError(f"{what}, more than the {r.hard[1]:g} one run may hold "
+                                f"({r.source})", file=file, key=key)
+        if r.unusual(n):
+            warn_unusual(f"{what}: slow (about a minute and 1.3 GB per million samples); "
+                         "running anyway", file=file, key=key, once=("samples", n))
+            return
+
+
 def _overridden(d: dict, overrides: dict[str, Any], file) -> dict:
     """A copy of the parsed file ``d`` with each dotted key of ``overrides`` set (a table on
     the way is created when the file leaves it out)."""
@@ -543,7 +610,8 @@ def load_scenario(path: str | Path | None = None,
     file before it is checked, as if the file said so (``{"schedule.dwell_s": 60.0}``).
     """
     path = default_scenario_path() if path is None else Path(path)
-    return _load(path, overrides, (path.resolve(),))[0]
+    with deferred_warnings():
+        return _load(path, overrides, (path.resolve(),))[0]
 
 
 def _load(path: Path, overrides, chain: tuple[Path, ...]) -> tuple[Scenario, dict]:
@@ -627,6 +695,11 @@ def _load(path: Path, overrides, chain: tuple[Path, ...]) -> tuple[Scenario, dic
     temps = number_list(d, "start_temperatures_c", "", f)
     for t0 in temps:
         check_temperature(t0, f, "start_temperatures_c")
+    if len(set(temps)) != len(temps):
+        twice = next(t for t in temps if temps.count(t) > 1)
+        raise ScenarioError(f"names {twice:g} C twice (runs are named by their start "
+                            "temperature; write repeats = N for more start-ups at one "
+                            "temperature)", file=f, key="start_temperatures_c")
     units = _int(d, "units", "", f, 1, minimum=1)
     variability = _variability(d, inst, seed, f)
     fs = number(d, "sample_rate_hz", "", f, 1.0, positive=True)
@@ -662,11 +735,21 @@ def _load(path: Path, overrides, chain: tuple[Path, ...]) -> tuple[Scenario, dic
                             "every north-finding cycle: [schedule] positions_deg needs three "
                             "distinct positions or more", file=f,
                             key="compensation.protocol")
+    latitude = number(d, "latitude_deg", "", f, 30.0, minimum=-89.0, maximum=89.0)
+    # every value against its range (nfs.ranges); an overridden value is the caller's to
+    # warn about in its own words (a sweep names its axis)
+    check_tree(d, file=f, error=ScenarioError,
+               quiet=tuple(p for k in (overrides or {}) for p in (k, f"{k}.*")))
+    _check_schedule(schedule, settings, fs, f)
+    _check_work(temps, duration, chamber, fs, f)
+    if comp.n_jobs == 0:
+        raise ScenarioError("must not be 0 (joblib: -1 is every core, N is N cores)",
+                            file=f, key="compensation.n_jobs")
     scenario = Scenario(
         name=string(d, "name", "", f, path.stem), instrument=inst,
         start_temperatures_c=temps, schedule=schedule, seed=seed, repeats=repeats,
         duration_s=duration, sample_rate_hz=fs,
-        latitude_deg=number(d, "latitude_deg", "", f, 30.0, minimum=-89.0, maximum=89.0),
+        latitude_deg=latitude,
         true_heading_deg=number(d, "true_heading_deg", "", f, 0.0),
         northfind=settings, chamber=chamber,
         compensation=comp,

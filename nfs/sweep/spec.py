@@ -54,6 +54,7 @@ from ..io.scenario import OVERRIDE_KEYS, Scenario, load_scenario
 from ..io.tomlio import check_keys, load_toml
 from ..northfind.spec import DEFAULT_WINDOW
 from ..parameters import canonical_path, param_paths, set_params
+from ..ranges import check, check_tree, deferred_warnings, find
 
 __all__ = ["SweepError", "Axis", "Draws", "SweepSpec", "load_sweep", "sweep_from_dict"]
 
@@ -269,6 +270,11 @@ def _axis(key: str, v: Any, sc: Scenario, scenario_path, file) -> Axis:
                          f"got {v!r}", file=file, key=name)
     for value in checks:
         _check_value(axis, value, sc, scenario_path, file)
+    for value in checks:
+        for number in (value if isinstance(value, list) else [value]):
+            # the base scenario refused what it cannot run; here every value is checked
+            # against its range (an instrument parameter's too) and warned about by its axis
+            check(axis.key, number, file=file, key=name, error=SweepError)
     return axis
 
 
@@ -291,8 +297,15 @@ def _check_value(axis: Axis, value: Any, sc: Scenario, scenario_path, file) -> N
 
 def sweep_from_dict(d: dict[str, Any], file: Path | None = None,
                     base: Path | None = None) -> SweepSpec:
-    """Check a parsed sweep (``base``: folder that a relative scenario path is read from)."""
+    """Check a parsed sweep (``base``: folder that a relative scenario path is read from):
+    every key, every value against its range (:mod:`nfs.ranges`), the number of cells."""
+    with deferred_warnings():
+        return _sweep_from_dict(d, file, base)
+
+
+def _sweep_from_dict(d: dict[str, Any], file: Path | None, base: Path | None) -> SweepSpec:
     check_keys(d, _TOP, "", file, required=("seeds",))
+    check_tree(d, file=file, error=SweepError, canonical="sweep", skip=("sweep.axes.*",))
     ref = d.get("scenario", "default")
     if not isinstance(ref, str):
         raise SweepError(f"must be \"default\" or a scenario file path, got {ref!r}",
@@ -359,6 +372,12 @@ def sweep_from_dict(d: dict[str, Any], file: Path | None = None,
     desc = d.get("description", "")
     if not isinstance(desc, str):
         raise SweepError(f"must be a string, got {desc!r}", file=file, key="description")
+    n_cells = math.prod(len(a.values) for a in axes if not a.drawn) * \
+        (draws.count if draws is not None and any(a.drawn for a in axes) else 1) * len(seeds)
+    r = find("limits.sweep_cells")
+    if r.impossible(n_cells):
+        raise SweepError(f"{n_cells:g} cells (points x seeds), more than the {r.hard[1]:g} a "
+                         f"sweep may hold ({r.source})", file=file, key="axes")
     return SweepSpec(path=file, scenario_path=scenario_path, scenario=sc, axes=tuple(axes),
                      seeds=seeds, draws=draws, method=method,
                      spec_deg=float(spec_deg),

@@ -47,7 +47,10 @@ def make_run(name="run_a", n=600, seed=0, step_s=1.0, start_temperature_c=-32.0)
         "time_s": time_s,
         "position_deg": position,
         "moving": moving,
-        "gyro_dph": 13.0 + rng.normal(0, 0.05, n),
+        # the horizontal Earth rate at the sidecar's latitude and heading (deg/h), as the
+        # unit checks of the reader require (nfs.io.measurement.check_units)
+        "gyro_dph": 15.041067 * np.cos(np.radians(30.26)) * np.cos(np.radians(212.7 + position))
+        + rng.normal(0, 0.05, n),
         "acc_x_g": rng.normal(0, 1e-4, n),
         "acc_y_g": rng.normal(0, 1e-4, n),
         "temp_acc_x_c": start_temperature_c + rng.normal(0, 0.01, n),
@@ -175,7 +178,7 @@ def test_metadata_round_trip_with_extra_keys(tmp_path):
         "odd key.with dots": 1e-05,
         "huge": 1e300,
     }
-    run = make_run()
+    run = make_run(start_temperature_c=17.0)
     run = Run(run.name, run.columns, RunMeta(latitude_deg=-45, start_temperature_c=17,
                                              positions_deg=(0, 180), extra=extra))
     back = read_run(write_run(run, tmp_path))
