@@ -3,9 +3,14 @@
 One PNG per axis (and per start temperature when the scenario has several): every run's
 stage RMSE as a faint point, the RMS over the runs at each grid value as a line, one colour
 per method and stage, and the white-noise floor of the cell's schedule and latitude as a
-dashed line (it follows 1 / cos L on a latitude axis).  A second PNG per axis gives the
-time to spec of every run (the median over the runs as a line).  With two grid axes or more, one more figure sets the first against
-the second (start-up stage).  Matplotlib's Agg backend; written atomically.
+dashed line (it follows 1 / cos L on a latitude axis).  A figure pools only runs that share
+a floor: the runs of other axes' values that move the floor (a latitude, a dwell, an ARW
+against the start temperature) go to a panel each, its floor labelled with the values that
+set it (``white-noise floor, latitude_deg = 30``); beyond :data:`MAX_PANELS` floors, each
+run's RMSE is set over its own cell's floor.  A second PNG per axis gives the time to spec
+of every run (the median over the runs as a line), in the same panels.  With two grid axes
+or more, one more figure sets the first against the second (start-up stage).  Figures are
+made without pyplot (no display needed), legends outside the data; written atomically.
 """
 
 from __future__ import annotations
@@ -17,19 +22,16 @@ from collections import defaultdict
 from pathlib import Path
 from typing import Any
 
-import matplotlib
+from matplotlib.figure import Figure
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
+from ..io.atomic import atomic_output
+from ..northfind.spec import median_time_s
+from .cells import STAGES
+from .spec import SweepSpec
+from .store import CellStore
+from .table import iter_rows
 
-from ..io.atomic import atomic_output  # noqa: E402
-from ..northfind.spec import median_time_s  # noqa: E402
-from .cells import STAGES  # noqa: E402
-from .spec import SweepSpec  # noqa: E402
-from .store import CellStore  # noqa: E402
-from .table import iter_rows  # noqa: E402
-
-__all__ = ["write_figures", "axis_label"]
+__all__ = ["write_figures", "sweep_figures", "floor_groups", "axis_label", "MAX_PANELS"]
 
 _UNITS = (("_deg_per_rth_h", "deg/sqrt(h)"), ("_dph", "deg/h"), ("_deg", "deg"),
           ("_c", "degC"), ("_s", "s"), ("_hz", "Hz"), ("_w_per_k", "W/K"),
@@ -68,26 +70,31 @@ def _rms(values) -> float:
 
 
 
-def _save(fig, path: Path) -> Path:
+def _save(fig: Figure, path: Path) -> Path:
     with atomic_output(path, "wb") as fh:
         fig.savefig(fh, format="png", dpi=110, metadata={"Software": None})
-    plt.close(fig)
     return path
 
 
+#: Most panels of one figure, one per white-noise floor; a sweep with more floors along an
+#: axis sets each run's RMSE against its own cell's floor instead.
+MAX_PANELS = 4
+
+
 def _collect(spec: SweepSpec, store: CellStore, keys: list[str]):
-    """Per (method, stage): {axis key: [(x, rmse, floor, tts, tts_rmse)]}, one pass."""
-    data: dict[tuple[str, str], dict[str, list]] = defaultdict(lambda: defaultdict(list))
+    """Every row's plotted fields (one pass over the cells) and the start-up pairs of the
+    first two grid axes."""
+    points = []
     pairs = []
     grid = [a.key for a in spec.grid_axes]
     for row in iter_rows(spec, store):
-        m = (row["method"], row["stage"])
-        for k in keys:
-            data[m][k].append((row[k], row["heading_rmse_deg"], row["floor_deg"],
-                               row["time_to_spec_s"], row["time_to_spec_rmse_s"]))
+        points.append({"method": row["method"], "stage": row["stage"],
+                       "values": {k: row[k] for k in keys},
+                       "rmse": row["heading_rmse_deg"], "floor": row["floor_deg"],
+                       "tts": row["time_to_spec_s"]})
         if len(grid) >= 2 and row["stage"] == "startup":
             pairs.append((row["method"], row[grid[0]], row[grid[1]], row["heading_rmse_deg"]))
-    return data, pairs
+    return points, pairs
 
 
 def _positions(values: list, drawn: bool):
@@ -105,88 +112,179 @@ def _positions(values: list, drawn: bool):
     return (lambda v: float(where[json.dumps(v, sort_keys=True)])), cats
 
 
-def _axis_figure(key: str, drawn: bool, series: dict, column: int, ylabel: str, title: str,
-                 floor: bool, log: bool, agg=_rms, agg_name: str = "RMS"):
-    fig, ax = plt.subplots(figsize=(6.4, 4.2))
-    allv = [p[0] for pts in series.values() for p in pts]
-    x_of, cats = _positions(allv, drawn)
-    floor_done = False
-    order = sorted(series, key=lambda m: (m[0] != "none", m[0],
-                                          STAGES.index(m[1]) if m[1] else 0))
-    for i, (method, stage) in enumerate(order):
-        pts = series[(method, stage)]
-        colour = f"C{i}"
-        xs = [x_of(p[0]) for p in pts]
-        ys = [p[column] for p in pts]
-        ax.plot(xs, ys, ".", color=colour, alpha=0.25, ms=4)
-        groups: dict[float, list] = defaultdict(list)
-        for x, y in zip(xs, ys):
-            groups[x].append(y)
-        label = ("uncompensated" if method == "none" else method)
-        label = f"{stage}, {label}" if stage else label
-        if not drawn:
-            gx = sorted(groups)
-            ax.plot(gx, [agg(groups[x]) for x in gx], "-o", color=colour, ms=4,
-                    label=label + f" ({agg_name} over runs)")
-        else:
-            ax.plot([], [], ".", color=colour, label=label)
-        if floor and not floor_done:
+def _same(v: float) -> str:
+    """A floor as the key it is grouped by (NaN: no closed form)."""
+    return "nan" if not math.isfinite(v) else f"{v:.12g}"
+
+
+def floor_groups(points: list[dict], key: str) -> list[tuple[str, list[dict]]]:
+    """The points of a figure against ``key`` split so that each group shares one
+    white-noise floor at every value of ``key``: (label, points) per group, in order of
+    appearance.
+
+    Points are first told apart by the values of the other axes; those whose floor is the
+    same function of ``key`` are pooled again (a start temperature, a soak time leave the
+    floor alone; a latitude, a dwell, an ARW move it).  The label names the other axes whose
+    value sets a group apart (``latitude_deg = 30``); empty for a single group.
+    """
+    by_point: dict[tuple, list[dict]] = defaultdict(list)
+    for p in points:
+        by_point[tuple((k, _text(v)) for k, v in p["values"].items() if k != key)].append(p)
+    merged: dict[tuple, list[tuple]] = {}
+    for g, pts in by_point.items():
+        sig = tuple(sorted({(_text(p["values"][key]), _same(p["floor"])) for p in pts}))
+        merged.setdefault(sig, []).append(g)
+    if len(merged) == 1:
+        return [("", points)]
+    groups = list(merged.values())
+    others = [k for k, _ in next(iter(by_point))]
+    # an axis names the groups when each holds one value of it and the groups differ by it
+    values = [[{dict(g)[k] for g in gs} for k in others] for gs in groups]
+    named = [k for i, k in enumerate(others)
+             if all(len(v[i]) == 1 for v in values) and len({min(v[i]) for v in values}) > 1]
+    out = []
+    for n, (gs, v) in enumerate(zip(groups, values)):
+        label = ", ".join(f"{k} = {min(v[others.index(k)])}" for k in named) or \
+            f"floor group {n + 1}"
+        out.append((label, [p for g in gs for p in by_point[g]]))
+    return out
+
+
+def _series(points: list[dict], x_of, field: str) -> dict[tuple[str, str], list]:
+    """(method, stage) -> [(x, value)] in a plotting order: uncompensated first."""
+    out: dict[tuple[str, str], list] = defaultdict(list)
+    for p in points:
+        out[(p["method"], p["stage"])].append((x_of(p["x"]), p[field]))
+    return dict(sorted(out.items(), key=lambda kv: (
+        kv[0][0] != "none", kv[0][0], STAGES.index(kv[0][1]) if kv[0][1] else 0)))
+
+
+def _stage_label(method: str, stage: str) -> str:
+    who = "uncompensated" if method == "none" else method
+    return f"{'start-up' if stage == 'startup' else stage}, {who}" if stage else who
+
+
+def _axis_figure(key: str, drawn: bool, points: list[dict], field: str, ylabel: str,
+                 title: str, floor: bool, log: bool, agg=None, agg_name: str = "RMS", *,
+                 floor_line: bool = True):
+    """One panel per white-noise floor (:func:`floor_groups`; ``floor``): each run's value
+    as a faint point, the ``agg`` over the runs at each grid value as a line, one colour per
+    method and stage, and (``floor_line``) the panel's white-noise floor as a dashed line
+    labelled with the axes that set it.  More floors than :data:`MAX_PANELS`: with a floor
+    line, each run's value over its own cell's floor in one panel, against the floor's line
+    at 1; without, one panel that says how many floors it pools."""
+    agg = agg or _rms
+    pts = [dict(p, x=p["values"][key]) for p in points]
+    x_of, cats = _positions([p["x"] for p in pts], drawn)
+    groups = floor_groups(pts, key) if floor else [("", pts)]
+    ratio = floor_line and len(groups) > MAX_PANELS
+    pooled = len(groups) if len(groups) > MAX_PANELS else 0
+    if pooled:
+        if ratio:
+            pts = [dict(p, **{field: p[field] / p["floor"]}) for p in pts]
+            ylabel = "heading RMSE / white-noise floor of its cell"
+        groups = [("", pts)]
+    names = list(_series(pts, x_of, field))          # one colour per method and stage
+    fig = Figure(figsize=(1.2 + 4.2 * len(groups) + 2.6, 4.4), dpi=110,
+                 layout="constrained")
+    axes = fig.subplots(1, len(groups), sharey=True, squeeze=False)[0]
+    for ax, (label, gpts) in zip(axes, groups):
+        for (method, stage), xy in _series(gpts, x_of, field).items():
+            colour = f"C{names.index((method, stage))}"
+            xs, ys = [x for x, _ in xy], [y for _, y in xy]
+            ax.plot(xs, ys, ".", color=colour, alpha=0.25, ms=4)
+            lab = _stage_label(method, stage)
+            if drawn:
+                ax.plot([], [], ".", color=colour, label=f"{lab} (each run)")
+                continue
+            at: dict[float, list] = defaultdict(list)
+            for x, y in xy:
+                at[x].append(y)
+            gx = sorted(at)
+            ax.plot(gx, [agg(at[x]) for x in gx], "-o", color=colour, ms=4,
+                    label=f"{lab} ({agg_name} over runs)")
+        if ratio:
+            ax.axhline(1.0, color="k", ls="--", lw=1,
+                       label="white-noise floor of each run's cell (= 1)")
+        elif floor_line:
             fl: dict[float, list] = defaultdict(list)
-            for x, p in zip(xs, pts):
-                fl[x].append(p[2])
+            for p in gpts:
+                fl[x_of(p["x"])].append(p["floor"])
             fx = sorted(fl)
-            ax.plot(fx, [sum(fl[x]) / len(fl[x]) for x in fx], "k--", lw=1,
-                    label="white-noise floor")
-            floor_done = True
-    if cats is not None:
-        ax.set_xticks(range(len(cats)), [_text(c) for c in cats], rotation=20, fontsize=8)
-    if log:
-        ax.set_yscale("log")
-    ax.set_xlabel(axis_label(key))
-    ax.set_ylabel(ylabel)
-    ax.set_title(title, fontsize=10)
-    ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=7)
-    fig.tight_layout()
+            fy = [sum(fl[x]) / len(fl[x]) for x in fx]
+            flat = all(_same(v) == _same(fy[0]) for v in fy)
+            ax.plot(fx, fy, "k--", lw=1,
+                    label="white-noise floor" + (f", {label}" if label else "")
+                    + (f" ({fy[0]:.4f} deg)" if flat and math.isfinite(fy[0]) else ""))
+        if label:
+            ax.set_title(label, fontsize=9)
+        if cats is not None:
+            ax.set_xticks(range(len(cats)), [_text(c) for c in cats], rotation=20,
+                          fontsize=8)
+        if log:
+            ax.set_yscale("log")
+        else:
+            ax.set_ylim(bottom=0.0)                 # a time after power-on starts at 0
+        ax.set_xlabel(axis_label(key))
+        ax.grid(True, which="both", alpha=0.3)
+        if len(groups) > 1:
+            ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(0.0, -0.16),
+                      frameon=False)
+    axes[0].set_ylabel(ylabel)
+    if len(groups) == 1:
+        axes[0].legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.02, 1.0),
+                       frameon=False)
+    fig.suptitle(title + (f"\n({len(groups)} white-noise floors: one panel each)"
+                          if len(groups) > 1 else
+                          f"\n({pooled} white-noise floors: each run over its own cell's)"
+                          if ratio else f"\n(runs of {pooled} white-noise floors pooled)"
+                          if pooled else ""), fontsize=10)
     return fig
 
 
 def write_figures(spec: SweepSpec, store: CellStore, folder: str | Path) -> list[Path]:
     """Write the summary figures into ``folder``; their paths."""
     folder = Path(folder)
+    out = []
+    for name, fig in sweep_figures(spec, store).items():
+        out.append(_save(fig, folder / name))
+    return out
+
+
+def sweep_figures(spec: SweepSpec, store: CellStore) -> dict[str, Figure]:
+    """The summary figures of a sweep (module docstring), {file name: figure}."""
     keys = [a.key for a in spec.axes]
     drawn = {a.key: a.drawn for a in spec.axes}
     if len(spec.scenario.start_temperatures_c) > 1 and "start_temperature_c" not in keys:
         keys.append("start_temperature_c")
         drawn["start_temperature_c"] = False
     if not keys:
-        return []
-    data, pairs = _collect(spec, store, keys)
+        return {}
+    points, pairs = _collect(spec, store, keys)
     name = spec.scenario.name
-    out = []
+    out = {}
     for key in keys:
-        series = {m: d[key] for m, d in data.items()}
-        fig = _axis_figure(key, drawn[key], series, 1, "heading RMSE [deg]",
-                           f"{name}: heading RMSE against {key}", True, True)
-        out.append(_save(fig, folder / f"heading_rmse_vs_{_slug(key)}.png"))
-        tts = {(m[0], ""): [(p[0], p[3] / 60.0) for p in pts]
-               for m, pts in series.items() if m[1] == "startup"}   # one value per run
-        never = sum(1 for pts in tts.values() for p in pts if p[1] == math.inf)
-        fig = _axis_figure(key, drawn[key], tts, 1, "time to spec [min after power-on]",
-                           f"{name}: time until every cycle stays within "
-                           f"{spec.spec_deg:g} deg\n({never} start-up(s) never within "
-                           f"spec, not drawn)", False, False, median_time_s, "median")
-        out.append(_save(fig, folder / f"time_to_spec_vs_{_slug(key)}.png"))
+        out[f"heading_rmse_vs_{_slug(key)}.png"] = _axis_figure(
+            key, drawn[key], points, "rmse", "heading RMSE [deg]",
+            f"{name}: heading RMSE against {key}", True, True)
+        tts = [dict(p, stage="", tts=p["tts"] / 60.0) for p in points
+               if p["stage"] == "startup"]                   # one value per run
+        never = sum(1 for p in tts if p["tts"] == math.inf)
+        out[f"time_to_spec_vs_{_slug(key)}.png"] = _axis_figure(
+            key, drawn[key], tts, "tts", "time to spec [min after power-on]",
+            f"{name}: time until every cycle stays within {spec.spec_deg:g} deg "
+            f"({never} start-up(s) never within spec, not drawn)", True, False,
+            median_time_s, "median", floor_line=False)
     if pairs:
         a, b = spec.grid_axes[0].key, spec.grid_axes[1].key
-        out.append(_save(_pair_figure(a, b, pairs, name), folder /
-                         f"heading_rmse_{_slug(a)}_by_{_slug(b)}.png"))
+        out[f"heading_rmse_{_slug(a)}_by_{_slug(b)}.png"] = _pair_figure(a, b, pairs, name)
     return out
 
 
 def _pair_figure(a: str, b: str, pairs, name: str):
     """Start-up RMSE against axis ``a``, one line per value of axis ``b`` (and method)."""
-    fig, ax = plt.subplots(figsize=(6.4, 4.2))
+    fig = Figure(figsize=(8.6, 4.4), dpi=110, layout="constrained")
+    ax = fig.subplots()
     x_of, cats = _positions([p[1] for p in pairs], False)
     lines: dict[tuple[str, str], dict[float, list]] = defaultdict(lambda: defaultdict(list))
     order: dict[str, int] = {}
@@ -206,6 +304,5 @@ def _pair_figure(a: str, b: str, pairs, name: str):
     ax.set_ylabel("start-up heading RMSE [deg] (RMS over runs)")
     ax.set_title(f"{name}: start-up stage, by {b}", fontsize=10)
     ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=7)
-    fig.tight_layout()
+    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.02, 1.0), frameon=False)
     return fig
