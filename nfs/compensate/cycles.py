@@ -22,8 +22,9 @@ compensation"):
      compensated bias (gyro output - Earth rate - prediction, noise included): the paper's
      "TRPLG bias stability", its data being given "at intervals of 100 s" (section 4.1);
    - improvement [%] = 100 (1 - bias stability / the uncompensated row's) (Tables 2-5);
-   - up-ramp and down-ramp residuals separately (RMSE and signed mean of e where the chamber
-     rises or falls faster than :data:`RAMP_RATE_C_PER_S`): a model missing a rate term
+   - up-ramp and down-ramp residuals separately (RMSE and signed mean of e where the
+     chamber program rises or falls faster than :data:`RAMP_RATE_C_PER_S`; the controller's
+     cycling and wander of ``[variability]`` are no ramp): a model missing a rate term
      leaves residuals of opposite signs on the two (thermal hysteresis);
    - heading RMSE [deg] of every north-finding cycle of the test cycles, compensated.
 
@@ -57,8 +58,9 @@ from .modes import check_features_mode
 from .study import (CompensationSettings, test_scenario, ticker, train_and_predict,
                     train_scenario)
 
-__all__ = ["CycleRow", "CycleStudy", "run_cycle_study", "run_runs_study", "cut_run", "CYCLE_METRICS",
-           "BIAS_WINDOW_S", "BLOCK_S", "RAMP_RATE_C_PER_S", "UNCOMPENSATED"]
+__all__ = ["CycleRow", "CycleStudy", "PartTrace", "run_cycle_study", "run_runs_study",
+           "cut_run", "CYCLE_METRICS", "BIAS_WINDOW_S", "BLOCK_S", "RAMP_RATE_C_PER_S",
+           "UNCOMPENSATED"]
 
 #: The table's metrics, in order (JSON keys).
 CYCLE_METRICS = ("mae_dph", "std_dph", "rmse_dph", "bias_stability_dph", "improvement_pct")
@@ -93,6 +95,27 @@ class CycleRow:
 
 
 @dataclass(frozen=True)
+class PartTrace:
+    """One test part (cycle or run) at its trusted samples: what the figures draw."""
+
+    name: str
+    """The part's name."""
+    time_s: np.ndarray
+    """Time from power-on [s]."""
+    temp_fog_c: np.ndarray
+    """The FOG thermometer [degC]."""
+    drift_dph: np.ndarray
+    """Wavelet-separated drift [deg/h]."""
+    bias_dph: np.ndarray
+    """Gyro output minus Earth rate, noise included [deg/h]."""
+    ramp: np.ndarray
+    """+1 where the chamber rises, -1 where it falls (faster than
+    :data:`RAMP_RATE_C_PER_S`), 0 otherwise."""
+    predicted_dph: dict
+    """Row name -> its predicted drift [deg/h] (:data:`UNCOMPENSATED`: the constant)."""
+
+
+@dataclass(frozen=True)
 class CycleStudy:
     """Everything :func:`run_cycle_study` computed."""
 
@@ -114,6 +137,9 @@ class CycleStudy:
     """Bootstrap replicates behind the intervals."""
     feature_names: tuple[str, ...] = ()
     """The features every method was trained on."""
+    traces: tuple[PartTrace, ...] = ()
+    """Every test part's drift, bias, thermometer and each row's prediction (the
+    figures')."""
 
     def row(self, method: str) -> CycleRow:
         for r in self.rows:
@@ -155,9 +181,21 @@ class _Scored:
     trusted: np.ndarray     # the mask into the cycle's samples
 
 
-def _score_parts(runs: list[Run], cutoff_period_s: float) -> list[_Scored]:
+def _program_slope(scenario, start_temperature_c: float, t: np.ndarray) -> np.ndarray:
+    """Rate of the scenario's chamber program at the times ``t`` from power-on [K/s] (0
+    without a program): the ramps the program makes, not the controller's cycling or
+    wander that the recorded ``temp_chamber_c`` also carries."""
+    prog = scenario.chamber.program
+    if prog is None or t.size < 2:
+        return np.zeros(t.size)
+    chamber = prog.ambient(start_temperature_c, 1.0 / scenario.sample_rate_hz)(t)
+    return np.gradient(chamber, t)
+
+
+def _score_parts(runs: list[Run], cutoff_period_s: float, scenario,
+                 start_temperatures_c: list[float]) -> list[_Scored]:
     out, w0, b0 = [], 0, 0
-    for run in runs:
+    for run, t0 in zip(runs, start_temperatures_c):
         sep = separate_drift(run, cutoff_period_s=cutoff_period_s)
         t = np.asarray(run.columns["time_s"], dtype=float)
         ok = ~np.asarray(sep.moving, dtype=bool) & np.isfinite(sep.raw_drift_dph)
@@ -165,12 +203,10 @@ def _score_parts(runs: list[Run], cutoff_period_s: float) -> list[_Scored]:
         window = w0 + np.floor(rel / BIAS_WINDOW_S).astype(int)
         block = b0 + np.floor(rel / BLOCK_S).astype(int)
         w0, b0 = int(window.max()) + 1, int(block.max()) + 1
-        chamber = run.columns.get("temp_chamber_c")
+        slope = _program_slope(scenario, t0, t)
         ramp = np.zeros(t.size, dtype=int)
-        if chamber is not None and t.size > 1:
-            slope = np.gradient(np.asarray(chamber, dtype=float), t)
-            ramp[slope > RAMP_RATE_C_PER_S] = 1
-            ramp[slope < -RAMP_RATE_C_PER_S] = -1
+        ramp[slope > RAMP_RATE_C_PER_S] = 1
+        ramp[slope < -RAMP_RATE_C_PER_S] = -1
         out.append(_Scored(np.asarray(sep.drift_dph)[ok], np.asarray(sep.raw_drift_dph)[ok],
                            window[ok], block[ok], ramp[ok], ok))
     return out
@@ -232,14 +268,16 @@ def run_cycle_study(scenario, settings=None, *, n_boot: int = 2000,
     tick = ticker(progress, 4 + len(specs))
     tick("simulating the runs")
     sims = simulate_runs(scenario.instrument, scenario.conditions())
-    train, test = [], []
+    train, test, t0s = [], [], []
     for k, sim in enumerate(sims):
         i_temp = k // scenario.repeats
         for c, (a, b) in enumerate(spans[i_temp]):
             part = cut_run(sim.run, a, b, f"cycle{c + 1}")
             (train if c == 0 else test).append(part)
+            if c:
+                t0s.append(scenario.start_temperatures_c[i_temp])
     return _drift_study(scenario, s, specs, train, test, n_boot, tick,
-                        tuple(tuple(sp) for sp in spans[0]))
+                        tuple(tuple(sp) for sp in spans[0]), t0s)
 
 
 def run_runs_study(scenario, settings=None, *, n_boot: int = 2000,
@@ -259,7 +297,8 @@ def run_runs_study(scenario, settings=None, *, n_boot: int = 2000,
     train = [r.run for r in simulate_runs(train_sc.instrument, train_sc.conditions())]
     test_sc = test_scenario(scenario, s)
     test = [r.run for r in simulate_runs(test_sc.instrument, test_sc.conditions())]
-    return _drift_study(scenario, s, specs, train, test, n_boot, tick, ())
+    t0s = [test_sc.start_temperatures_c[k // test_sc.repeats] for k in range(len(test))]
+    return _drift_study(scenario, s, specs, train, test, n_boot, tick, (), t0s)
 
 
 def _untuned(s, why: str):
@@ -272,13 +311,15 @@ def _untuned(s, why: str):
     return specs
 
 
-def _drift_study(scenario, s, specs, train, test, n_boot, tick, spans) -> CycleStudy:
-    """Train on ``train``, score on the parts ``test`` (module docstring, steps 2-5)."""
+def _drift_study(scenario, s, specs, train, test, n_boot, tick, spans,
+                 start_temperatures_c) -> CycleStudy:
+    """Train on ``train``, score on the parts ``test`` (module docstring, steps 2-5), each
+    run from its start temperature in ``start_temperatures_c``."""
     tick("separating the drift")
     mode = check_features_mode(s.features_mode)
     data = drift_dataset(train, list(s.features), decimate_s=s.decimate_s,
                          cutoff_period_s=s.cutoff_period_s, features_mode=mode)
-    parts = _score_parts(test, s.cutoff_period_s)
+    parts = _score_parts(test, s.cutoff_period_s, scenario, start_temperatures_c)
     n_blocks = int(max(p.block.max() for p in parts)) + 1
     # the constant calibration: the mean of gyro - Earth rate over the training runs at rest
     train_bias = np.concatenate([
@@ -324,8 +365,14 @@ def _drift_study(scenario, s, specs, train, test, n_boot, tick, spans) -> CycleS
         msd = tuple(float(np.mean((p.raw - q[p.trusted]) ** 2))
                     for p, q in zip(parts, preds[name]))
         rows.append(CycleRow(name, values, intervals, heading, msd))
+    traces = tuple(
+        PartTrace(run.name, np.asarray(run.columns["time_s"], dtype=float)[p.trusted],
+                  np.asarray(run.columns["temp_fog_c"], dtype=float)[p.trusted], p.drift,
+                  p.raw, p.ramp, {n: np.asarray(preds[n][k])[p.trusted] for n in names})
+        for k, (run, p) in enumerate(zip(test, parts)))
     tick("done")
     return CycleStudy(scenario=scenario, settings=s,
                       spans_s=spans, train_runs=tuple(train),
                       test_runs=tuple(test), rows=tuple(rows), compensators=comps,
-                      n_boot=n_boot, feature_names=tuple(data.feature_names))
+                      n_boot=n_boot, feature_names=tuple(data.feature_names),
+                      traces=traces)

@@ -166,6 +166,9 @@ class ParameterStudy:
     """Parameter -> (description, unit, thermometer column): :data:`PARAMETERS`."""
     block_cycles: int = BLOCK_CYCLES
     """Consecutive test cycles per bootstrap block."""
+    predicted: dict = field(default_factory=dict)
+    """(row name, parameter) -> the prediction for every test cycle, the test runs' cycles
+    one after the other (:attr:`test`'s order), in the parameter's unit (the figures')."""
     startup_stage: str = "start-up"
     """Name of the start-up stage of the heading table: ``start-up``, or ``start-up, chamber
     ramping`` when the chamber program moves the chamber during a start-up cycle of a test run
@@ -342,7 +345,8 @@ def run_parameter_study(scenario, settings=None, *, n_boot: int = 2000,
     tick("done")
     return ParameterStudy(scenario=scenario, settings=s, train=train, test=test,
                           parameters=tuple(rows), headings=tuple(headings), models=models,
-                          n_boot=n_boot, startup_stage=_startup_stage(test_sc, test_nf))
+                          n_boot=n_boot, startup_stage=_startup_stage(test_sc, test_nf),
+                          predicted={k: np.concatenate(v) for k, v in predicted.items()})
 
 
 def _startup_stage(test_sc, test_nf) -> str:

@@ -5,6 +5,7 @@ from __future__ import annotations
 import io
 import json
 import math
+import textwrap
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -163,7 +164,9 @@ def plot_drift_vs_compensated(study, run_index: int | None = None, methods=None,
     By default the coldest test start-up (where the start-up drift is largest) and the rows
     BP and SSA-SVR (the pair the start-up paper's figure sets side by side) plus ``best`` (the
     table's best row, :attr:`HeadingTable.best`) when it is another; the figure says which
-    rows it shows and why.
+    rows it shows and why.  The raw trace is drawn where the turntable rests (a move adds
+    its rotation rate, no drift); each panel's limits hold every trace drawn in it, the
+    residual's symmetric about 0; the legends stand beside the panels, off the data.
     """
     from matplotlib.figure import Figure
 
@@ -181,36 +184,47 @@ def plot_drift_vs_compensated(study, run_index: int | None = None, methods=None,
             why[best] = (why[best] + "; best row" if best in why
                          else "best row of the table")
         methods = tuple(why)
+    methods = [m for m in methods if m in study.results]
     run = sims[run_index].run
     sep = separate_drift(run, cutoff_period_s=study.settings.cutoff_period_s)
     t_min = np.asarray(run.columns["time_s"]) / 60.0
-    fig = Figure(figsize=(8.5, 6.0), dpi=110)
+    raw = np.where(np.asarray(sep.moving, dtype=bool), np.nan, sep.raw_drift_dph)
+    preds = {m: study.results[m].compensator.predict_drift(run) for m in methods}
+    fig = Figure(figsize=(11.0, 6.4), dpi=110, layout="constrained")
     ax1, ax2 = fig.subplots(2, 1, sharex=True)
-    ax1.plot(t_min, sep.raw_drift_dph, color="0.8", lw=0.5,
-             label="gyro output - Earth rate (noisy)")
+    ax1.plot(t_min, raw, color="0.8", lw=0.5,
+             label="gyro output - Earth rate,\nat rest (1 Hz, noisy) [deg/h]")
     ax1.plot(t_min, sep.drift_dph, color="k", lw=1.2,
-             label="thermal drift (wavelet-separated)")
-    for m in methods:
-        if m in study.results:
-            p = study.results[m].compensator.predict_drift(run)
-            ax1.plot(t_min, p, lw=1.0, label=f"{m} prediction")
-            ax2.plot(t_min, sep.drift_dph - p, lw=1.0, label=f"{m}: drift - prediction")
-    lo, hi = np.percentile(sep.drift_dph, [0.5, 99.5])
-    pad = 0.5 * (hi - lo) + 1e-3
-    ax1.set_ylim(lo - pad, hi + pad)
+             label="thermal drift\n(wavelet-separated) [deg/h]")
+    for i, m in enumerate(methods):
+        ax1.plot(t_min, preds[m], color=f"C{i}", lw=1.0, label=f"{m}: predicted drift")
+        ax2.plot(t_min, sep.drift_dph - preds[m], color=f"C{i}", lw=1.0,
+                 label=f"{m}: drift - prediction")
+    ax1.set_ylim(*_limits([raw, sep.drift_dph, *preds.values()]))
     ax1.set_ylabel("drift [deg/h]")
-    ax1.legend(fontsize=8)
-    shown = "; ".join(f"{m} ({why[m]})" if m in why else m for m in methods
-                      if m in study.results)
-    ax1.set_title(f"{run.name} (T0 = {run.meta.start_temperature_c:g} C, {which})"
-                  "\nrows shown: " + (shown or "none"), fontsize=9)
+    ax1.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
+    shown = "; ".join(f"{m} ({why[m]})" if m in why else m for m in methods)
+    fig.suptitle(f"{run.name} (T0 = {run.meta.start_temperature_c:g} C, {which})\n"
+                 + "\n".join(textwrap.wrap("rows shown: " + (shown or "none"), 110)),
+                 fontsize=9)
     ax2.axhline(0.0, color="k", lw=0.5)
+    if methods:
+        r = max(float(np.nanmax(np.abs(sep.drift_dph - p))) for p in preds.values())
+        ax2.set_ylim(-1.08 * r, 1.08 * r)
+        ax2.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
     ax2.set_ylabel("residual drift [deg/h]")
     ax2.set_xlabel("time since power-on [min]")
-    if ax2.get_legend_handles_labels()[0]:      # none when the table has none of the rows
-        ax2.legend(fontsize=8)
-    fig.tight_layout()
+    ax2.set_xlim(t_min[0], t_min[-1])
     return fig
+
+
+def _limits(traces, pad: float = 0.04) -> tuple[float, float]:
+    """y limits that hold every finite value of ``traces``, padded by ``pad`` of the span."""
+    v = np.concatenate([np.asarray(t, dtype=float).ravel() for t in traces])
+    v = v[np.isfinite(v)]
+    lo, hi = float(v.min()), float(v.max())
+    span = (hi - lo) or max(abs(hi), 1e-6)
+    return lo - pad * span, hi + pad * span
 
 
 def _png(fig) -> bytes:

@@ -16,7 +16,8 @@ import json
 import math
 from pathlib import Path
 
-from ..io.atomic import atomic_write_text
+from ..io.atomic import atomic_write_bytes, atomic_write_text
+from .drift_figures import plot_drift_vs_temperature, plot_residual_vs_time, png_bytes
 from .intervals import json_number
 from .table import NOT_APPLICABLE
 from .reference import CHENG2015_TABLE2_MSD, TAO2019_BIAS_STABILITY
@@ -70,9 +71,9 @@ def _notes(study) -> list[str]:
         f"calibration). Intervals: 95 %, bias-corrected, from a block bootstrap of the test "
         f"{part}s "
         f"({study.n_boot} replicates, 30 min blocks, every row with the same draws).",
-        "Ramps: residuals where the chamber rises (up) or falls (down) faster than "
-        "0.006 C/min; opposite signed means on the two are thermal hysteresis, a rate term "
-        "the model lacks.",
+        "Ramps: residuals where the chamber program rises (up) or falls (down) faster than "
+        "0.006 C/min (the controller's cycling and wander are no ramp); opposite signed "
+        "means on the two are thermal hysteresis, a rate term the model lacks.",
         f"heading RMSE: every north-finding cycle of the test {part}s, compensated [deg].",
     ]
 
@@ -125,7 +126,7 @@ def _ramp_table(study) -> list[str]:
     missing = [side for side in moves
                if not any(math.isfinite(r.values[f"{side}_rmse_dph"]) for r in study.rows)]
     part = "run" if _runs(study) else "cycle"
-    why = (f"No {' or '.join(missing)}-ramp residual: the chamber never "
+    why = (f"No {' or '.join(missing)}-ramp residual: the chamber program never "
            f"{' or '.join(moves[m] for m in missing)} faster than 0.006 C/min in the test "
            f"{part}s.") if missing else ""
     cols = [(k, h) for k, h in _RAMPS if k.split("_")[0] not in missing]
@@ -216,14 +217,19 @@ def intervals_csv(rows: list[dict], skip=()) -> str:
     return buf.getvalue()
 
 
-def write_table_files(out_dir, files: dict[str, str], js: str, json_path=None) -> list[Path]:
-    """Write ``files`` {name: text} into ``out_dir`` (made if missing) and the JSON ``js``
-    also to ``json_path``, each atomically.  Returns the paths written, in order."""
+def write_table_files(out_dir, files: dict[str, str | bytes], js: str,
+                      json_path=None) -> list[Path]:
+    """Write ``files`` {name: text, or bytes of a figure} into ``out_dir`` (made if missing)
+    and the JSON ``js`` also to ``json_path``, each atomically.  Returns the paths written,
+    in order."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     paths = [out / name for name in files]
-    for path, text in zip(paths, files.values()):
-        atomic_write_text(path, text)
+    for path, data in zip(paths, files.values()):
+        if isinstance(data, bytes):
+            atomic_write_bytes(path, data)
+        else:
+            atomic_write_text(path, data)
     if json_path is not None:
         atomic_write_text(json_path, js)
         paths.append(Path(json_path))
@@ -232,12 +238,19 @@ def write_table_files(out_dir, files: dict[str, str], js: str, json_path=None) -
 
 def write_cycle_study(study, out_dir, *, json_path=None, title: str = "",
                       provenance: dict | None = None) -> list[Path]:
-    """Write drift_table.md, .csv, .json and report.md into ``out_dir`` (and the JSON also
-    to ``json_path``), each atomically.  Returns the paths written."""
+    """Write drift_table.md, .csv, .json, the figures drift_vs_temperature.png and
+    residual_vs_time.png (:mod:`nfs.report.drift_figures`) and report.md into ``out_dir``
+    (and the JSON also to ``json_path``), each atomically.  Returns the paths written."""
     md = cycle_table_markdown(study)
     js = cycle_table_json(study, title, provenance)
+    figures = {"drift_vs_temperature.png": png_bytes(plot_drift_vs_temperature(study)),
+               "residual_vs_time.png": png_bytes(plot_residual_vs_time(study))}
+    report = (f"# {title or 'Drift table of a temperature cycle'}\n\n" + md + "\n"
+              "![drift against temperature, before and after compensation]"
+              "(drift_vs_temperature.png)\n\n"
+              "![100 s means of the compensated bias against time, before and after "
+              "compensation](residual_vs_time.png)\n")
     return write_table_files(out_dir, {
         "drift_table.md": md,
         "drift_table.csv": intervals_csv(json.loads(js)["rows"], skip=("msd_by_part_dph2",)),
-        "drift_table.json": js,
-        "report.md": f"# {title or 'Drift table of a temperature cycle'}\n\n" + md}, js, json_path)
+        "drift_table.json": js, **figures, "report.md": report}, js, json_path)

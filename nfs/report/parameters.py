@@ -14,6 +14,7 @@ import json
 import math
 from pathlib import Path
 
+from .drift_figures import plot_parameter_residuals, plot_parameters_vs_temperature, png_bytes
 from .intervals import json_number
 from .cycles import intervals_csv, write_table_files
 from .reference import LIANG2021_RVR_OVER_LS_PCT
@@ -142,14 +143,23 @@ def parameter_table_json(study, title: str = "", provenance: dict | None = None)
 def write_parameter_study(study, out_dir, *, json_path=None, title: str = "",
                           provenance: dict | None = None) -> list[Path]:
     """Write parameter_table.md, parameter_table.csv, heading_by_schedule.csv,
-    parameter_table.json and report.md into ``out_dir`` (and the JSON also to
-    ``json_path``), each atomically.  Returns the paths written."""
+    parameter_table.json, the figures parameters_vs_temperature.png and
+    parameter_residual_vs_time.png (:mod:`nfs.report.drift_figures`) and report.md into
+    ``out_dir`` (and the JSON also to ``json_path``), each atomically.  Returns the paths
+    written."""
     md = parameter_table_markdown(study)
     js = parameter_table_json(study, title, provenance)
     doc = json.loads(js)
+    figures = {
+        "parameters_vs_temperature.png": png_bytes(plot_parameters_vs_temperature(study)),
+        "parameter_residual_vs_time.png": png_bytes(plot_parameter_residuals(study))}
+    report = (f"# {title or 'Parameter-level compensation'}\n\n" + md + "\n"
+              "![each cycle's calibrated parameters against temperature, with the models]"
+              "(parameters_vs_temperature.png)\n\n"
+              "![calibrated minus predicted against time, before and after compensation]"
+              "(parameter_residual_vs_time.png)\n")
     return write_table_files(out_dir, {
         "parameter_table.md": md,
         "parameter_table.csv": intervals_csv(doc["parameters"]),
         "heading_by_schedule.csv": intervals_csv(doc["headings"], skip=("positions_deg",)),
-        "parameter_table.json": js,
-        "report.md": f"# {title or 'Parameter-level compensation'}\n\n" + md}, js, json_path)
+        "parameter_table.json": js, **figures, "report.md": report}, js, json_path)

@@ -377,6 +377,7 @@ def plot_heading_table(table: HeadingTable, title: str = ""):
     """
     from matplotlib import colormaps
     from matplotlib.figure import Figure
+    from matplotlib.lines import Line2D
 
     refs = [r for r in table.rows if r.method in STAGE_ROWS]   # in every panel
     methods = [r for r in table.rows if r.method not in REFERENCE_ROWS]
@@ -387,7 +388,7 @@ def plot_heading_table(table: HeadingTable, title: str = ""):
     floor = next((r for r in table.rows if r.method == "floor"), None)
     # tab10 without its grey: seven hues that stay apart in print and for most colour vision
     hues = [c for j, c in enumerate(colormaps["tab10"].colors) if j != 7]
-    fig = Figure(figsize=(9.0, 1.0 + 3.4 * len(panels)), dpi=110)
+    fig = Figure(figsize=(11.0, 1.0 + 3.4 * len(panels)), dpi=110, layout="constrained")
     axes = fig.subplots(len(panels), 1, squeeze=False, sharey=True)[:, 0]
     x = np.arange(len(table.temperatures_c))
     with_ci = False
@@ -419,16 +420,19 @@ def plot_heading_table(table: HeadingTable, title: str = ""):
         if name:
             ax.set_title(name, fontsize=9, loc="left")
         ax.grid(axis="y", alpha=0.3)
-        ax.legend(fontsize=7, ncol=3, loc="upper right")
+        handles, labels = ax.get_legend_handles_labels()
+        if with_ci:                      # the error bars, named once in every legend
+            handles.append(Line2D([], [], color="0.15", ls="none", marker="|", ms=10,
+                                  mew=0.8))
+            labels.append("95 % interval of each cell\n(two-level bootstrap)")
+        # beside the panel, never over its bars
+        ax.legend(handles, labels, fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0),
+                  frameon=False)
     axes[-1].set_xlabel("start temperature T0 [degC]")
     title = title or "North-finding heading RMSE by start temperature"
     if table.features_mode:
         title += f" (features: {table.features_mode})"
     fig.suptitle(title, fontsize=10)
-    if with_ci:
-        fig.text(0.99, 0.005, "error bars: 95 % intervals of each cell (two-level bootstrap)",
-                 ha="right", va="bottom", fontsize=7, color="0.3")
-    fig.tight_layout(rect=(0.0, 0.02, 1.0, 1.0))
     return fig
 
 

@@ -194,11 +194,16 @@ def test_runs_protocol_scores_whole_test_runs_with_their_msd(tmp_path, cli):
     # the chamber only rises: no column of "-" for the down-ramps, a line says why; nothing
     # prints nan, and the CSV holds "-" where the JSON holds null
     assert "down-ramp" not in out.split("No down-ramp")[0] and "nan" not in out
-    assert "No down-ramp residual: the chamber never falls faster than 0.006 C/min" in out
+    assert "No down-ramp residual: the chamber program never falls faster than 0.006 C/min" \
+        in out
     assert doc["rows"][0]["down_rmse_dph"] is None
     with open(tmp_path / "out" / "drift_table.csv") as fh:
         row = next(csv.DictReader(fh))
     assert row["down_rmse_dph"] == "-" and row["down_rmse_dph_ci_low"] == "-"
+    # the papers' scenarios write their figures, and the report shows them
+    for png in ("drift_vs_temperature.png", "residual_vs_time.png"):
+        assert (tmp_path / "out" / png).stat().st_size > 20000
+        assert f"]({png})" in (tmp_path / "out" / "report.md").read_text()
 
 
 def test_runs_protocol_refuses_a_tuned_method_at_load(tmp_path):
@@ -206,3 +211,41 @@ def test_runs_protocol_refuses_a_tuned_method_at_load(tmp_path):
     p.write_text(RUNS.replace('["ls"]', '["ssa-svr"]'))
     with pytest.raises(ScenarioError, match="untuned"):
         load_scenario(p)
+
+
+def _labelled(fig) -> None:
+    """Every line that draws data is named in a legend (of its axes or of the figure); the
+    zero line is a reference, not data."""
+    named = {t.get_text() for ax in fig.axes if ax.get_legend()
+             for t in ax.get_legend().get_texts()}
+    named |= {t.get_text() for leg in fig.legends for t in leg.get_texts()}
+    for ax in fig.axes:
+        for line in ax.get_lines():
+            y = np.asarray(line.get_ydata(), dtype=float)
+            if y.size and np.any(y != 0.0):
+                assert line.get_label() in named, line.get_label()
+
+
+def test_figures_of_the_cycle_study_say_what_they_draw(study):
+    # Oracles: Tao et al. 2019's published bias stability (Table 5: 0.00718 deg/h after
+    # IR-LSSVM, 0.01850 before) drawn as +-1 lines beside ours, the bias stability of the
+    # table (the standard deviation of the 100 s means); signed panels symmetric about 0;
+    # every line labelled.
+    from nfs.report.drift_figures import plot_drift_vs_temperature, plot_residual_vs_time
+    fig = plot_residual_vs_time(study)
+    _labelled(fig)
+    top, bottom = fig.axes[:2]
+    for ax in (top, bottom):
+        lo, hi = ax.get_ylim()
+        assert lo == pytest.approx(-hi)
+    tao = {ln.get_label(): abs(ln.get_ydata()[0]) for ln in bottom.get_lines()
+           if "Tao et al. 2019" in ln.get_label()}
+    assert list(tao.values()) == [TAO2019_BIAS_STABILITY["IR-LSSVM"][0]]
+    ours = next(ln for ln in top.get_lines()
+                if ln.get_label().startswith("+-1 bias stability here"))
+    assert abs(ours.get_ydata()[0]) == study.rows[0].values["bias_stability_dph"]
+    fig = plot_drift_vs_temperature(study)
+    _labelled(fig)
+    assert "Tao et al. 2019 (Tables 2-5): bias stability 0.01850 -> 0.00718" in \
+        fig.get_suptitle().replace("\n", " ")
+    assert all(ax.get_ylim()[0] == pytest.approx(-ax.get_ylim()[1]) for ax in fig.axes)

@@ -23,3 +23,26 @@ def test_figure_panels_by_group_from_zero_with_distinct_colours():
         assert len(fills) == (7 if ax is axes[0] else 5) and len(set(fills)) == len(fills)
     assert sum(lab.startswith("m") for lab in
                [t.get_text() for t in axes[0].get_legend().get_texts()]) == 7
+
+
+def test_figure_legends_stand_beside_the_bars_and_name_the_stages():
+    # Oracle (invariant): no legend over a panel's bars; the stage rows of a chamber program
+    # and the error bars named in words.
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    from nfs.report.table import HeadingTable, TableRow, plot_heading_table
+    rows = (TableRow("before", (0.02,), cell_ci_deg=((0.015, 0.03),)),
+            TableRow("held", (0.009,), cell_ci_deg=((0.007, 0.011),)),
+            TableRow("ramping", (0.008,), cell_ci_deg=((0.006, 0.01),)),
+            TableRow("floor", (0.0046,)))
+    fig = plot_heading_table(HeadingTable((10.0,), rows))
+    FigureCanvasAgg(fig).draw()
+    renderer = fig.canvas.get_renderer()
+    (ax,) = fig.axes
+    assert ax.get_legend().get_window_extent(renderer).x0 >= \
+        ax.get_window_extent(renderer).x1
+    labels = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert {"chamber held, after the start-up (uncompensated)",
+            "chamber ramping (uncompensated)"} <= set(labels)
+    assert any(lab.startswith("95 % interval of each cell") for lab in labels)
+    assert ax.get_ylim()[0] == 0.0 and ax.get_ylim()[1] >= 0.03     # the top error bar shows
