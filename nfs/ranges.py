@@ -390,8 +390,9 @@ _TABLE: list[Range] = [
     _I("repeats", (1, 10000), (1, 100), "start-ups per temperature are",
        "Monte Carlo sets of tens of start-ups"),
     _I("units", (1, 1000), (1, 20), "simulated units are", "a fleet of a few units"),
-    _R("duration_s", "s", (0, 30 * 86400), (1800, 43200), "a start-up run lasts",
-       f"{_PHYS} 1: the start-up stage lasts 30-90 min, then the stable stage",
+    _R("duration_s", "s", (0, 30 * 86400), (600, 86400), "a start-up run lasts",
+       f"{_PHYS} 1 and 5: a north-finding cycle of 5-12 min, a start-up stage of 30-90 min, "
+       "a stable stage after it",
        (MINUTES, HOURS), low_open=True),
     _R("sample_rate_hz", "Hz", (0.001, 10000), (0.1, 100), "a north finder samples at",
        "FOG outputs of 1-2000 Hz, logged at 1 Hz (docs/measurement-format.md)"),
@@ -625,10 +626,17 @@ def warn(message: str, *, key: Any = None) -> None:
         held.setdefault(message if key is None else key, message)
 
 
+#: Where Python's default filter records the messages shown (once each per process).
+_REGISTRY: dict = {}
+
+
 def _emit(message: str) -> None:
-    # One place of issue: Python's default filter shows a message once per place, so a
-    # value a sweep's cells load again does not warn again in the same process.
-    warnings.warn(message, RangeWarning, stacklevel=1)
+    # One place of issue ("nfs", line 0: no source line to print), so that a message is one
+    # line even where the command line's one_line_warnings is not in force (a sweep's worker
+    # processes), and Python's default filter shows it once per process (a value every cell
+    # of a sweep loads again).
+    warnings.warn_explicit(message, RangeWarning, "nfs", 0, module="nfs.ranges",
+                           registry=_REGISTRY)
 
 
 # ------------------------------------------------------------------------------------------

@@ -359,7 +359,8 @@ def check_columns(columns: Mapping[str, np.ndarray], *, file: str | os.PathLike 
                   line_of: Callable[[int], int] | None = None) -> None:
     """Check sample columns against the format; raise on the first fault.
 
-    Checks, in this order: every value finite or NaN; no NaN in :data:`NO_MISSING_COLUMNS`;
+    Checks, in this order: every value finite or NaN; no NaN in :data:`NO_MISSING_COLUMNS`
+    and not every sample NaN in any required column;
     ``time_s`` strictly increasing; ``moving`` 0 or 1; every ``temp_*_c`` >= -273.15;
     every ``|acc_*_g|`` <= 2. Also that the required columns are there; equal lengths and
     float dtype are the caller's concern (the reader and :func:`write_run` ensure them).
@@ -400,6 +401,10 @@ def check_columns(columns: Mapping[str, np.ndarray], *, file: str | os.PathLike 
         if i is not None:
             raise fail(f"missing value ({', '.join(NO_MISSING_COLUMNS)} "
                        "must be given in every row)", name, i)
+    for name in REQUIRED_COLUMNS:
+        if len(columns[name]) and np.isnan(columns[name]).all():
+            raise MeasurementError("every sample is missing (a required column needs "
+                                   "values)", file=file, column=name)
     time = columns["time_s"]
     i = _first(~(np.diff(time) > 0.0))
     if i is not None:

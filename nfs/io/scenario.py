@@ -32,6 +32,14 @@ unpowered soak (:mod:`nfs.io.chamber`).  A run lasts as long as its program afte
 unless ``duration_s`` is written (in the file or a base): then it is cut there, or the chamber
 holds the program's last temperature until then.  Start and chamber temperatures outside
 -70 .. +150 C are refused (a value such as 293.15 is kelvin).
+
+Ranges.  Every value is checked against its range in :mod:`nfs.ranges` before anything runs:
+an impossible value is refused naming the file and the key (with the unit it was likely
+written in: a dwell of 2.5 s, minutes?), an unusual one loads with one warning line.  So are
+what a run needs as a whole: distinct positions that determine the heading, samples in every
+dwell, a start-up stage that holds a cycle, runs of at most
+:data:`nfs.ranges.MAX_SAMPLES_PER_RUN` samples (a program's soak included), a wavelet cutoff
+the shortest run can be separated at, distinct start temperatures.
 """
 
 from __future__ import annotations
@@ -404,6 +412,10 @@ def _compensation(tbl: dict, file, units: int = 1) -> Any:
     methods = tbl.get("methods", list(d.methods))
     if not isinstance(methods, list) or not all(isinstance(m, str) for m in methods):
         raise ScenarioError("must be a list of method names", file=file, key=f"{p}.methods")
+    if not methods:
+        raise ScenarioError("must name at least one method (nfs table --no-compensation "
+                            "gives the uncompensated rows alone)", file=file,
+                            key=f"{p}.methods")
     try:
         methods = tuple(get_method(m).key for m in methods)
     except NfsError as exc:
@@ -583,6 +595,25 @@ def _check_work(temps, duration: float | None, chamber: ChamberProfile, fs: floa
             return
 
 
+def _check_cutoff(cutoff_period_s: float, temps, duration: float | None,
+                  chamber: ChamberProfile, fs: float, file) -> None:
+    """The drift target of a compensated run is separated at the wavelet level of
+    ``compensation.cutoff_period_s`` (:func:`nfs.denoise.drift.separate_drift`): the
+    denoiser, with the options that separation uses, on a record as long as the shortest
+    run refuses the level now rather than after the start-ups are simulated."""
+    from ..denoise.wavelet import wavelet_denoise
+    n = min(int((duration if duration is not None else chamber.powered_s(t0, 1.0 / fs)) * fs)
+            + 1 for t0 in temps)
+    try:
+        with np.errstate(all="ignore"):
+            wavelet_denoise(np.zeros(max(n, 2)), sample_rate_hz=fs,
+                            cutoff_period_s=cutoff_period_s)
+    except NfsError as exc:
+        raise ScenarioError(f"the drift of the shortest run ({n} samples) cannot be separated "
+                            f"at this cutoff: {exc}", file=file,
+                            key="compensation.cutoff_period_s") from None
+
+
 def _overridden(d: dict, overrides: dict[str, Any], file) -> dict:
     """A copy of the parsed file ``d`` with each dotted key of ``overrides`` set (a table on
     the way is created when the file leaves it out)."""
@@ -742,6 +773,7 @@ def _load(path: Path, overrides, chain: tuple[Path, ...]) -> tuple[Scenario, dic
                quiet=tuple(p for k in (overrides or {}) for p in (k, f"{k}.*")))
     _check_schedule(schedule, settings, fs, f)
     _check_work(temps, duration, chamber, fs, f)
+    _check_cutoff(comp.cutoff_period_s, temps, duration, chamber, fs, f)
     if comp.n_jobs == 0:
         raise ScenarioError("must not be 0 (joblib: -1 is every core, N is N cores)",
                             file=f, key="compensation.n_jobs")
