@@ -83,10 +83,8 @@ def _cmd_table(args) -> int:
         from .compensate.study import test_scenario
         progress.what = "simulating"
         res = run_scenario(test_scenario(scenario, settings), progress=progress)
-        table = uncompensated_table(res)
-        table = table.with_intervals(
-            {n: e for n, e in stage_errors_by_temperature(res).items()
-             if n in [r.method for r in table.rows]}, random_state=scenario.seed)
+        table = uncompensated_table(res).with_intervals(stage_errors_by_temperature(res),
+                                                        random_state=scenario.seed)
         table = dataclasses.replace(table, provenance=provenance)
         paths = write_table(table, args.output, json_path=args.json, title=title)
         text = table.to_markdown()

@@ -218,15 +218,11 @@ def uncompensated_table(res: ScenarioResult):
     if sc.units > 1 or var.active:
         notes += (f"Start-ups made by {describe_units(sc.units, sc.unit_ids)}; variability "
                   f"{var.describe()}.",)
-    rows = []
-    for name, values in rmse.items():
-        if any(np.isfinite(values)):
-            rows.append(TableRow(name, values))
-        elif name == "before":                # the row every table compares with: kept
-            rows.append(TableRow(name, values))
-            notes += (f"before: - at every start temperature: {_why_empty(sc, name)}.",)
-        else:
-            notes += (f"No {name} row: {_why_empty(sc, name)}.",)
+    rows = [TableRow(name, values) for name, values in rmse.items()]
+    # a stage row is kept where nothing applies (tables compared row by row keep their rows),
+    # and a note says why
+    notes += tuple(f"{name}: - at every start temperature: {_why_empty(sc, name)}."
+                   for name, values in rmse.items() if not any(np.isfinite(values)))
     rows.append(TableRow("floor", (fl,) * n_t))
     return HeadingTable(tuple(sc.start_temperatures_c), tuple(rows), notes)
 

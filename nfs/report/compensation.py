@@ -18,7 +18,7 @@ from .intervals import json_number
 from .reference import (SEED004_TABLE1_SVR, SEED004_TABLE2_DRIFT_DPH,
                         SEED004_TABLE3_HEADING_RMSE_DEG, SEED004_TEMPERATURES_C)
 from .startup import plot_error_vs_time, time_to_spec_table
-from .table import NOT_APPLICABLE, REFERENCE_ROWS, HeadingTable, write_table
+from .table import NOT_APPLICABLE, UNCOMPENSATED_ROWS, HeadingTable, write_table
 
 __all__ = ["ShapeCheck", "shape_checks", "paper_comparison_markdown", "drift_table_markdown",
            "write_study", "plot_drift_vs_compensated"]
@@ -53,7 +53,7 @@ def shape_checks(table: HeadingTable) -> list[ShapeCheck]:
       at every start temperature (the paper misses this at 28 C).
     """
     names = [r.method for r in table.rows]
-    comp = [r for r in table.rows if r.method not in REFERENCE_ROWS]
+    comp = [r for r in table.rows if r.method not in UNCOMPENSATED_ROWS]
     out = []
     before = table.row("before").mean_deg
     if "SSA-SVR" in names:

@@ -27,7 +27,7 @@ from ..io.atomic import atomic_write_bytes, atomic_write_text
 from .intervals import DEFAULT_N_BOOT, Comparison, cluster_bootstrap, compare_rows, json_number
 
 __all__ = ["TableRow", "HeadingTable", "pooled_rmse", "write_table", "plot_heading_table",
-           "REFERENCE_ROWS", "STAGE_ROWS", "NOT_APPLICABLE"]
+           "REFERENCE_ROWS", "STAGE_ROWS", "UNCOMPENSATED_ROWS", "NOT_APPLICABLE"]
 
 _NAN2 = (math.nan, math.nan)
 
@@ -35,8 +35,11 @@ _NAN2 = (math.nan, math.nan)
 #: the stable stage, or under a chamber program that moves, the cycles with the chamber held
 #: after the start-up and those with it ramping.
 STAGE_ROWS = ("before", "stable", "held", "ramping")
+#: The reference rows of a table without a chamber program: the uncompensated start-up, the
+#: stable stage, the floor (what a rerun of the same scenario must reproduce exactly).
+REFERENCE_ROWS = ("before", "stable", "floor")
 #: Rows that are not a compensator: the uncompensated stages and the white-noise floor.
-REFERENCE_ROWS = STAGE_ROWS + ("floor",)
+UNCOMPENSATED_ROWS = STAGE_ROWS + ("floor",)
 #: How the figure and the notes name each stage row.
 STAGE_LABELS = {"before": "before (uncompensated start-up)",
                 "stable": "stable stage (uncompensated)",
@@ -117,7 +120,7 @@ class HeadingTable:
     @property
     def best(self) -> str | None:
         """The compensated row with the lowest mean (None without compensated rows)."""
-        comp = [r for r in self.rows if r.method not in REFERENCE_ROWS
+        comp = [r for r in self.rows if r.method not in UNCOMPENSATED_ROWS
                 and math.isfinite(r.mean_deg)]
         return min(comp, key=lambda r: r.mean_deg).method if comp else None
 
@@ -148,7 +151,7 @@ class HeadingTable:
         """The comparisons that the text states: every row against ``before``, SSA-SVR (the
         method of the start-up experiment reproduced) against every other, and the best
         row against the runner-up."""
-        names = [r.method for r in self.rows if r.method not in REFERENCE_ROWS]
+        names = [r.method for r in self.rows if r.method not in UNCOMPENSATED_ROWS]
         want = [(m, "before") for m in names]
         if "SSA-SVR" in names:
             want += [("SSA-SVR", m) for m in names if m != "SSA-SVR"]
@@ -231,7 +234,7 @@ class HeadingTable:
         -------
         HeadingTable
         """
-        later = set(REFERENCE_ROWS) - {"before"}
+        later = set(UNCOMPENSATED_ROWS) - {"before"}
         tail = [r for r in self.rows if r.method in later]
         head = [r for r in self.rows if r.method not in later]
         return dataclasses.replace(self, rows=tuple(head + list(rows) + tail),
@@ -308,7 +311,7 @@ class HeadingTable:
                           else ["", "", ""])
                 cells.append(self.versus_best(r.method))
             if mode:
-                cells.append("" if r.method in REFERENCE_ROWS else mode)
+                cells.append("" if r.method in UNCOMPENSATED_ROWS else mode)
             lines.append(",".join(cells))
         return "\n".join(lines) + "\n"
 
@@ -380,7 +383,7 @@ def plot_heading_table(table: HeadingTable, title: str = ""):
     from matplotlib.lines import Line2D
 
     refs = [r for r in table.rows if r.method in STAGE_ROWS]   # in every panel
-    methods = [r for r in table.rows if r.method not in REFERENCE_ROWS]
+    methods = [r for r in table.rows if r.method not in UNCOMPENSATED_ROWS]
     groups: dict[str, list[TableRow]] = {}
     for r in methods:
         groups.setdefault(r.group or "compensated", []).append(r)

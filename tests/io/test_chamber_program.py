@@ -80,7 +80,8 @@ def test_example_program_simulates_and_tabulates(tmp_path, cli):
     assert code == 0, err
     assert out.splitlines()[0].startswith("| method | 25 |")
     doc = json.loads((tmp_path / "t.json").read_text())
-    assert [r["method"] for r in doc["rows"]] == ["before", "stable", "floor"]
+    # the program ramps: the cycles after the start-up are named for what the chamber does
+    assert [r["method"] for r in doc["rows"]] == ["before", "held", "ramping", "floor"]
     res = run_scenario(load_scenario(p))
     assert res.northfind[0].n_cycles == 12
 

@@ -182,9 +182,11 @@ def test_baseline_with_compensation_and_without(tmp_path, cli, scenario_text):
     code, out, err = cli("table", scen, "-o", tmp_path / "b", "-q", "--baseline", base)
     assert code == 0, err
     comp = json.loads((tmp_path / "b" / "baseline_comparison.json").read_text())
-    # runs of 2600 s have no stable stage (5400 s on): no row of "-", a note says why
-    assert comp["methods"] == ["before", "LS", "floor"]
-    assert "No stable row: the runs (2600 s) end before the stable stage starts (5400 s)." in out
+    assert comp["methods"] == ["before", "LS", "stable", "floor"]
+    # runs of 2600 s have no stable stage (5400 s on): a row of "-", and a note says why
+    assert "| stable | - | - | - |" in out
+    assert ("stable: - at every start temperature: the runs (2600 s) end before the stable "
+            "stage starts (5400 s).") in out
     assert all(c["change_deg"] in (0.0, None) for c in comp["cells"])
     # the uncompensated table against the full one: the rows they share
     code, out, err = cli("table", scen, "-o", tmp_path / "c", "-q", "--no-compensation",
