@@ -1,4 +1,4 @@
-"""The one table of ranges: every value a user writes, its unit, what is impossible and what is usual.
+"""The one table of ranges: every value a user writes, its unit, what is impossible, what is usual.
 
 Every number of an instrument, a scenario, a chamber program, a sweep and a measurement
 sidecar has one :class:`Range` in :data:`RANGES`, found by its key path (:func:`find`):
@@ -49,8 +49,8 @@ from typing import Any, Iterator
 from .errors import InputError
 
 __all__ = ["Range", "RANGES", "RangeWarning", "find", "check", "check_tree", "leaves",
-           "warn", "warn_unusual", "one_line_warnings", "deferred_warnings", "MAX_SAMPLES_PER_RUN", "TEMPERATURE_RANGE_C",
-           "G_N_M_PER_S2", "KELVIN_OFFSET"]
+           "warn", "warn_unusual", "one_line_warnings", "deferred_warnings",
+           "MAX_SAMPLES_PER_RUN", "TEMPERATURE_RANGE_C", "G_N_M_PER_S2", "KELVIN_OFFSET"]
 
 #: 0 degC in kelvin (the offset of a temperature written in K).
 KELVIN_OFFSET = 273.15
@@ -63,9 +63,6 @@ G_N_M_PER_S2 = 9.80665
 #: 1.3 kB per sample at its peak (1e6 samples: 1.3 GB and about a minute), so 2e6 samples
 #: (23 days at 1 Hz, 2.3 days at 10 Hz) is the largest run a workstation is sure to allocate.
 MAX_SAMPLES_PER_RUN = 2_000_000
-
-_INF = math.inf
-
 
 @dataclass(frozen=True)
 class Range:
