@@ -37,7 +37,7 @@ __all__ = ["plot_drift_vs_temperature", "plot_residual_vs_time",
 #: Colour of the uncompensated row (the methods take C0, C1, ...).
 _BEFORE = "0.35"
 #: Width of a title line [characters].
-_WRAP = 120
+_WRAP = 140
 
 
 def png_bytes(fig: Figure) -> bytes:

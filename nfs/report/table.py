@@ -249,9 +249,9 @@ class HeadingTable:
 
     def to_markdown(self, digits: int = 4) -> str:
         """A Markdown table (``-`` where nothing applies): method, one column per T0, mean;
-        with intervals also the mean's
-        95 % interval, the spread of the tuned rows over their seeds and the verdict against
-        the best row; notes and the key comparisons below (cells' intervals: CSV, JSON)."""
+        with intervals also the mean's 95 % interval, the spread of the tuned rows over
+        their seeds and the verdict against the best row; notes and the key comparisons
+        below (cells' intervals: CSV, JSON)."""
         ci = self._has_ci()
         seeds = any(r.seed_means_deg for r in self.rows)
         head = ["method", *self._labels(), "mean"] + (["95 % CI"] if ci else []) + \
@@ -373,10 +373,12 @@ def plot_heading_table(table: HeadingTable, title: str = ""):
     """Heading RMSE by start temperature as grouped bars, one panel per group of rows.
 
     Each panel holds the uncompensated stage rows (``before``, ``stable``, or ``held`` and
-    ``ramping`` under a chamber program; greys) beside at most seven compensated rows of one group (:attr:`TableRow.group`), in colours far apart
-    (a 14-row table in one panel needs near-identical colours); the white-noise ``floor`` is
-    a dashed line. Bars start from zero and carry their 95 % intervals when computed.
-    Returns a matplotlib Figure (made without pyplot, so no display is needed).
+    ``ramping`` under a chamber program; greys) beside at most seven compensated rows of one
+    group (:attr:`TableRow.group`), in colours far apart (a 14-row table in one panel needs
+    near-identical colours); the white-noise ``floor`` is a dashed line. Bars start from zero
+    and carry their 95 % intervals when computed; the legend, which names them, stands
+    beside each panel, never over its bars.  Returns a matplotlib Figure (made without
+    pyplot, so no display is needed).
     """
     from matplotlib import colormaps
     from matplotlib.figure import Figure
