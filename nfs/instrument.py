@@ -372,11 +372,11 @@ def _check_effect_targets(inst: Instrument, file: Any) -> None:
                 raise ScenarioError(msg, file=file, key=where)
 
 
-def _check_heating(network: Network, file: Any) -> None:
+def _check_heating(network: Network, file: Any, effects=()) -> None:
     """The steady-state rise of every node above the chamber under the nodes' constant
-    powers (G dT = P, the chamber as ground) against ``limits.steady_rise_k`` of
-    :mod:`nfs.ranges`; a powered part without a thermal path to the chamber would heat
-    without bound."""
+    powers and the effects' constant heat sources (G dT = P, the chamber as ground) against
+    ``limits.steady_rise_k`` of :mod:`nfs.ranges`; a powered part without a thermal path to
+    the chamber would heat without bound."""
     names = list(network.node_names)
     idx = {n: i for i, n in enumerate(names)}
     n = len(names)
@@ -390,6 +390,9 @@ def _check_heating(network: Network, file: Any) -> None:
             g[ends[0], ends[1]] -= c
             g[ends[1], ends[0]] -= c
     power = np.array([node.power_w for node in network.nodes])
+    for e in effects:
+        if e.name == "heat_source" and e.params.get("node") in idx:
+            power[idx[e.params["node"]]] += float(e.params["power"])
     # nodes with a path of non-zero conductance to the chamber
     grounded = np.zeros(n, bool)
     for link in network.links:
@@ -446,7 +449,7 @@ def _instrument_from_dict(d: dict[str, Any], file: Any) -> Instrument:
                       description=string(d, "description", "", file, ""))
     _check_effect_targets(inst, file)
     check_tree(d, file=file, error=ScenarioError)
-    _check_heating(network, file)
+    _check_heating(network, file, inst.effects)
     return inst
 
 

@@ -374,7 +374,7 @@ _TABLE: list[Range] = [
        magnitude=True),
     _R("effects.tilt_exact.*_deg", "deg", (0, 5), (0, 0.1), "a levelled platform is tilted by",
        f"{_PHYS} 4", ((1 / 60, 0.0, "arc-minutes"),), magnitude=True),
-    _R("effects.acc_bias_temperature.b_q1", "g/K", (0, 0.01), (1e-5, 5e-5),
+    _R("effects.acc_bias_temperature.b_q1", "g/K", (0, 1e-3), (1e-5, 5e-5),
        "a QFA's bias changes per kelvin by", f"{_PHYS} 4: 10-50 ug/K",
        ((1e-6, 0.0, "ug/K"),), magnitude=True, off=0.0),
     _R("effects.aux_linear.*", "channel units", (0, 1e9), (0, 1e9),

@@ -57,8 +57,8 @@ import numpy as np
 from ..docfields import document_fields
 from ..effects import check_geometry, load_effects_file
 from ..errors import EffectError, NfsError, ScenarioError
-from ..instrument import (Instrument, _aux, _check_effect_targets, load_instrument,
-                          parse_effects)
+from ..instrument import (Instrument, _aux, _check_effect_targets, _check_heating,
+                          load_instrument, parse_effects)
 from ..parameters import ParameterError, expand_paths
 from ..ranges import check_tree, deferred_warnings, find, warn_unusual
 from ..sensors import ORDERS, Schedule
@@ -580,6 +580,7 @@ def _check_work(temps, duration: float | None, chamber: ChamberProfile, fs: floa
     ``limits.samples_per_run`` of :mod:`nfs.ranges`, before any array is allocated."""
     r = find("limits.samples_per_run")
     key = "duration_s" if duration is not None else "chamber.program"
+    warned = False
     for t0 in temps:
         soak = chamber.soak_s(t0, 1.0 / fs)
         length = duration if duration is not None else chamber.powered_s(t0, 1.0 / fs)
@@ -589,10 +590,10 @@ def _check_work(temps, duration: float | None, chamber: ChamberProfile, fs: floa
         if r.impossible(n):
             raise ScenarioError(f"{what}, more than the {r.hard[1]:g} one run may hold "
                                 f"({r.source})", file=file, key=key)
-        if r.unusual(n):
+        if r.unusual(n) and not warned:
             warn_unusual(f"{what}: slow (about a minute and 1.3 GB per million samples); "
                          "running anyway", file=file, key=key, once=("samples", n))
-            return
+            warned = True
 
 
 def _check_cutoff(cutoff_period_s: float, temps, duration: float | None,
@@ -686,6 +687,7 @@ def _load(path: Path, overrides, chain: tuple[Path, ...]) -> tuple[Scenario, dic
             effects = effects + parse_effects(d["added_effects"], f, "added_effects")
         inst = Instrument(**{**inst.__dict__, "effects": effects})
         _check_effect_targets(inst, f)
+        _check_heating(inst.network, f, inst.effects)
 
     sch = table(d, "schedule", "", f)
     check_keys(sch, _SCHEDULE, "schedule", f, required=("positions_deg", "dwell_s"))

@@ -283,6 +283,12 @@ def test_a_refused_file_shows_its_error_and_no_warning(tmp_path, cli):
     ("[[added_effects]]\nname = \"magnetic\"\nm = nan\nD_mag = 0.0\n", "added_effects[0].m",
      "finite"),
     ("[compensation]\nn_jobs = 0\n", "compensation.n_jobs", "must not be 0"),
+    ("[compensation]\nmethods = []\n", "compensation.methods", "at least one method"),
+    ("[compensation]\ncutoff_period_s = 100000.0\n", "compensation.cutoff_period_s",
+     "cannot be separated"),
+    # 99 W more on the board (1.2 W/K to the housing): a steady rise of about 160 K
+    ("[[added_effects]]\nname = \"heat_source\"\nnode = \"board\"\npower = 99.0\n",
+     "thermal.nodes.board", "steady-state rise"),
 ])
 def test_a_scenario_that_cannot_run_is_refused_before_any_work(tmp_path, cli, text, key, what):
     scen = _scenario(tmp_path, text)
@@ -401,6 +407,13 @@ def test_a_sidecar_in_kelvin_is_refused(simulated_run, tmp_path):
     with pytest.raises(MeasurementError, match="Kelvin") as exc:
         read_run(path)
     assert exc.value.key == "start_temperature_c"
+
+
+def test_a_required_column_with_no_value_is_refused(simulated_run, tmp_path):
+    path = _written(simulated_run, tmp_path, gyro_dph=lambda v: v * np.nan)
+    with pytest.raises(MeasurementError, match="every sample is missing") as exc:
+        read_run(path)
+    assert exc.value.column == "gyro_dph"
 
 
 def test_measured_kelvin_via_the_command_line_is_one_line(simulated_run, tmp_path, cli):
