@@ -25,7 +25,7 @@ import time
 from pathlib import Path
 
 from .errors import NfsError
-from .ranges import one_line_warnings
+from .ranges import check, one_line_warnings
 
 __all__ = ["main"]
 
@@ -319,6 +319,11 @@ def _cmd_northfind(args) -> int:
     for run in runs:
         res = north_find(run, tilt_correction=not args.no_tilt, settle_s=args.settle_s,
                          heading_hint_deg=args.heading_hint)
+        if res.n_missing:
+            print(f"nfs: warning: run '{run.name}': "
+                  + ", ".join(f"{n} samples without a {c} value" for c, n in
+                              res.n_missing.items())
+                  + " inside the dwells, left out of their dwell means", file=sys.stderr)
         known = res.true_heading_deg is not None
         st = heading_rmse(res, startup_end_s=args.startup_end_s,
                           stable_start_s=args.stable_start_s) if known else None
@@ -514,50 +519,93 @@ def _cmd_diagnose(args) -> int:
 
 def _cmd_preset(args) -> int:
     from .instrument import preset_names, preset_path
-    from .io.scenario import scenario_preset_names, scenario_preset_path
+    from .io.scenario import (scenario_preset_names, scenario_preset_path, sweep_preset_names,
+                              sweep_preset_path)
     if args.name is None:
         print("instruments (nfs preset NAME > my_instrument.toml):")
         print("\n".join(f"  {n}" for n in preset_names()))
-        print("scenarios (nfs preset NAME > my_scenario.toml; nfs init DIR writes both):")
+        print("scenarios (run by name from any folder: nfs table NAME; a copy to edit with "
+              "its instrument: nfs init DIR --from NAME):")
         print("\n".join(f"  {n}" for n in scenario_preset_names()))
+        print("sweeps (nfs sweep NAME -o DIR; nfs init DIR --from NAME):")
+        print("\n".join(f"  {n}" for n in sweep_preset_names()))
         return 0
     if args.name in scenario_preset_names():
         path = scenario_preset_path(args.name)
+    elif args.name in sweep_preset_names():
+        path = sweep_preset_path(args.name)
     elif args.name in preset_names():
         path = preset_path(args.name)
     else:
         raise NfsError(f"unknown preset '{args.name}'; instruments: "
                        f"{', '.join(preset_names())}; scenarios: "
-                       f"{', '.join(scenario_preset_names())}")
+                       f"{', '.join(scenario_preset_names())}; sweeps: "
+                       f"{', '.join(sweep_preset_names())}")
     sys.stdout.write(path.read_text(encoding="utf-8"))
     return 0
+
+
+def _set_key(text: str, key: str, value: str, comment: str) -> str:
+    """``text`` (TOML) with its top-level ``key = ...`` line set to the string ``value`` (added
+    after the first comment block when absent)."""
+    import re
+    line = f'{key} = "{value}"' + (f"      # {comment}" if comment else "")
+    m = re.search(rf'^{key}\s*=.*$', text, flags=re.MULTILINE)
+    if m is not None:
+        return text[:m.start()] + line + text[m.end():]
+    head = re.match(r'(?:#.*\n|\s*\n)*', text).end()
+    return text[:head] + line + "\n" + text[head:]
 
 
 def _cmd_init(args) -> int:
     import re
     from .instrument import preset_path
     from .io.atomic import atomic_write_files
-    from .io.scenario import load_scenario, scenario_preset_path
-    scen_text = scenario_preset_path(args.scenario).read_text(encoding="utf-8")
-    m = re.search(r'^instrument\s*=\s*"([^"]+)".*$', scen_text, flags=re.MULTILINE)
-    if m is None:  # every built-in scenario names its instrument preset
-        raise NfsError(f"scenario preset '{args.scenario}' names no instrument preset")
-    inst_text = preset_path(m.group(1)).read_text(encoding="utf-8")
-    scen_text = (scen_text[:m.start()] + 'instrument = "instrument.toml"      # the file beside '
-                 'this one (or a built-in preset name: nfs preset)' + scen_text[m.end():])
-    header = ("# Starter scenario written by `nfs init` from the built-in preset "
-              f"'{args.scenario}'.\n# Edit it and run:  nfs table scenario.toml -o results\n"
-              "# Its instrument is instrument.toml beside it (the preset "
-              f"'{m.group(1)}').\n#\n")
-    folder = _folder(args, "init")
+    from .io.scenario import (load_scenario, scenario_preset_names, scenario_preset_path,
+                              sweep_preset_names, sweep_preset_path)
+    from .sweep import load_sweep
+    name = args.source
     out = Path(args.output)
+    label = out.resolve().name or "my_unit"
+    files: dict[Path, str] = {}
+    if name in sweep_preset_names():
+        sweep_path = sweep_preset_path(name)
+        sweep_text = sweep_path.read_text(encoding="utf-8")
+        m = re.search(r'^scenario\s*=\s*"([^"]+)".*$', sweep_text, flags=re.MULTILINE)
+        scen_path = (sweep_path.parent / m.group(1)).resolve()
+        files[out / "sweep.toml"] = _set_key(sweep_text, "scenario", "scenario.toml",
+                                             "the file beside this one")
+        source = f"sweep preset '{name}'"
+    elif name in scenario_preset_names():
+        scen_path = scenario_preset_path(name)
+        source = f"scenario preset '{name}'"
+    else:
+        raise NfsError(f"--from {name}: no such scenario or sweep preset; scenarios: "
+                       f"{', '.join(scenario_preset_names())}; sweeps: "
+                       f"{', '.join(sweep_preset_names())}")
+    scen_text = scen_path.read_text(encoding="utf-8")
+    m = re.search(r'^instrument\s*=\s*"([^"]+)".*$', scen_text, flags=re.MULTILINE)
+    inst_preset = m.group(1) if m is not None else "default"
+    inst_text = _set_key(preset_path(inst_preset).read_text(encoding="utf-8"), "name", label,
+                         "your unit's name: reports compare models by it")
+    scen_text = _set_key(scen_text, "instrument", "instrument.toml",
+                         "the file beside this one (or a built-in preset name: nfs preset)")
+    scen_text = _set_key(scen_text, "name", label, "your experiment's name")
+    header = (f"# Written by `nfs init` from the built-in {source}.\n"
+              f"# Edit it and run:  nfs table scenario.toml -o results\n"
+              f"# Its instrument is instrument.toml beside it (the preset '{inst_preset}').\n#\n")
+    files[out / "scenario.toml"] = header + scen_text
+    files[out / "instrument.toml"] = inst_text
+    folder = _folder(args, "init")
     out.mkdir(parents=True, exist_ok=True)
-    atomic_write_files({out / "scenario.toml": header + scen_text,
-                        out / "instrument.toml": inst_text})
+    atomic_write_files(files)
     load_scenario(out / "scenario.toml")  # what was written loads (a check of the package)
-    _finish(folder, args, {"scenario_preset": args.scenario, "instrument_preset": m.group(1)})
-    print(f"wrote {out / 'scenario.toml'} and {out / 'instrument.toml'}; run: "
-          f"nfs table {out / 'scenario.toml'} -o {out / 'results'}")
+    if out / "sweep.toml" in files:
+        load_sweep(out / "sweep.toml")
+    _finish(folder, args, {"preset": name, "instrument_preset": inst_preset})
+    run = (f"nfs sweep {out / 'sweep.toml'} -o {out / 'sweep_results'}" if out / "sweep.toml"
+           in files else f"nfs table {out / 'scenario.toml'} -o {out / 'results'}")
+    print("wrote " + ", ".join(str(p) for p in files) + f"; run: {run}")
     return 0
 
 
@@ -849,9 +897,11 @@ def build_parser() -> argparse.ArgumentParser:
                                      "instrument preset it names), the scenario pointing at "
                                      "the instrument file: a start for your own experiment.")
     ini.add_argument("output", metavar="DIR", help="folder to write (made when missing)")
-    ini.add_argument("--scenario", default="startup_7temps",
-                     help="scenario preset to start from (default: startup_7temps; "
-                          "nfs preset lists them)")
+    ini.add_argument("--from", "--scenario", dest="source", default="startup_7temps",
+                     metavar="NAME",
+                     help="scenario or sweep preset to start from (default: startup_7temps; "
+                          "nfs preset lists them); its instrument comes along, and both "
+                          "are named after DIR")
     ini.add_argument("--overwrite", action="store_true",
                      help="write into a folder that holds other files")
     ini.set_defaults(func=_cmd_init)
@@ -887,6 +937,21 @@ def build_parser() -> argparse.ArgumentParser:
     return p
 
 
+#: Numeric options checked against the table of ranges (nfs.ranges) before any work, as
+#: the same values are when a file gives them: option attribute -> the file's key.
+_OPTION_RANGES = {"repeats": "repeats", "seed": "seed", "settle_s": "northfind.settle_s",
+                  "startup_end_s": "northfind.startup_end_s",
+                  "stable_start_s": "northfind.stable_start_s"}
+
+
+def _check_options(args) -> None:
+    """Every numeric option of ``_OPTION_RANGES`` the command has, against its range."""
+    for attr, key in _OPTION_RANGES.items():
+        value = getattr(args, attr, None)
+        if value is not None:
+            check(key, value, key=f"--{attr.replace('_', '-')}")
+
+
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``nfs`` console script; returns the exit code."""
     parser = build_parser()
@@ -894,6 +959,7 @@ def main(argv: list[str] | None = None) -> int:
     args.argv = list(sys.argv[1:] if argv is None else argv)
     try:
         with one_line_warnings():             # an unusual input value: one line, then on
+            _check_options(args)
             return args.func(args)
     except NfsError as exc:
         print(f"nfs: error: {exc}", file=sys.stderr)

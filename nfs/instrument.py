@@ -21,7 +21,7 @@ from .effects import EffectInstance, check_geometry, make_effect
 from .effects.thermometer import THERMOMETERS
 from .errors import EffectError, ScenarioError, ThermalError
 from .io.tomlio import (check_keys, dumps_toml, load_toml, number, string, table)
-from .ranges import check, check_tree, deferred_warnings
+from .ranges import check, check_tree, deferred_warnings, warn_unusual
 from .sensors import ThermometerModel
 
 __all__ = [
@@ -478,4 +478,22 @@ def load_instrument(name_or_path: str | Path, base: Path | None = None) -> Instr
         if base is not None and not path.is_absolute():
             path = base / path
     with deferred_warnings():
-        return instrument_from_dict(load_toml(path), file=path)
+        inst = instrument_from_dict(load_toml(path), file=path)
+        return _own_name(inst, path)
+
+
+def _own_name(inst: Instrument, path: Path) -> Instrument:
+    """A copy of a built-in preset keeps the preset's ``name`` (``nfs preset default >
+    my.toml``), and every later report would compare 'default' with 'default': such a file
+    is named after itself (``my``), with one warning line saying how to choose."""
+    if inst.name not in preset_names():
+        return inst
+    try:
+        if path.resolve() == preset_path(inst.name).resolve():
+            return inst
+    except OSError:
+        pass
+    warn_unusual(f"name = \"{inst.name}\" is the built-in preset's; this instrument is called "
+                 f"'{path.stem}' (write name = \"...\" to choose)", file=path, key="name",
+                 once=("name", str(path)))
+    return replace(inst, name=path.stem)

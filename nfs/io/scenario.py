@@ -68,7 +68,8 @@ from .chamber import ChamberProgram, check_temperature, parse_program
 from .tomlio import check_keys, load_toml, number, number_list, string, table
 
 __all__ = ["NorthFindSettings", "ChamberProfile", "Scenario", "load_scenario",
-           "default_scenario_path", "scenario_preset_names", "scenario_preset_path"]
+           "default_scenario_path", "scenario_preset_names", "scenario_preset_path",
+           "sweep_preset_names", "sweep_preset_path", "scenario_file"]
 
 _TOP = ("name", "description", "base", "instrument", "seed", "start_temperatures_c", "repeats",
         "duration_s", "sample_rate_hz", "latitude_deg", "true_heading_deg", "effects_files",
@@ -277,16 +278,26 @@ class Scenario:
         return tuple(train_units), tuple(test_units)
 
 
+def _preset_dir(kind: str) -> Path:
+    """Where the built-in scenarios (``kind = "scenarios"``) or sweeps (``"sweeps"``) are:
+    the package's ``presets/scenarios`` (the repository's ``scenarios/`` folder, shipped)."""
+    root = Path(str(resources.files("nfs") / "presets" / "scenarios"))
+    return root if kind == "scenarios" else root / "sweeps"
+
+
 def default_scenario_path() -> Path:
     """The built-in default scenario (the FOG start-up paper's seven start temperatures)."""
-    return Path(str(resources.files("nfs") / "presets" / "startup_7temps.toml"))
+    return _preset_dir("scenarios") / "startup_7temps.toml"
 
 
 def scenario_preset_names() -> list[str]:
     """Names of the built-in scenario presets (``nfs preset`` lists them)."""
-    root = resources.files("nfs") / "presets"
-    return sorted(p.name[: -len(".toml")] for p in root.iterdir()
-                  if p.name.endswith(".toml") and not p.name.endswith("_instrument.toml"))
+    return sorted(p.stem for p in _preset_dir("scenarios").glob("*.toml"))
+
+
+def sweep_preset_names() -> list[str]:
+    """Names of the built-in sweep presets (``nfs preset`` lists them)."""
+    return sorted(p.stem for p in _preset_dir("sweeps").glob("*.toml"))
 
 
 def scenario_preset_path(name: str) -> Path:
@@ -294,7 +305,28 @@ def scenario_preset_path(name: str) -> Path:
     if name not in scenario_preset_names():
         raise ScenarioError(f"unknown scenario preset '{name}'; presets: "
                             + ", ".join(scenario_preset_names()))
-    return Path(str(resources.files("nfs") / "presets" / f"{name}.toml"))
+    return _preset_dir("scenarios") / f"{name}.toml"
+
+
+def sweep_preset_path(name: str) -> Path:
+    """Path of a built-in sweep preset."""
+    if name not in sweep_preset_names():
+        raise ScenarioError(f"unknown sweep preset '{name}'; presets: "
+                            + ", ".join(sweep_preset_names()))
+    return _preset_dir("sweeps") / f"{name}.toml"
+
+
+def scenario_file(path_or_name: str | Path, kind: str = "scenarios") -> Path:
+    """The file a command is given: a path, or the name of a built-in preset (``nfs table
+    seed003_ramp_calibration`` from any folder).  A path that does not exist and names no
+    preset is returned as it is (its reader says it is missing)."""
+    p = Path(path_or_name)
+    if p.exists() or p.suffix.lower() == ".toml" or len(p.parts) > 1:
+        return p
+    names = scenario_preset_names() if kind == "scenarios" else sweep_preset_names()
+    if p.name in names:
+        return (scenario_preset_path if kind == "scenarios" else sweep_preset_path)(p.name)
+    return p
 
 
 def _bool(tbl, key, prefix, file, default):
@@ -641,7 +673,7 @@ def load_scenario(path: str | Path | None = None,
     ``overrides`` ({dotted key: value}, keys of :data:`OVERRIDE_KEYS`) replace values of the
     file before it is checked, as if the file said so (``{"schedule.dwell_s": 60.0}``).
     """
-    path = default_scenario_path() if path is None else Path(path)
+    path = default_scenario_path() if path is None else scenario_file(path)
     with deferred_warnings():
         return _load(path, overrides, (path.resolve(),))[0]
 
@@ -667,6 +699,12 @@ def _load(path: Path, overrides, chain: tuple[Path, ...]) -> tuple[Scenario, dic
         except EffectError as exc:
             raise ScenarioError(str(exc), file=f, key="effects_files") from None
     inst_ref = string(d, "instrument", "", f, "default")
+    inst_path = Path(inst_ref) if Path(inst_ref).is_absolute() else base / inst_ref
+    if (inst_ref.endswith(".toml") or "/" in inst_ref or "\\" in inst_ref) \
+            and not inst_path.is_file():
+        raise ScenarioError(f"the instrument file {inst_path} does not exist (a path is taken "
+                            "relative to this scenario's folder; a preset is named without "
+                            ".toml: nfs preset lists them)", file=f, key="instrument")
     try:
         inst = load_instrument(inst_ref, base=base)
     except ScenarioError as exc:

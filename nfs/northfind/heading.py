@@ -79,6 +79,9 @@ class NorthFindResult:
     acc_bias_g: np.ndarray | None = None
     """Accelerometer biases (b_x, b_y) fitted with U_T in each cycle, (n_cycles, 2) [g]
     (NaN when tilt correction is off)."""
+    n_missing: dict[str, int] | None = None
+    """Samples inside the dwells with no value, by column (``gyro_dph``, ``acc_x_g``,
+    ``acc_y_g``): left out of their dwell means (a dwell without any is NaN)."""
 
     @property
     def n_cycles(self) -> int:
@@ -173,6 +176,10 @@ def north_find(run: Run, *, tilt_correction: bool = True, settle_s: float = 0.0,
     shape = (n_cyc, n_pos)
     theta = np.array([d.theta_deg for d in dwells]).reshape(shape)
     rate = _dwell_means(gyro, idx, owner, len(dwells)).reshape(shape)
+    missing = {gyro_column: int(np.count_nonzero(~np.isfinite(gyro[idx])))}
+    for col in ("acc_x_g", "acc_y_g"):
+        if col in run.columns:
+            missing[col] = int(np.count_nonzero(~np.isfinite(_column(run, col)[idx])))
     if tilt_correction or "acc_x_g" in run.columns:
         acc_x = _dwell_means(_column(run, "acc_x_g"), idx, owner, len(dwells)).reshape(shape)
     else:
@@ -223,7 +230,8 @@ def north_find(run: Run, *, tilt_correction: bool = True, settle_s: float = 0.0,
         theta_deg=_frozen(theta), rate_dph=_frozen(rate), acc_x_g=_frozen(acc_x),
         true_heading_deg=true, latitude_deg=float(meta.latitude_deg),
         tilt_correction=bool(tilt_correction), ambiguous=bool(ambiguous),
-        up_table=_frozen(up), acc_y_g=_frozen(acc_y), acc_bias_g=_frozen(bias))
+        up_table=_frozen(up), acc_y_g=_frozen(acc_y), acc_bias_g=_frozen(bias),
+        n_missing={k: v for k, v in missing.items() if v})
 
 
 @document_fields

@@ -50,7 +50,7 @@ from scipy.stats import qmc
 
 from ..compensate.methods import get_method
 from ..errors import InputError, NfsError
-from ..io.scenario import OVERRIDE_KEYS, Scenario, load_scenario
+from ..io.scenario import OVERRIDE_KEYS, Scenario, load_scenario, scenario_file
 from ..io.tomlio import check_keys, load_toml
 from ..northfind.spec import DEFAULT_WINDOW
 from ..parameters import canonical_path, param_paths, set_params
@@ -227,6 +227,26 @@ def _number(v) -> bool:
     return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
 
 
+def _unknown_axis(key: str, sc: Scenario, valid: list[str]) -> str:
+    """Why ``key`` is no axis, in the words of the files: an effect the instrument lacks, a
+    near miss, or what an axis may be."""
+    parts = key.split(".")
+    if parts[0] == "effects" and len(parts) > 1:
+        label = parts[1]
+        have = sorted({e.label for e in sc.instrument.effects})
+        if label not in have and label.split(":")[0] not in {e.name for e in
+                                                             sc.instrument.effects}:
+            return (f"the scenario's instrument '{sc.instrument.name}' has no effect "
+                    f"'{label}' (it has: {', '.join(have)}); add it to the instrument's "
+                    "[[effects]] first, then sweep its parameter")
+    close = difflib.get_close_matches(key, [*OVERRIDE_KEYS, *valid], n=4, cutoff=0.6)
+    scenario_keys = ", ".join(sorted(OVERRIDE_KEYS)[:6])
+    return ("neither a key of the scenario file nor a parameter of its instrument"
+            + (f"; did you mean {' or '.join(close)}?" if close else "")
+            + f" (scenario keys such as {scenario_keys}, ...; instrument parameters as "
+            "`nfs fit --free` names them, e.g. thermal.nodes.board.power_w)")
+
+
 def _axis(key: str, v: Any, sc: Scenario, scenario_path, file) -> Axis:
     name = f"axes.{key}"
     if key == "seed":
@@ -239,12 +259,7 @@ def _axis(key: str, v: Any, sc: Scenario, scenario_path, file) -> Axis:
         try:
             key = canonical_path(sc.instrument, key, set(valid))
         except NfsError:
-            close = difflib.get_close_matches(key, [*OVERRIDE_KEYS, *valid], n=4, cutoff=0.6)
-            raise SweepError(
-                "neither a scenario key nor an instrument parameter"
-                + (f"; did you mean {' or '.join(close)}?" if close else "")
-                + " (scenario keys: nfs.io.scenario.OVERRIDE_KEYS; instrument parameters: "
-                "nfs.parameters.list_params)", file=file, key=name) from None
+            raise SweepError(_unknown_axis(key, sc, valid), file=file, key=name) from None
         target = "instrument"
     if isinstance(v, dict):
         check_keys(v, _RANGE, name, file, required=("low", "high"))
@@ -385,8 +400,9 @@ def _sweep_from_dict(d: dict[str, Any], file: Path | None, base: Path | None) ->
 
 
 def load_sweep(path: str | Path) -> SweepSpec:
-    """Read and check a sweep file (module docstring); :class:`SweepError` on any fault."""
-    path = Path(path)
+    """Read and check a sweep file, or a built-in sweep preset by name (module docstring);
+    :class:`SweepError` on any fault."""
+    path = scenario_file(path, "sweeps")
     try:
         d = load_toml(path)
     except InputError as exc:
