@@ -17,6 +17,7 @@
 from __future__ import annotations
 
 import argparse
+import os
 import dataclasses
 import json
 import math
@@ -703,6 +704,10 @@ def build_parser() -> argparse.ArgumentParser:
     t.add_argument("--tolerance", type=float, default=None,
                    help="relative change a worse cell must also exceed (default 0.05: 5 %%)")
     t.add_argument("-q", "--quiet", action="store_true", help="no progress on stderr")
+    t.add_argument("--trust-effects", action="store_true",
+                    help="let the scenario's effects_files (Python files of your own "
+                         "effects) run; read them first: a scenario file does not run code "
+                         "otherwise")
     t.add_argument("--overwrite", action="store_true",
                    help="replace an existing --json file, and write into a folder that holds "
                         "another command's output or files of unknown origin (files of the "
@@ -765,6 +770,10 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--seed", type=int, default=None, help="override the scenario's seed")
     s.add_argument("--repeats", type=int, default=None, help="override runs per temperature")
     s.add_argument("-q", "--quiet", action="store_true", help="no progress on stderr")
+    s.add_argument("--trust-effects", action="store_true",
+                    help="let the scenario's effects_files (Python files of your own "
+                         "effects) run; read them first: a scenario file does not run code "
+                         "otherwise")
     s.add_argument("--overwrite", action="store_true",
                     help="write into a folder that holds another command's output or files "
                          "of unknown origin (files of the earlier output that are not "
@@ -923,6 +932,10 @@ def build_parser() -> argparse.ArgumentParser:
     sw.add_argument("sweep", help="sweep TOML file")
     sw.add_argument("-o", "--output", required=True, metavar="DIR",
                     help="the sweep's folder (cells/, results.csv, figures); reused by a rerun")
+    sw.add_argument("--trust-effects", action="store_true",
+                    help="let the scenario's effects_files (Python files of your own "
+                         "effects) run; read them first: a scenario file does not run code "
+                         "otherwise")
     sw.add_argument("--jobs", type=int, default=-1, metavar="N",
                     help="local worker processes (default -1: every core; 1: this process)")
     sw.add_argument("--dask-local", type=int, default=None, metavar="N",
@@ -957,6 +970,9 @@ def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     args.argv = list(sys.argv[1:] if argv is None else argv)
+    if getattr(args, "trust_effects", False):   # a scenario's effects_files may run
+        from .io.scenario import TRUST_EFFECTS_ENV  # lazy: nfs --help stays fast
+        os.environ[TRUST_EFFECTS_ENV] = "1"
     try:
         with one_line_warnings():             # an unusual input value: one line, then on
             _check_options(args)

@@ -4,11 +4,12 @@
 import numpy as np
 import pytest
 
-from nfs.effects import make_effect
+from nfs.effects import available_effects, make_effect
+from nfs.errors import ScenarioError
 from nfs.experiment import RunConditions, simulate_run
 from nfs.instrument import load_instrument
 from nfs.io.measurement import read_run, write_run
-from nfs.io.scenario import load_scenario
+from nfs.io.scenario import TRUST_EFFECTS_ENV, load_scenario
 from nfs.sensors import Schedule
 
 SCHED = Schedule((0.0, 90.0, 180.0, 270.0), dwell_s=150.0, move_s=10.0)
@@ -83,7 +84,7 @@ def test_same_seed_same_bytes(tmp_path, inst):
     assert run.meta.true_heading_deg == 123.4 and run.meta.positions_deg == (0, 90, 180, 270)
 
 
-def test_scenario_with_user_effect(tmp_path):
+def test_scenario_with_user_effect(tmp_path, monkeypatch):
     (tmp_path / "fx.py").write_text(
         "from nfs.effects import register_effect, Parameter\n"
         "@register_effect('test_step_bias', kind='gyro',\n"
@@ -97,6 +98,11 @@ def test_scenario_with_user_effect(tmp_path):
         "start_temperatures_c = [20.0]\nduration_s = 700.0\n"
         "[schedule]\npositions_deg = [0, 90, 180, 270]\ndwell_s = 150.0\n"
         "[[effects]]\nname = 'test_step_bias'\nstep = 0.5\nat = 100.0\n")
+    # a scenario does not run code because it was loaded: refused until the user trusts it
+    with pytest.raises(ScenarioError, match="does not run code"):
+        load_scenario(tmp_path / "s.toml")
+    assert "test_step_bias" not in available_effects()
+    monkeypatch.setenv(TRUST_EFFECTS_ENV, "1")
     sc = load_scenario(tmp_path / "s.toml")
     assert [e.name for e in sc.instrument.effects] == ["test_step_bias"]
     r = simulate_run(sc.instrument, sc.conditions()[0])

@@ -13,7 +13,8 @@ registered exactly like a built-in one::
         '''Rate error k (T_coil - T_coil(0)) [deg/h]. ...'''
         return k * (ctx.coil_c - ctx.coil_c[0])
 
-Such a file is named in a scenario (``effects_files = ["my_effects.py"]``) or exposed as an
+Such a file is named in a scenario (``effects_files = ["my_effects.py"]``, run only when the
+user trusts it: ``--trust-effects``) or exposed as an
 entry point in the group ``nfs.effects``.
 
 Kinds and call signatures

@@ -44,6 +44,8 @@ the shortest run can be separated at, distinct start temperatures.
 
 from __future__ import annotations
 
+import os
+
 import copy
 import dataclasses
 import math
@@ -69,7 +71,7 @@ from .tomlio import check_keys, load_toml, number, number_list, string, table
 
 __all__ = ["NorthFindSettings", "ChamberProfile", "Scenario", "load_scenario",
            "default_scenario_path", "scenario_preset_names", "scenario_preset_path",
-           "sweep_preset_names", "sweep_preset_path", "scenario_file"]
+           "sweep_preset_names", "sweep_preset_path", "scenario_file", "TRUST_EFFECTS_ENV"]
 
 _TOP = ("name", "description", "base", "instrument", "seed", "start_temperatures_c", "repeats",
         "duration_s", "sample_rate_hz", "latitude_deg", "true_heading_deg", "effects_files",
@@ -665,6 +667,12 @@ def _overridden(d: dict, overrides: dict[str, Any], file) -> dict:
     return d
 
 
+#: The environment variable that lets a scenario's ``effects_files`` run (``nfs ...
+#: --trust-effects`` sets it, so that a sweep's worker processes inherit it): a scenario
+#: passed between colleagues must not run code because it was loaded.
+TRUST_EFFECTS_ENV = "NFS_TRUST_EFFECTS_FILES"
+
+
 def load_scenario(path: str | Path | None = None,
                   overrides: dict[str, Any] | None = None) -> Scenario:
     """Read and check a scenario file (the built-in default when ``path`` is None), with
@@ -692,6 +700,12 @@ def _load(path: Path, overrides, chain: tuple[Path, ...]) -> tuple[Scenario, dic
     files = d.get("effects_files", [])
     if not isinstance(files, list) or not all(isinstance(x, str) for x in files):
         raise ScenarioError("must be a list of Python file paths", file=f, key="effects_files")
+    if files and os.environ.get(TRUST_EFFECTS_ENV) != "1":
+        raise ScenarioError(
+            "names Python files to run (" + ", ".join(files) + "): a scenario file does not "
+            "run code on its own; after reading them, give --trust-effects on the command "
+            f"line (or set {TRUST_EFFECTS_ENV}=1 for a Python script and its workers)",
+            file=f, key="effects_files")
     for name in files:
         p = Path(name) if Path(name).is_absolute() else base / name
         try:
