@@ -1,6 +1,7 @@
 """The nfs command: outputs, JSON form, and one-line errors with exit code 2 on bad input."""
 
 import argparse
+import dataclasses
 import json
 import subprocess
 import sys
@@ -91,7 +92,13 @@ def test_preset_and_effects(cli):
     code, out, _ = cli("preset", "startup_7temps")
     assert code == 0 and out == default_scenario_path().read_text()
     code, out, _ = cli("preset")
-    assert out.split("scenarios")[1].split()[-1] == "startup_7temps"
+    scenarios = out.split("scenarios (")[1].split("sweeps (")[0].splitlines()[1:]
+    assert [s.strip() for s in scenarios][-3:] == ["startup_7temps", "startup_7temps_fleet",
+                                                   "startup_7temps_precise"]
+    assert out.split("sweeps (")[1].splitlines()[1:] == ["  dwell_positions", "  latitude",
+                                                          "  time_to_spec"]
+    code, out, _ = cli("preset", "latitude")
+    assert code == 0 and "latitude_deg = [" in out
 
 
 def test_init_writes_a_starter_that_runs(tmp_path, cli):
@@ -102,17 +109,27 @@ def test_init_writes_a_starter_that_runs(tmp_path, cli):
     assert 'instrument = "instrument.toml"' in scen and scen.count("\n#") > 10  # comments kept
     from nfs.instrument import preset_path
     from nfs.io.scenario import load_scenario
-    assert (d / "instrument.toml").read_text() == preset_path("default").read_text()
+    # the preset's text, named after the folder (every later report names the unit)
+    inst = (d / "instrument.toml").read_text()
+    assert inst.replace('name = "mine"      # your unit\'s name: reports compare models by it',
+                        'name = "default"') == preset_path("default").read_text()
     sc, ref = load_scenario(d / "scenario.toml"), load_scenario()
+    assert sc.name == "mine" and sc.instrument.name == "mine"
     # the starter is the default experiment, its instrument read from the file beside it
-    assert sc.instrument.to_toml() == ref.instrument.to_toml()
+    assert sc.instrument.to_toml() == dataclasses.replace(ref.instrument, name="mine").to_toml()
     assert sc.start_temperatures_c == ref.start_temperatures_c and sc.seed == ref.seed
     # a second init into the folder, now holding the user's edits, is refused
     (d / "notes.md").write_text("mine")
     code, _, err = cli("init", d)
     assert one_line_error(code, err) and "notes.md" in err
-    code, _, err = cli("init", tmp_path / "x", "--scenario", "nope")
-    assert "unknown scenario preset 'nope'" in one_line_error(code, err)
+    code, _, err = cli("init", tmp_path / "x", "--from", "nope")
+    assert "--from nope: no such scenario or sweep preset" in one_line_error(code, err)
+    # a paper's scenario (no instrument line) and a sweep come with their instrument
+    code, _, err = cli("init", tmp_path / "paper", "--from", "seed001_ramps")
+    assert code == 0, err
+    assert load_scenario(tmp_path / "paper" / "scenario.toml").instrument.name == "paper"
+    code, _, err = cli("init", tmp_path / "lat", "--from", "latitude")
+    assert code == 0 and (tmp_path / "lat" / "sweep.toml").exists(), err
 
 
 # ---------------------------------------------------------------- bad scenario files

@@ -46,8 +46,8 @@ def test_instrument_names_a_measured_channel_it_does_not_simulate(tmp_path):
     with aux_linear on an undeclared channel gives the same effect; simulating it raises
     one EffectError naming the effect, the channel and the fix."""
     default = load_instrument("default")
-    fitted = default.with_effects(list(default.effects) + [make_effect(
-        "aux_linear", {"channel": "aux_source_current_ma", "k": K})])
+    fitted = dataclasses.replace(default.with_effects(list(default.effects) + [make_effect(
+        "aux_linear", {"channel": "aux_source_current_ma", "k": K})]), name="unit 7 fitted")
     path = tmp_path / "fitted.toml"
     path.write_text(fitted.to_toml(), encoding="utf-8")
     back = load_instrument(path)

@@ -207,13 +207,10 @@ def test_the_default_world_names_nothing():
     floor).  Measured on this seed: a tie of a 1.6 W housing heat source (Holm p 0.048
     against the model: the unit's internal conductances, scattered by 15 %, are not free)
     with the QFA y thermometer reading part of the housing, an honest "cannot tell apart";
-    seed 12 answers "nothing beyond noise"."""
+    the slow test below runs seeds 11-20."""
     d, adequate = _clean_set(11)
     assert d.answer.kind in ("nothing", "tie"), d.verdict
     assert adequate
-    d12, adequate12 = _clean_set(12)
-    assert d12.answer.kind == "nothing", d12.verdict
-    assert adequate12
 
 
 @pytest.mark.slow
