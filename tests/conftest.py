@@ -1,8 +1,17 @@
 """Fixtures shared by the test modules."""
 
+import os
+
 import pytest
+from threadpoolctl import threadpool_limits
 
 from nfs.cli import main
+
+if os.environ.get("PYTEST_XDIST_WORKER"):
+    # Each pytest-xdist worker is one of the run's processes: a BLAS pool per worker as
+    # well would oversubscribe the cores (two workers of two threads on two cores spend
+    # their time waiting on each other).
+    threadpool_limits(1)
 
 
 @pytest.fixture

@@ -15,6 +15,7 @@ def load(name):
     return mod
 
 
+@pytest.mark.slow  # the whole loop on 7 runs; tests/diagnose checks each step by default
 def test_missing_effect_example(tmp_path):
     """Runs of the independent generator (not our simulator) with a hidden magnetic bias
     (m = 0.012 deg/h, D_mag = 40 deg; 1.2x the drift noise floor).  Oracle: the hidden

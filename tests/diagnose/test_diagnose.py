@@ -311,6 +311,7 @@ def test_effect_outside_the_library(scenario, default):
     assert u["cross_correlation"][0]["max_abs_r"] > 0.5
 
 
+@pytest.mark.slow  # a second fit of every run with another network
 def test_ranking_survives_a_model_with_another_node_count(scenario, default):
     # Oracle: the data come from the default 7-node instrument with a hidden shupe_product;
     # the model has 8 nodes (a mounting plate between the housing and the chamber), is

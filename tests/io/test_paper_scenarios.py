@@ -83,6 +83,7 @@ def test_ramps_table_has_the_shape_of_cheng_et_al(tmp_path, cli):
     assert "Cheng et al. 2015" in out
 
 
+@pytest.mark.slow  # 9 ramp runs and every method; the cycle and parameter tables run by default
 def test_ramp_calibration_table_has_the_shape_of_liang_et_al(tmp_path, cli):
     # Oracle: Liang et al. 2021: the temperature models of the calibrated parameters beat a
     # constant (R^2 near 1 for the biases), and the predicted biases are what a schedule
