@@ -43,6 +43,7 @@ from typing import Callable
 
 import numpy as np
 from joblib import Parallel, delayed
+from threadpoolctl import threadpool_limits
 
 from ..denoise import earth_rate_projection_dph, separate_drift
 from ..errors import NfsError
@@ -333,7 +334,10 @@ def _drift_study(scenario, s, specs, train, test, n_boot, tick, spans,
     comps: dict[str, DriftCompensator] = {}
     preds = {UNCOMPENSATED: [np.full(r.n_samples, constant) for r in test]}
     order = sorted(specs, key=lambda sp: -sp.cost)
-    with Parallel(n_jobs=s.n_jobs, return_as="generator_unordered") as parallel:
+    # One BLAS thread: the trainings' matrices are small, and a thread pool beside joblib's
+    # workers (or in the one process of n_jobs=1) spins more than it computes.
+    with threadpool_limits(limits=1), \
+            Parallel(n_jobs=s.n_jobs, return_as="generator_unordered") as parallel:
         for j, comp, pred in parallel(delayed(train_and_predict)(
                 j, spec.key, data, s, s.random_state, plans) for j, spec in enumerate(order)):
             comps[order[j].name], preds[order[j].name] = comp, pred

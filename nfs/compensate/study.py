@@ -31,6 +31,7 @@ from typing import Any, Callable
 
 import numpy as np
 from joblib import Parallel, delayed
+from threadpoolctl import threadpool_limits
 from sklearn.exceptions import ConvergenceWarning
 
 from ..docfields import document_fields
@@ -412,7 +413,10 @@ def run_study(scenario, settings: CompensationSettings | None = None, *,
     order = sorted(range(len(jobs)), key=lambda j: -jobs[j][0].cost)
     done: dict[int, SeedResult] = {}
     fitted: dict[int, tuple] = {}
-    with Parallel(n_jobs=s.n_jobs, return_as="generator_unordered") as parallel:
+    # One BLAS thread: the trainings' matrices are small, and a thread pool beside joblib's
+    # workers (or in the one process of n_jobs=1) spins more than it computes.
+    with threadpool_limits(limits=1), \
+            Parallel(n_jobs=s.n_jobs, return_as="generator_unordered") as parallel:
         out = parallel(delayed(train_and_predict)(j, jobs[j][0].key, data, s, jobs[j][1],
                                                    plans) for j in order)
         for j, comp, preds in out:
