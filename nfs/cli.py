@@ -25,7 +25,7 @@ import sys
 import time
 from pathlib import Path
 
-from .errors import NfsError
+from .errors import NfsError, USER_ERRORS
 from .ranges import check, one_line_warnings
 
 __all__ = ["main"]
@@ -977,7 +977,7 @@ def main(argv: list[str] | None = None) -> int:
         with one_line_warnings():             # an unusual input value: one line, then on
             _check_options(args)
             return args.func(args)
-    except NfsError as exc:
+    except USER_ERRORS as exc:
         print(f"nfs: error: {exc}", file=sys.stderr)
         return EXIT_USAGE
     except BrokenPipeError:

@@ -9,6 +9,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from thermal.errors import ThermalError
+
 __all__ = [
     "NfsError",
     "InputError",
@@ -16,6 +18,7 @@ __all__ = [
     "ScenarioError",
     "EffectError",
     "ThermalError",
+    "USER_ERRORS",
 ]
 
 
@@ -73,5 +76,7 @@ class EffectError(NfsError):
     """An unknown effect name, a missing or unknown effect parameter, a bad target."""
 
 
-class ThermalError(NfsError):
-    """A thermal network that is not physical (negative capacity, unknown node, ...)."""
+#: Every error a user's input can cause: the package's own and the thermal network's (the
+#: thermal package stands alone and raises its own :class:`thermal.ThermalError`, a
+#: ValueError, for a network that is not physical). The CLI prints either as one line.
+USER_ERRORS = (NfsError, ThermalError)

@@ -8,6 +8,7 @@ the :class:`ThermalResult` labels every node and carries the energy bookkeeping.
 through the network (Kalman filter and smoother, thermal/estimate.py).
 """
 
+from thermal.errors import ThermalError
 from thermal.network import CHAMBER, Link, Network, Node
 from thermal.solve import ThermalResult, simulate
 from thermal.batch import simulate_many
@@ -15,6 +16,6 @@ from thermal.estimate import (LinearSensor, NodeEstimate, ProcessNoiseFit, State
                               StatePower, ThermalRecord, estimate_states,
                               fit_process_noise, kalman_smooth)
 
-__all__ = ["CHAMBER", "Node", "Link", "Network", "simulate", "simulate_many", "ThermalResult",
+__all__ = ["ThermalError", "CHAMBER", "Node", "Link", "Network", "simulate", "simulate_many", "ThermalResult",
            "LinearSensor", "ThermalRecord", "StatePower", "NodeEstimate", "ProcessNoiseFit",
            "StateEstimate", "kalman_smooth", "fit_process_noise", "estimate_states"]

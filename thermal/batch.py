@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from nfs.errors import ThermalError
+from thermal.errors import ThermalError
 from thermal.network import Network
 from thermal.solve import (AMBIENT_HOLDS, PowerLaw, StepMatrices, ThermalResult, _as_ambient,
                            _as_time, _check_power_array, _result, _step_classes, _step_maps,

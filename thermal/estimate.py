@@ -78,7 +78,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import minimize, minimize_scalar
 
-from nfs.errors import ThermalError
+from thermal.errors import ThermalError
 from thermal import kalman
 from thermal.network import Network, index_of
 

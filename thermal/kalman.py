@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from scipy.linalg import expm
 
-from nfs.errors import ThermalError
+from thermal.errors import ThermalError
 from thermal.network import Network, index_of
 from thermal.solve import step_matrices
 

@@ -26,7 +26,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from nfs.errors import ThermalError
+from thermal.errors import ThermalError
 
 __all__ = ["CHAMBER", "Node", "Link", "Network"]
 

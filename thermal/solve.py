@@ -60,7 +60,7 @@ import numpy as np
 from scipy.linalg import expm, eigh
 from scipy.signal import lfilter
 
-from nfs.errors import ThermalError
+from thermal.errors import ThermalError
 from thermal.network import Network, index_of
 
 __all__ = ["ThermalResult", "simulate", "step_matrices", "StepMatrices", "AMBIENT_HOLDS"]

@@ -104,7 +104,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from ..errors import NfsError, ThermalError
+from ..errors import USER_ERRORS, NfsError, ThermalError
 from ..instrument import Instrument
 from ..io.measurement import Run
 from .adequacy import MODEL_RIVAL, structure_rival, thermal_adequacy
@@ -420,7 +420,7 @@ def diagnose_candidates(inst: Instrument, runs: Sequence[Run], *, n_boot: int = 
     if node_temperatures == "smoothed":
         try:
             sm = smooth_runs(inst, runs, decimate_s=decimate_s, start_c=start_c)
-        except NfsError as exc:
+        except USER_ERRORS as exc:
             # a filter these runs leave ill-conditioned: the model's own node temperatures,
             # and the diagnosis says so
             node_info.update(source="model", smoother_failed=str(exc))

@@ -217,7 +217,7 @@ def free_link(inst: Instrument, a: str, b: str) -> StructuralAlternative:
     """A new conductance G [W/K] between nodes a and b, from 0 (bounds 0..5 W/K)."""
     net = inst.network
     for n in (a, b):
-        net.index(n)  # ThermalError (an NfsError) listing the valid nodes
+        net.index(n)  # thermal.ThermalError (one of USER_ERRORS) listing the valid nodes
     if any({l.a, l.b} == {a, b} for l in net.links):
         raise NfsError(f"free_link: {a} and {b} are linked already in '{inst.name}'")
     new = replace(inst, network=Network(net.nodes, net.links + (Link(a, b, 0.0),)))

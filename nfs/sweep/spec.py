@@ -49,7 +49,7 @@ import numpy as np
 from scipy.stats import qmc
 
 from ..compensate.methods import get_method
-from ..errors import InputError, NfsError
+from ..errors import USER_ERRORS, InputError, NfsError
 from ..io.scenario import OVERRIDE_KEYS, Scenario, load_scenario, scenario_file
 from ..io.tomlio import check_keys, load_toml
 from ..northfind.spec import DEFAULT_WINDOW
@@ -306,7 +306,7 @@ def _check_value(axis: Axis, value: Any, sc: Scenario, scenario_path, file) -> N
             set_params(sc.instrument, {axis.key: value})
     except SweepError:
         raise
-    except NfsError as exc:
+    except USER_ERRORS as exc:
         raise _located(exc, file, name, f"value {value!r}: ") from None
 
 
@@ -330,7 +330,7 @@ def _sweep_from_dict(d: dict[str, Any], file: Path | None, base: Path | None) ->
         scenario_path = Path(ref) if Path(ref).is_absolute() else (base or Path.cwd()) / ref
     try:
         sc = load_scenario(scenario_path)
-    except NfsError as exc:
+    except USER_ERRORS as exc:
         raise SweepError(f"the scenario does not load: {exc}", file=file,
                          key="scenario") from None
     seeds = _seeds(d["seeds"], file)

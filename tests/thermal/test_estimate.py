@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 from scipy.linalg import expm
 
-from nfs.errors import ThermalError
+from thermal import ThermalError
 from nfs.signal import first_order_lag
 from thermal import (CHAMBER, Link, LinearSensor, Network, Node, ThermalRecord,
                      fit_process_noise, kalman_smooth, simulate)

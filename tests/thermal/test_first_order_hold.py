@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from nfs.errors import ThermalError
+from thermal import ThermalError
 from thermal import CHAMBER, Link, Network, Node, simulate
 from thermal_networks import seven_nodes
 

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from nfs.errors import ThermalError
+from thermal import ThermalError
 from thermal import simulate, simulate_many
 from thermal_networks import seven_nodes
 

@@ -11,7 +11,7 @@ import math
 import numpy as np
 import pytest
 
-from nfs.errors import ThermalError
+from thermal import ThermalError
 from thermal import CHAMBER, Link, Network, Node
 
 
