@@ -36,7 +36,7 @@ from pathlib import Path
 import numpy as np
 
 from nfs.constants import OMEGA_IE_DPH, STANDARD_GRAVITY_M_S2
-from nfs.io.measurement import Run, RunMeta
+from nfs.run import Run, RunMeta
 from nfs.northfind import NorthFindResult, north_find, wrap_deg_360
 
 #: Default data folder: <repo>/../shared/data/spresense-gyrocompass.

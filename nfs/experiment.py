@@ -22,7 +22,7 @@ from .effects import EffectContext, EffectInstance, Geometry, apply_geometry, ch
 from .effects.thermometer import THERMOMETERS
 from .errors import EffectError
 from .instrument import Instrument
-from .io.measurement import Run, RunMeta
+from .run import Run, RunMeta
 from .noise import gyro_noise_dph, white_noise
 from .sensors import (Schedule, earth_rate_along_axis_dph, thermometer_reading,
                       turntable_motion)

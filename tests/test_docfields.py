@@ -11,7 +11,7 @@ from nfs.diagnose.result import CandidateScore, Diagnosis
 from nfs.docfields import document_fields, field_docs
 from nfs.experiment import SimulationResult
 from nfs.scenario_runs import ScenarioResult
-from nfs.io.measurement import Run, RunMeta
+from nfs.run import Run, RunMeta
 from nfs.io.scenario import Scenario
 from nfs.northfind.heading import NorthFindResult
 from nfs.report.table import HeadingTable, TableRow

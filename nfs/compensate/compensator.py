@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import NfsError
-from ..io.measurement import Run
+from ..run import Run
 from ..io.provenance import library_versions, runs_provenance
 from .dataset import DriftDataset, drift_dataset
 from .features import compute_features

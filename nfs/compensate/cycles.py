@@ -49,7 +49,7 @@ from ..denoise import earth_rate_projection_dph, separate_drift
 from ..errors import NfsError
 from ..experiment import simulate_runs
 from ..scenario_runs import northfind_runs
-from ..io.measurement import Run
+from ..run import Run
 from ..report.intervals import MIN_REPLICATES, bc_interval, block_counts
 from ..report.table import pooled_rmse
 from .compensator import DriftCompensator, prediction_plan

@@ -58,7 +58,7 @@ from ..constants import earth_rate_components_dph
 from ..errors import NfsError
 from ..experiment import simulate_runs
 from ..scenario_runs import chamber_moves, northfind_runs
-from ..io.measurement import Run
+from ..run import Run
 from ..northfind.known_bias import north_find_known_bias
 from ..northfind.solve import _distinct_angles
 from ..report.intervals import MIN_REPLICATES, bc_interval, block_counts

@@ -24,7 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from nfs.errors import InputError, MeasurementError
-from nfs.io.measurement import Run
+from nfs.run import Run
 from nfs.sensors.fog import earth_rate_along_axis_dph
 
 from .wavelet import DenoiseResult, ThresholdRule, wavelet_denoise

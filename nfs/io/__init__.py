@@ -1,9 +1,10 @@
-"""Measurement files (``nfs-measurement/1``), scenario files and atomic output."""
+"""Files only: the measurement format (``nfs-measurement/1``), TOML helpers, atomic output,
+output folders and provenance."""
 
 from .atomic import atomic_output, atomic_write_bytes, atomic_write_files, atomic_write_text
-from .measurement import (FORMAT, REQUIRED_COLUMNS, Run, RunMeta, check_columns, find_runs,
-                          read_run, read_runs, write_run)
+from .measurement import FORMAT, find_runs, read_run, read_runs, write_run
+from .measurement_checks import check_columns, check_units
 
-__all__ = ["FORMAT", "REQUIRED_COLUMNS", "Run", "RunMeta", "check_columns", "find_runs",
-           "read_run", "read_runs", "write_run", "atomic_output", "atomic_write_bytes",
-           "atomic_write_files", "atomic_write_text"]
+__all__ = ["FORMAT", "check_columns", "check_units", "find_runs", "read_run", "read_runs",
+           "write_run", "atomic_output", "atomic_write_bytes", "atomic_write_files",
+           "atomic_write_text"]

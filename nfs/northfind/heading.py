@@ -14,7 +14,7 @@ import numpy as np
 
 from nfs.docfields import document_fields
 from nfs.errors import MeasurementError, NfsError
-from nfs.io.measurement import Run
+from nfs.run import Run
 from nfs.northfind.segment import Cycle, dwell_samples, find_dwells, segment_cycles
 from nfs.northfind.level import LEVEL_UP, gravity_and_biases, level_heading, level_two_position
 from nfs.northfind.solve import (_distinct_angles, _solve_stack, _vertical_rate_removed,

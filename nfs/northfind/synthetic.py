@@ -28,7 +28,7 @@ import numpy as np
 
 from nfs.effects.geometry import Geometry
 from nfs.errors import NfsError
-from nfs.io.measurement import Run, RunMeta
+from nfs.run import Run, RunMeta
 from nfs.sensors import earth_rate_along_axis_dph
 
 __all__ = ["synthetic_run"]

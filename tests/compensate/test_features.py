@@ -5,7 +5,7 @@ import pytest
 
 from nfs.compensate.features import (FeatureError, compute_features,
                                      rate_k_per_min, resolve_features)
-from nfs.io.measurement import Run, RunMeta
+from nfs.run import Run, RunMeta
 
 
 def make_run(n=3600, aux=True):

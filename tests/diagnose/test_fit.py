@@ -105,7 +105,7 @@ def test_write_fitted_model(fitted, tmp_path):
 
 def test_fitted_name_says_where_the_model_came_from(tmp_path):
     from nfs.diagnose.fit import fitted_name
-    from nfs.io.measurement import Run
+    from nfs.run import Run
     mk = lambda name, path=None: Run(name=name, columns={}, meta=None, path=path)  # noqa: E731
     assert fitted_name("default", [mk("a", tmp_path / "chamber" / "a.csv"),
                                    mk("b", tmp_path / "chamber" / "b.csv")]) == \

@@ -49,7 +49,7 @@ from nfs.diagnose.smoother import SmoothedThermal, smooth_runs, thermometer_sens
 from nfs.effects import make_effect
 from nfs.errors import NfsError
 from nfs.experiment import conditions_from_run, effect_context, simulate_run, thermal_power
-from nfs.io.measurement import Run
+from nfs.run import Run
 from nfs.io.scenario import load_scenario
 
 DURATION_S = 3600.0

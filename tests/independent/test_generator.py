@@ -16,7 +16,9 @@ import numpy as np
 import pytest
 from scipy.linalg import expm
 
-from nfs.io.measurement import REQUIRED_COLUMNS, read_runs
+from nfs.io.measurement import read_runs
+
+from nfs.run import REQUIRED_COLUMNS
 
 from . import generator as g
 

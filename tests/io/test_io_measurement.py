@@ -17,19 +17,10 @@ import numpy as np
 import pytest
 
 from nfs.errors import MeasurementError
-from nfs.io.measurement import (
-    FORMAT,
-    REQUIRED_COLUMNS,
-    Run,
-    RunMeta,
-    _parse_csv_careful,
-    _parse_csv_fast,
-    check_columns,
-    find_runs,
-    read_run,
-    read_runs,
-    write_run,
-)
+from nfs.io.csv_columns import _parse_csv_careful, _parse_csv_fast
+from nfs.io.measurement import FORMAT, find_runs, read_run, read_runs, write_run
+from nfs.io.measurement_checks import check_columns
+from nfs.run import REQUIRED_COLUMNS, Run, RunMeta
 
 # ---------------------------------------------------------------------------------------------
 # helpers

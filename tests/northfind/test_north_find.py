@@ -12,7 +12,7 @@ import pytest
 
 from nfs.constants import OMEGA_IE_DPH
 from nfs.errors import MeasurementError, NfsError
-from nfs.io.measurement import Run
+from nfs.run import Run
 from nfs.northfind import (east_tilt_error_deg, heading_rmse, linear_drift_error_deg,
                            north_find, synthetic_run, white_noise_floor_deg, wrap_deg_180)
 
