@@ -137,7 +137,7 @@ def assert_compensator_no_worse(compensator, runs, *, tolerance: float = 0.0,
         A trained compensator, or a model file written by ``nfs train``.
     runs : Run, path, or iterable of them
         Runs with a known heading (``true_heading_deg``): measurement files, folders, or
-        :class:`~nfs.io.measurement.Run` objects.
+        :class:`~nfs.run.Run` objects.
     tolerance : float
         Relative tolerance (default 0: any change beyond noise fails).
     startup_end_s : float

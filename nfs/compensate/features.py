@@ -177,7 +177,7 @@ def compute_features(run, spec: str | Sequence[str] = "seed004", *,
     Parameters
     ----------
     run : Run
-        A :class:`~nfs.io.measurement.Run` (or any object with ``columns``, ``name`` and,
+        A :class:`~nfs.run.Run` (or any object with ``columns``, ``name`` and,
         for ``cycle`` mode, ``meta``).
     spec : str or sequence of str
         Feature names, sets or patterns (:func:`resolve_features`).
