@@ -28,7 +28,7 @@ from pathlib import Path
 
 from nfs.compensate.study import run_study
 from nfs.io.scenario import load_scenario
-from nfs.report.table import REFERENCE_ROWS
+from nfs.scoring.heading_table import REFERENCE_ROWS
 
 ROOT = Path(__file__).resolve().parents[1]
 #: Block name -> scenario file (None: the built-in default).

@@ -158,7 +158,7 @@ def _baseline(args, scenario, settings):
     from .compensate import get_method
     from .io.provenance import sha256_of_file
     from .report.baseline import TOLERANCE, check_common, read_table
-    from .report.table import REFERENCE_ROWS
+    from .scoring.heading_table import REFERENCE_ROWS
     if args.tolerance is None:
         args.tolerance = TOLERANCE
     if not (math.isfinite(args.tolerance) and args.tolerance >= 0):

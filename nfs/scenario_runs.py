@@ -156,7 +156,7 @@ def run_stage_errors(result: ScenarioResult, k: int, northfind=None) -> tuple[np
 def stage_errors_by_temperature(result: ScenarioResult, northfind=None) -> dict:
     """Stage row name (:func:`stage_names`) -> ``errors[column][run]``: the heading errors
     [deg] of that stage of every run, by start temperature (the input of
-    :meth:`~nfs.report.table.HeadingTable.with_intervals`)."""
+    :meth:`~nfs.scoring.heading_table.HeadingTable.with_intervals`)."""
     sc = result.scenario
     per_run = [run_stage_errors(result, k, northfind) for k in range(len(result.northfind))]
     return {name: [[per_run[k][j] for k in result.runs_at(i)]
@@ -187,7 +187,7 @@ def floor_deg(scenario) -> float:
 
 def uncompensated_table(res: ScenarioResult):
     """Rows ``before`` (start-up, uncompensated), ``stable`` and ``floor`` by T0."""
-    from .report import HeadingTable, TableRow, pooled_rmse
+    from .scoring.heading_table import HeadingTable, TableRow, pooled_rmse
     sc = res.scenario
     errors = stage_errors_by_temperature(res)
     rmse = {name: tuple(pooled_rmse(runs) for runs in cols) for name, cols in errors.items()}

@@ -40,8 +40,8 @@ from .compensate import load_compensator
 from .io.measurement import read_runs
 from .northfind import north_find, run_time_to_spec_s
 from .report.baseline import TOLERANCE, BaselineComparison, compare_tables
-from .report.table import pooled_rmse
-from .report.tablefile import TableData
+from .scoring.heading_table import pooled_rmse
+from .scoring.tablefile import TableData
 
 __all__ = ["assert_table_within", "assert_compensator_no_worse", "assert_time_to_spec_below",
            "EXACT_ATOL_DEG"]
@@ -68,7 +68,7 @@ def assert_table_within(table_or_json, baseline_json, tolerance: float = TOLERAN
     Parameters
     ----------
     table_or_json : HeadingTable, dict or path
-        The table now: a :class:`~nfs.report.table.HeadingTable`, its ``to_dict()``, or a JSON
+        The table now: a :class:`~nfs.scoring.heading_table.HeadingTable`, its ``to_dict()``, or a JSON
         file written by ``nfs table --json``.
     baseline_json : path or dict
         The baseline: a JSON file written earlier by ``nfs table --json`` (or its dict).
@@ -82,7 +82,7 @@ def assert_table_within(table_or_json, baseline_json, tolerance: float = TOLERAN
     atol_deg : float
         Tolerance of ``exact_rows`` [deg].
     n_boot : int, optional
-        Bootstrap replicates (default :data:`~nfs.report.intervals.DEFAULT_N_BOOT`).
+        Bootstrap replicates (default :data:`~nfs.scoring.intervals.DEFAULT_N_BOOT`).
 
     Returns
     -------

@@ -14,7 +14,7 @@ from nfs.scenario_runs import ScenarioResult
 from nfs.run import Run, RunMeta
 from nfs.io.scenario import Scenario
 from nfs.northfind.heading import NorthFindResult
-from nfs.report.table import HeadingTable, TableRow
+from nfs.scoring.heading_table import HeadingTable, TableRow
 
 
 @document_fields

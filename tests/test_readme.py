@@ -33,7 +33,7 @@ def test_the_check_fails_on_a_changed_number():
     text = (ROOT / "README.md").read_text(encoding="utf-8")
     rows = readme_numbers.parse("default-table", text)
     assert {"before", "stable", "floor", "SSA-SVR"} <= set(rows)
-    from nfs.report.table import HeadingTable, TableRow
+    from nfs.scoring.heading_table import HeadingTable, TableRow
     n_t = len(rows["before"]) - 4
     temps = tuple(float(t) for t in range(n_t))
 

@@ -13,7 +13,7 @@ import pytest
 
 from nfs.cli import main
 from nfs.io.measurement import read_runs
-from nfs.report.table import REFERENCE_ROWS
+from nfs.scoring.heading_table import REFERENCE_ROWS
 from nfs.testing import assert_compensator_no_worse, assert_table_within
 
 ROOT = Path(__file__).resolve().parents[1]

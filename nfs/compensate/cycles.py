@@ -28,7 +28,7 @@ compensation"):
      leaves residuals of opposite signs on the two (thermal hysteresis);
    - heading RMSE [deg] of every north-finding cycle of the test cycles, compensated.
 
-5. Intervals: 95 %, bias-corrected percentile (:func:`nfs.report.intervals.bc_interval`) from a
+5. Intervals: 95 %, bias-corrected percentile (:func:`nfs.scoring.intervals.bc_interval`) from a
    block bootstrap of the test cycles (Carlstein 1986, non-overlapping blocks of
    :data:`BLOCK_S`: the residual of a thermal model is correlated over tens of minutes, so
    blocks, not samples, are resampled), every row with the same draws (paired), so the
@@ -50,8 +50,8 @@ from ..errors import NfsError
 from ..experiment import simulate_runs
 from ..scenario_runs import northfind_runs
 from ..run import Run
-from ..report.intervals import MIN_REPLICATES, bc_interval, block_counts
-from ..report.table import pooled_rmse
+from ..scoring.intervals import MIN_REPLICATES, bc_interval, block_counts
+from ..scoring.heading_table import pooled_rmse
 from .compensator import DriftCompensator, prediction_plan
 from .dataset import drift_dataset
 from .methods import get_method

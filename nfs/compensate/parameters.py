@@ -36,7 +36,7 @@ north finder:
    sample-level compensation by the same methods (the scenario's features; the gyro
    compensated sample by sample, the accelerometers by the constant).  One position needs
    the sign of psi + theta from a hint: the run's true heading serves, as a compass would.
-5. **Intervals.**  95 %, bias-corrected percentile (:func:`nfs.report.intervals.bc_interval`),
+5. **Intervals.**  95 %, bias-corrected percentile (:func:`nfs.scoring.intervals.bc_interval`),
    from a bootstrap of blocks of :data:`BLOCK_CYCLES` consecutive test cycles (neighbouring
    calibrations are correlated through the thermal state), every row with the same draws.
 """
@@ -61,7 +61,7 @@ from ..scenario_runs import chamber_moves, northfind_runs
 from ..run import Run
 from ..northfind.known_bias import north_find_known_bias
 from ..northfind.solve import _distinct_angles
-from ..report.intervals import MIN_REPLICATES, bc_interval, block_counts
+from ..scoring.intervals import MIN_REPLICATES, bc_interval, block_counts
 from .compensator import prediction_plan
 from .dataset import drift_dataset
 from .methods import get_method

@@ -16,7 +16,7 @@ Protocol (the FOG start-up paper, done on equal terms):
    of the test runs over the start-up stage (the FOG start-up paper, Table 2).
 4. Uncertainty: every cell and row mean gets a 95 % interval from a two-level bootstrap over
    the test start-ups and their cycles, and rows are compared in pairs on the same start-ups,
-   Holm-adjusted (:mod:`nfs.report.intervals`).
+   Holm-adjusted (:mod:`nfs.scoring.intervals`).
 
 The features of the test runs and their separated drift are computed once and shared by
 every method; the trainings (methods x tuner seeds) run in parallel on ``n_jobs`` workers,
@@ -41,7 +41,7 @@ from ..io.provenance import output_provenance
 from ..experiment import simulate_runs
 from ..scenario_runs import (northfind_runs, run_scenario, run_stage_errors, stage_names,
                              uncompensated_table)
-from ..report.table import TableRow, pooled_rmse
+from ..scoring.heading_table import TableRow, pooled_rmse
 from .compensator import DriftCompensator, PredictionPlan, prediction_plan, train_compensator
 from .dataset import DriftDataset, drift_dataset
 from .methods import TABLE_METHODS, MethodSpec, get_method
@@ -192,7 +192,7 @@ class CompensationStudy:
         """The heading-RMSE table: before, every method, stable, floor, with 95 % intervals
         and the paired comparisons (every row against ``before``, SSA-SVR and the best row
         against every other), Holm-adjusted together; ``n_boot`` replicates (default
-        :data:`~nfs.report.intervals.DEFAULT_N_BOOT`), seeded by ``random_state``."""
+        :data:`~nfs.scoring.intervals.DEFAULT_N_BOOT`), seeded by ``random_state``."""
         base = uncompensated_table(self.test)
         sc = self.test.scenario
         rows = []
@@ -291,7 +291,7 @@ def errors_by_temperature(result, northfind=None, *, stage: int = 0
                           ) -> list[list[np.ndarray]]:
     """Heading errors [deg] of one stage of every run of a scenario result, by start
     temperature, one array per run: the input of
-    :meth:`~nfs.report.table.HeadingTable.with_intervals`.
+    :meth:`~nfs.scoring.heading_table.HeadingTable.with_intervals`.
 
     Parameters
     ----------

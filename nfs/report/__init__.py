@@ -1,9 +1,8 @@
-"""Tables, figures and reports."""
+"""Renderers: the heading table's files and figure, the compensation, drift, cycle and
+parameter reports, the comparison with a baseline table (Markdown, CSV, JSON, PNG)."""
 
 from .baseline import BaselineComparison, CellChange, compare_tables, write_baseline_comparison
-from .table import HeadingTable, TableRow, plot_heading_table, pooled_rmse, write_table
-from .tablefile import TableData, read_table
+from .table import plot_heading_table, write_table
 
-__all__ = ["HeadingTable", "TableRow", "plot_heading_table", "pooled_rmse", "write_table",
-           "BaselineComparison", "CellChange", "compare_tables", "write_baseline_comparison",
-           "TableData", "read_table"]
+__all__ = ["plot_heading_table", "write_table", "BaselineComparison", "CellChange",
+           "compare_tables", "write_baseline_comparison"]

@@ -7,7 +7,7 @@ temperatures both tables have) gets
 
     change = RMSE_new - RMSE_baseline   [deg]
 
-with its 95 % interval from the two-level bootstrap of :mod:`nfs.report.intervals` (Davison &
+with its 95 % interval from the two-level bootstrap of :mod:`nfs.scoring.intervals` (Davison &
 Hinkley 1997, section 3.8: start-ups resampled, then their cycles), and a verdict:
 
 * ``worse``: the interval lies above 0 (beyond noise) *and* the change exceeds
@@ -45,8 +45,8 @@ import numpy as np
 from ..docfields import document_fields
 from ..errors import InputError
 from ..io.atomic import atomic_write_text
-from .intervals import DEFAULT_N_BOOT, _nanmean, bc_interval, cluster_bootstrap, json_number
-from .tablefile import TableData, check_common, common_columns, read_table
+from ..scoring.intervals import (DEFAULT_N_BOOT, _nanmean, bc_interval, cluster_bootstrap, json_number)
+from ..scoring.tablefile import TableData, check_common, common_columns, read_table
 
 __all__ = ["TOLERANCE", "CellChange", "BaselineComparison", "compare_tables",
            "write_baseline_comparison", "read_table", "check_common"]

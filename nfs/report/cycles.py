@@ -18,8 +18,8 @@ from pathlib import Path
 
 from ..io.atomic import atomic_write_bytes, atomic_write_text
 from .drift_figures import plot_drift_vs_temperature, plot_residual_vs_time, png_bytes
-from .intervals import json_number
-from .table import NOT_APPLICABLE
+from ..scoring.intervals import json_number
+from ..scoring.heading_table import NOT_APPLICABLE
 from .reference import CHENG2015_TABLE2_MSD, TAO2019_BIAS_STABILITY
 
 __all__ = ["cycle_table_markdown", "cycle_table_json", "write_cycle_study", "intervals_csv",

@@ -15,7 +15,7 @@ import math
 from pathlib import Path
 
 from .drift_figures import plot_parameter_residuals, plot_parameters_vs_temperature, png_bytes
-from .intervals import json_number
+from ..scoring.intervals import json_number
 from .cycles import intervals_csv, write_table_files
 from .reference import LIANG2021_RVR_OVER_LS_PCT
 

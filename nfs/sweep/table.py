@@ -37,7 +37,7 @@ from typing import Any, Iterator
 
 from ..io.atomic import atomic_output
 from ..northfind.spec import run_time_to_spec_s
-from ..report.table import NOT_APPLICABLE
+from ..scoring.heading_table import NOT_APPLICABLE
 from .cells import STAGES, cell_tasks
 from .spec import SweepSpec
 from .store import CellStore

@@ -8,8 +8,8 @@ import pytest
 
 from nfs.errors import NfsError
 from nfs.report.baseline import compare_tables
-from nfs.report.table import HeadingTable, TableRow
-from nfs.report.tablefile import TableData, read_table
+from nfs.scoring.heading_table import HeadingTable, TableRow
+from nfs.scoring.tablefile import TableData, read_table
 
 PRESET = Path(__file__).resolve().parents[2] / "nfs" / "presets" / "default_instrument.toml"
 LS_ONLY = """[compensation]

@@ -11,8 +11,7 @@ import math
 import numpy as np
 import pytest
 
-from nfs.report.intervals import (ClusterBootstrap, bc_interval, cluster_bootstrap,
-                                  compare_rows, holm)
+from nfs.scoring.intervals import (ClusterBootstrap, bc_interval, cluster_bootstrap, compare_rows, holm)
 
 R, N, COLS = 5, 5, 7          # start-ups per column, cycles per start-up, start temperatures
 

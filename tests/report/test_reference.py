@@ -8,7 +8,7 @@ import pytest
 from nfs.report.reference import (SEED004_TABLE1_SVR, SEED004_TABLE2_DRIFT_DPH,
                                   SEED004_TABLE3_HEADING_RMSE_DEG, SEED004_TEMPERATURES_C)
 from nfs.report.compensation import shape_checks
-from nfs.report.table import HeadingTable, TableRow
+from nfs.scoring.heading_table import HeadingTable, TableRow
 
 REF = Path(__file__).resolve().parents[2].parent / "shared" / "reference"
 

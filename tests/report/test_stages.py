@@ -17,7 +17,7 @@ import pytest
 
 from nfs.io.scenario import load_scenario
 from nfs.report.compensation import drift_table_markdown
-from nfs.report.table import HeadingTable, TableRow
+from nfs.scoring.heading_table import HeadingTable, TableRow
 from nfs.scenario_runs import (chamber_moves, run_scenario, stage_names,
                                uncompensated_table)
 

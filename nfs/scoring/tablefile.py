@@ -16,7 +16,7 @@ import numpy as np
 
 from ..docfields import document_fields
 from ..errors import InputError
-from .table import HeadingTable
+from .heading_table import HeadingTable
 
 __all__ = ["TableData", "read_table", "check_common", "common_columns"]
 

@@ -76,7 +76,7 @@ from scipy.stats import norm
 
 from ..docfields import document_fields
 
-__all__ = ["ClusterBootstrap", "Comparison", "cluster_bootstrap", "bc_interval", "bc_pvalue",
+__all__ = ["ClusterBootstrap", "PairedComparison", "cluster_bootstrap", "bc_interval", "bc_pvalue",
            "holm", "compare_rows", "DEFAULT_N_BOOT", "LEVEL"]
 
 #: Replicates of the bootstrap (p-values resolve down to about 2/B: 5e-4).
@@ -327,7 +327,7 @@ def _bootstrap_tables(tables, n_boot: int, rng) -> tuple[np.ndarray, np.ndarray]
 
 @document_fields
 @dataclass(frozen=True)
-class Comparison:
+class PairedComparison:
     """A paired comparison of two rows' means (row a minus row b)."""
 
     method_a: str
@@ -392,7 +392,7 @@ def json_number(v: float | None, digits: int | None = None):
 
 
 def compare_rows(boot: ClusterBootstrap, names: Sequence[str],
-                 pairs: Sequence[tuple[str, str]], alpha: float = 0.05) -> list[Comparison]:
+                 pairs: Sequence[tuple[str, str]], alpha: float = 0.05) -> list[PairedComparison]:
     """Paired comparisons of row means, Holm-adjusted over ``pairs``.
 
     Parameters
@@ -409,7 +409,7 @@ def compare_rows(boot: ClusterBootstrap, names: Sequence[str],
 
     Returns
     -------
-    list of Comparison
+    list of PairedComparison
     """
     index = {n: i for i, n in enumerate(names)}
     seen, todo = set(), []
@@ -419,5 +419,5 @@ def compare_rows(boot: ClusterBootstrap, names: Sequence[str],
         seen.add(frozenset((a, b)))
         todo.append((a, b, *boot.difference(index[a], index[b])))
     adj = holm([t[5] for t in todo])
-    return [Comparison(a, b, d, lo, hi, p, float(pa), alpha)
+    return [PairedComparison(a, b, d, lo, hi, p, float(pa), alpha)
             for (a, b, d, lo, hi, p), pa in zip(todo, adj)]
