@@ -30,7 +30,7 @@ from pathlib import Path
 from nfs.diagnose import diagnose, fit_unit
 from nfs.experiment import simulate_run
 from nfs.io.measurement import read_runs
-from nfs.io.scenario import load_scenario
+from nfs.config.scenario import load_scenario
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests" / "independent"))

@@ -40,7 +40,7 @@ from scipy.stats import binomtest
 
 from nfs.diagnose import compare, diagnose, fit_unit
 from nfs.experiment import simulate_run
-from nfs.io.scenario import load_scenario
+from nfs.config.scenario import load_scenario
 
 ALPHA = 0.05
 

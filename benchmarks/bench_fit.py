@@ -34,7 +34,7 @@ from nfs.diagnose.thermal_residual import prepare_thermal, thermal_residual_part
 from nfs.experiment import simulate_run
 from nfs.instrument import load_instrument
 from nfs.io.measurement import read_runs
-from nfs.io.scenario import load_scenario
+from nfs.config.scenario import load_scenario
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests" / "independent"))
 from generator import generate_set  # noqa: E402

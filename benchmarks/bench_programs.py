@@ -30,7 +30,7 @@ from timing import best_of
 
 from nfs.cli import main as nfs_main
 from nfs.experiment import simulate_runs
-from nfs.io.scenario import load_scenario
+from nfs.config.scenario import load_scenario
 
 TARGET_S = 60.0
 SCENARIOS = Path(__file__).resolve().parents[1] / "scenarios"

@@ -14,7 +14,7 @@ import time
 
 from nfs.experiment import simulate_run, simulate_runs
 from nfs.scenario_runs import northfind_runs
-from nfs.io.scenario import load_scenario
+from nfs.config.scenario import load_scenario
 
 
 def best_of(f, n=5):

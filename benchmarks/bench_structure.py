@@ -21,7 +21,7 @@ from nfs.diagnose.fit import fit_model
 from nfs.diagnose.adequacy import thermal_adequacy
 from nfs.diagnose.structure import free_link
 from nfs.experiment import simulate_run
-from nfs.io.scenario import load_scenario
+from nfs.config.scenario import load_scenario
 
 REPEATS = 1
 DECIMATE_S = 30.0

@@ -19,7 +19,7 @@ import warnings
 
 from nfs.cli import main as nfs_main
 from nfs.compensate.study import run_study
-from nfs.io.scenario import load_scenario
+from nfs.config.scenario import load_scenario
 from nfs.report.compensation import write_study
 
 TARGET_S = 60.0

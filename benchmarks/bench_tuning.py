@@ -48,7 +48,7 @@ from nfs.compensate.dataset import drift_dataset
 from nfs.compensate.methods import get_method
 from nfs.compensate.tuners import TUNERS, TuneResult, minimize
 from nfs.experiment import simulate_run
-from nfs.io.scenario import load_scenario
+from nfs.config.scenario import load_scenario
 
 DEFAULT_TUNERS = ("ssa", "pso", "gwo", "hho", "random", "grid", "tpe")
 OVERHEAD_GOAL = 0.01

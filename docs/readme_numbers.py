@@ -27,7 +27,7 @@ import time
 from pathlib import Path
 
 from nfs.compensate.study import run_study
-from nfs.io.scenario import load_scenario
+from nfs.config.scenario import load_scenario
 from nfs.scoring.heading_table import REFERENCE_ROWS
 
 ROOT = Path(__file__).resolve().parents[1]

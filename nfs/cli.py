@@ -64,12 +64,12 @@ class Progress:
 def _cmd_table(args) -> int:
     from .compensate.modes import check_features_mode
     from .scenario_runs import run_scenario, stage_errors_by_temperature, uncompensated_table
-    from .io.scenario import load_scenario
+    from .config.scenario import load_scenario
     from .report import write_table
     if args.features_mode is not None:
         check_features_mode(args.features_mode, "--features-mode")
     from .compensate.study import table_provenance
-    from .compensate.study import CompensationSettings
+    from .compensate.settings import CompensationSettings
     scenario = _with_overrides(load_scenario(args.scenario), args)
     _file(args.json, "--json", args.overwrite)
     settings = _table_settings(args, scenario.compensation or CompensationSettings())
@@ -289,7 +289,7 @@ def _with_overrides(scenario, args):
 def _cmd_simulate(args) -> int:
     from .experiment import simulate_run
     from .io.measurement import write_run
-    from .io.scenario import load_scenario
+    from .config.scenario import load_scenario
     from .io.provenance import scenario_provenance
     scenario = _with_overrides(load_scenario(args.scenario), args)
     folder = _folder(args, "simulate")
@@ -520,8 +520,7 @@ def _cmd_diagnose(args) -> int:
 
 def _cmd_preset(args) -> int:
     from .instrument import preset_names, preset_path
-    from .io.scenario import (scenario_preset_names, scenario_preset_path, sweep_preset_names,
-                              sweep_preset_path)
+    from .config.presets import (scenario_preset_names, scenario_preset_path, sweep_preset_names, sweep_preset_path)
     if args.name is None:
         print("instruments (nfs preset NAME > my_instrument.toml):")
         print("\n".join(f"  {n}" for n in preset_names()))
@@ -562,8 +561,8 @@ def _cmd_init(args) -> int:
     import re
     from .instrument import preset_path
     from .io.atomic import atomic_write_files
-    from .io.scenario import (load_scenario, scenario_preset_names, scenario_preset_path,
-                              sweep_preset_names, sweep_preset_path)
+    from .config.scenario import load_scenario
+    from .config.presets import (scenario_preset_names, scenario_preset_path, sweep_preset_names, sweep_preset_path)
     from .sweep import load_sweep
     name = args.source
     out = Path(args.output)
@@ -971,7 +970,7 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     args.argv = list(sys.argv[1:] if argv is None else argv)
     if getattr(args, "trust_effects", False):   # a scenario's effects_files may run
-        from .io.scenario import TRUST_EFFECTS_ENV  # lazy: nfs --help stays fast
+        from .config.scenario import TRUST_EFFECTS_ENV  # lazy: nfs --help stays fast
         os.environ[TRUST_EFFECTS_ENV] = "1"
     try:
         with one_line_warnings():             # an unusual input value: one line, then on

@@ -27,7 +27,7 @@ matches any name; the first matching entry wins, so specific entries come before
 ones.  Every range is finite: a value of 1e300 is refused wherever it is written.
 
 This module imports nothing of the package but its errors: the loaders (:mod:`nfs.instrument`,
-:mod:`nfs.io.scenario`, :mod:`nfs.io.chamber`, :mod:`nfs.sweep.spec`,
+:mod:`nfs.config.scenario`, :mod:`nfs.chamber`, :mod:`nfs.sweep.spec`,
 :mod:`nfs.io.measurement`) call :func:`check_tree` on what they parsed and :func:`check`
 on derived values, inside :func:`deferred_warnings` so that a refused file shows its one
 error and no warnings.  The comments of ``nfs/presets/default_instrument.toml`` state the

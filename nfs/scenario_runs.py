@@ -10,6 +10,8 @@ import numpy as np
 
 from .docfields import document_fields
 from .experiment import SimulationResult, simulate_runs
+from .northfind import north_find, white_noise_floor_deg
+from .scoring.heading_table import HeadingTable, TableRow, pooled_rmse
 from .variability import describe_units
 
 __all__ = ["ScenarioResult", "run_scenario", "run_scenarios", "northfind_runs", "stage_errors",
@@ -23,7 +25,7 @@ class ScenarioResult:
     """Every run of a scenario, simulated and north-found."""
 
     scenario: Any
-    """The :class:`~nfs.io.scenario.Scenario`."""
+    """The :class:`~nfs.scenario.Scenario`."""
     simulations: tuple[SimulationResult, ...]
     """One per run, temperature-major (all repeats of T0[0] first)."""
     northfind: tuple[Any, ...]
@@ -43,7 +45,6 @@ def northfind_runs(runs, settings=None) -> list:
     which of the two mirror-image solutions is returned, never moves the value, and is
     ignored by schedules of three or more positions.
     """
-    from .northfind import north_find
     tilt = True if settings is None else settings.tilt_correction
     settle = 0.0 if settings is None else settings.settle_s
     return [north_find(run, tilt_correction=tilt, settle_s=settle,
@@ -173,7 +174,6 @@ def floor_deg(scenario) -> float:
     """White-noise floor of the scenario's schedule (:func:`~nfs.northfind.white_noise_floor_deg`):
     sqrt(2/N) (ARW/sqrt(dwell)) / Omega_h, or for two positions 180 deg apart
     (ARW/sqrt(dwell)) / (sqrt(2 v) Omega_h |sin(psi + theta_a)|) at the scenario's heading."""
-    from .northfind import white_noise_floor_deg
     sched = scenario.schedule
     if _two_positions(sched):
         return white_noise_floor_deg(scenario.instrument.gyro.arw_deg_per_rth_h,
@@ -187,7 +187,6 @@ def floor_deg(scenario) -> float:
 
 def uncompensated_table(res: ScenarioResult):
     """Rows ``before`` (start-up, uncompensated), ``stable`` and ``floor`` by T0."""
-    from .scoring.heading_table import HeadingTable, TableRow, pooled_rmse
     sc = res.scenario
     errors = stage_errors_by_temperature(res)
     rmse = {name: tuple(pooled_rmse(runs) for runs in cols) for name, cols in errors.items()}

@@ -12,7 +12,7 @@ import pytest
 
 from nfs.cli import build_parser
 from nfs.io.measurement import write_run
-from nfs.io.scenario import default_scenario_path
+from nfs.config.presets import default_scenario_path
 from nfs.northfind.synthetic import synthetic_run
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -36,7 +36,7 @@ def test_scenarios_folder_holds_the_builtin_default():
 def test_every_scenario_file_loads(path):
     # Oracle: the file itself; the precise variant differs from the default only in its
     # name, description and the number of start-ups.
-    from nfs.io.scenario import load_scenario
+    from nfs.config.scenario import load_scenario
     sc = load_scenario(path)
     assert sc.start_temperatures_c == (-32.0, -16.0, -5.0, 17.0, 28.0, 43.0, 54.0)
     if path.stem.endswith("precise"):
@@ -108,7 +108,7 @@ def test_init_writes_a_starter_that_runs(tmp_path, cli):
     scen = (d / "scenario.toml").read_text()
     assert 'instrument = "instrument.toml"' in scen and scen.count("\n#") > 10  # comments kept
     from nfs.instrument import preset_path
-    from nfs.io.scenario import load_scenario
+    from nfs.config.scenario import load_scenario
     # the preset's text, named after the folder (every later report names the unit)
     inst = (d / "instrument.toml").read_text()
     assert inst.replace('name = "mine"      # your unit\'s name: reports compare models by it',

@@ -32,7 +32,7 @@ from nfs.experiment import simulate_run
 from nfs.scenario_runs import northfind_runs, run_scenario, stage_errors
 from nfs.scenario_runs import uncompensated_table
 from nfs.northfind import tilt_model_error_deg
-from nfs.io.scenario import load_scenario
+from nfs.config.scenario import load_scenario
 
 
 @pytest.fixture(scope="module")

@@ -12,7 +12,7 @@ from nfs.docfields import document_fields, field_docs
 from nfs.experiment import SimulationResult
 from nfs.scenario_runs import ScenarioResult
 from nfs.run import Run, RunMeta
-from nfs.io.scenario import Scenario
+from nfs.scenario import Scenario
 from nfs.northfind.heading import NorthFindResult
 from nfs.scoring.heading_table import HeadingTable, TableRow
 

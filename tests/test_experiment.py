@@ -9,7 +9,7 @@ from nfs.errors import ScenarioError
 from nfs.experiment import RunConditions, simulate_run
 from nfs.instrument import load_instrument
 from nfs.io.measurement import read_run, write_run
-from nfs.io.scenario import TRUST_EFFECTS_ENV, load_scenario
+from nfs.config.scenario import TRUST_EFFECTS_ENV, load_scenario
 from nfs.sensors import Schedule
 
 SCHED = Schedule((0.0, 90.0, 180.0, 270.0), dwell_s=150.0, move_s=10.0)

@@ -38,7 +38,7 @@ from hypothesis import strategies as st
 
 from nfs.cli import main
 from nfs.instrument import preset_path
-from nfs.io.scenario import default_scenario_path
+from nfs.config.presets import default_scenario_path
 from nfs.io.tomlio import dumps_toml
 
 TINY = ('start_temperatures_c = [17.0]\nduration_s = 1200.0\n[compensation]\n'

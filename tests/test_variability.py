@@ -19,7 +19,7 @@ import thermal
 from nfs.errors import ScenarioError
 from nfs.experiment import RunConditions, simulate_run
 from nfs.io.measurement import write_run
-from nfs.io.scenario import load_scenario
+from nfs.config.scenario import load_scenario
 from nfs.parameters import get_param
 from nfs.variability import (NO_VARIABILITY, REALISTIC, Variability, chamber_terms,
                              lognormal_factor, start_up_state, unit_instrument, unit_scatter)

@@ -23,7 +23,8 @@ from .modes import DEFAULT_FEATURE_MODE, FEATURE_MODES, FeatureModeError, check_
 from .neural import BPNetwork, RBFNetwork
 from .regression import CubicLeastSquares, StepwiseRegression
 from .search import Integer, MetaheuristicSearchCV, Real
-from .study import CompensationSettings, CompensationStudy, run_study
+from .study import CompensationStudy, run_study
+from .settings import CompensationSettings
 from .tuners import TUNERS, TuneResult, minimize
 
 __all__ = [

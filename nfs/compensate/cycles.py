@@ -7,7 +7,7 @@ Prism Laser Gyro Bias in Consideration of High Frequency Oscillator Voltage", Se
 compensation"):
 
 1. The scenario's runs are simulated once; each is cut at the cycles of its chamber program
-   (the iterations of the program's first top-level ``repeat``, :mod:`nfs.io.chamber`).
+   (the iterations of the program's first top-level ``repeat``, :mod:`nfs.chamber`).
 2. Every method is trained on cycle 1 of every run (drift by wavelet separation, the
    scenario's features and mode, training samples every ``decimate_s``) and predicts the
    drift of the later cycles from their own thermometers and channels.
@@ -56,8 +56,8 @@ from .compensator import DriftCompensator, prediction_plan
 from .dataset import drift_dataset
 from .methods import get_method
 from .modes import check_features_mode
-from .study import (CompensationSettings, test_scenario, ticker, train_and_predict,
-                    train_scenario)
+from .study import test_scenario, ticker, train_and_predict, train_scenario
+from .settings import CompensationSettings
 
 __all__ = ["CycleRow", "CycleStudy", "PartTrace", "run_cycle_study", "run_runs_study",
            "cut_run", "CYCLE_METRICS", "BIAS_WINDOW_S", "BLOCK_S", "RAMP_RATE_C_PER_S",
@@ -123,7 +123,7 @@ class CycleStudy:
     scenario: object
     """The scenario."""
     settings: object
-    """Its :class:`~nfs.compensate.study.CompensationSettings`."""
+    """Its :class:`~nfs.compensate.settings.CompensationSettings`."""
     spans_s: tuple[tuple[float, float], ...]
     """(start, end) of every cycle from power-on [s] (of the first start temperature)."""
     train_runs: tuple[Run, ...]

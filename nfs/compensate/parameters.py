@@ -66,8 +66,8 @@ from .compensator import prediction_plan
 from .dataset import drift_dataset
 from .methods import get_method
 from .modes import check_features_mode
-from .study import (CompensationSettings, test_scenario, ticker, train_and_predict,
-                    train_scenario)
+from .study import test_scenario, ticker, train_and_predict, train_scenario
+from .settings import CompensationSettings
 
 __all__ = ["PARAMETERS", "PARAMETER_METRICS", "BLOCK_CYCLES", "CONSTANT", "BIAS_FITTED",
            "CycleParameters", "ParameterRow", "HeadingRow", "ParameterStudy",
@@ -150,7 +150,7 @@ class ParameterStudy:
     scenario: object
     """The scenario."""
     settings: object
-    """Its :class:`~nfs.compensate.study.CompensationSettings`."""
+    """Its :class:`~nfs.compensate.settings.CompensationSettings`."""
     train: tuple
     """:class:`CycleParameters` of every training run."""
     test: tuple

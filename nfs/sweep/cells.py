@@ -31,11 +31,12 @@ from threadpoolctl import threadpool_limits
 
 import nfs
 
-from ..compensate.study import CompensationSettings, run_study
+from ..compensate.study import run_study
+from ..compensate.settings import CompensationSettings
 from ..errors import NfsError
 from ..scenario_runs import floor_deg, run_scenario, run_scenarios
 from ..io.provenance import sha256_of_text
-from ..io.scenario import load_scenario
+from ..config.scenario import load_scenario
 from ..northfind import heading_rmse
 from ..parameters import set_params
 from .spec import SweepSpec

@@ -20,7 +20,7 @@ A sweep file (TOML)::
     count = 16                          # points (a power of 2 for sobol)
     seed = 0
 
-An axis names any scenario key of :data:`nfs.io.scenario.OVERRIDE_KEYS` (``latitude_deg``,
+An axis names any scenario key of :data:`nfs.config.scenario.OVERRIDE_KEYS` (``latitude_deg``,
 ``schedule.dwell_s``, ``start_temperatures_c``, ...) or any instrument parameter by the
 dotted path ``nfs fit`` uses (:mod:`nfs.parameters`: ``gyro.arw_deg_per_rth_h``,
 ``effects.shupe_gradient.k_r``, ``thermal.nodes.housing.capacity_j_per_k``).  The points are
@@ -50,7 +50,9 @@ from scipy.stats import qmc
 
 from ..compensate.methods import get_method
 from ..errors import USER_ERRORS, InputError, NfsError
-from ..io.scenario import OVERRIDE_KEYS, Scenario, load_scenario, scenario_file
+from ..config.scenario import OVERRIDE_KEYS, load_scenario
+from ..config.presets import scenario_file
+from ..scenario import Scenario
 from ..io.tomlio import check_keys, load_toml
 from ..northfind.spec import DEFAULT_WINDOW
 from ..parameters import canonical_path, param_paths, set_params

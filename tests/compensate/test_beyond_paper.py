@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 from nfs.compensate.study import run_study
-from nfs.io.scenario import load_scenario
+from nfs.config.scenario import load_scenario
 from nfs.report.compensation import shape_checks
 
 PRECISE = Path(__file__).resolve().parents[2] / "scenarios" / "startup_7temps_precise.toml"

@@ -20,7 +20,7 @@ from nfs.compensate.cycles import (BIAS_WINDOW_S, CYCLE_METRICS, UNCOMPENSATED, 
                                    run_cycle_study)
 from nfs.denoise import separate_drift
 from nfs.errors import ScenarioError
-from nfs.io.scenario import load_scenario
+from nfs.config.scenario import load_scenario
 from nfs.report.reference import TAO2019_BIAS_STABILITY
 
 CYCLE = """start_temperatures_c = [25.0]

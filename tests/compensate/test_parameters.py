@@ -17,7 +17,7 @@ import pytest
 from nfs.compensate.parameters import (BIAS_FITTED, CONSTANT, PARAMETER_METRICS, PARAMETERS,
                                        calibrate_cycles, run_parameter_study)
 from nfs.errors import ScenarioError
-from nfs.io.scenario import load_scenario
+from nfs.config.scenario import load_scenario
 from nfs.northfind import north_find, synthetic_run
 from nfs.report.reference import LIANG2021_RVR_OVER_LS_PCT
 

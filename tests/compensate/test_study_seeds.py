@@ -11,8 +11,9 @@ import dataclasses
 import numpy as np
 import pytest
 
-from nfs.compensate.study import CompensationSettings, run_study
-from nfs.io.scenario import load_scenario
+from nfs.compensate.study import run_study
+from nfs.compensate.settings import CompensationSettings
+from nfs.config.scenario import load_scenario
 
 
 @pytest.fixture(scope="module")

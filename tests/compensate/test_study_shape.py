@@ -12,7 +12,7 @@ the 11 methods; the default budget (30 evaluations) and 3 tuner seeds.
 
 The paper trains and tests on one unit, and its comparison is a bench analysis of recorded
 runs: the check runs in the default scenario's world without variability
-(:meth:`~nfs.io.scenario.Scenario.nominal`: one unit, every start-up soaked exactly at T0;
+(:meth:`~nfs.scenario.Scenario.nominal`: one unit, every start-up soaked exactly at T0;
 training and test start-ups differ by their seeds) on the offline features (the centred rate
 window).  The slow tests check SSA-SVR against no compensation with the features an
 instrument computes (cycle mode), on that unit and on the fleet scenario, where the
@@ -25,8 +25,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from nfs.compensate.study import CompensationSettings, run_study
-from nfs.io.scenario import load_scenario
+from nfs.compensate.study import run_study
+from nfs.compensate.settings import CompensationSettings
+from nfs.config.scenario import load_scenario
 from nfs.report.compensation import SVR_FAMILY, shape_checks
 
 FLEET = Path(__file__).resolve().parents[2] / "scenarios" / "startup_7temps_fleet.toml"

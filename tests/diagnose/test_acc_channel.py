@@ -22,7 +22,7 @@ from nfs.diagnose.diagnose import candidates, diagnose
 from nfs.diagnose.stats import clustered_fit, run_grams
 from nfs.experiment import simulate_run
 from nfs.instrument import load_instrument
-from nfs.io.scenario import load_scenario
+from nfs.config.scenario import load_scenario
 
 B_Y = -1.5e-5
 

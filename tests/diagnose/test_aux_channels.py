@@ -17,7 +17,7 @@ from nfs.effects import make_effect
 from nfs.errors import EffectError, NfsError
 from nfs.experiment import simulate_run
 from nfs.instrument import AuxChannel, instrument_from_dict, load_instrument
-from nfs.io.scenario import load_scenario
+from nfs.config.scenario import load_scenario
 
 CURRENT = AuxChannel(name="aux_source_current_ma", source="temperature:electronics",
                      gain=2.0, offset=150.0, noise=0.01, walk_per_rth_s=0.02)

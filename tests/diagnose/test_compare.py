@@ -28,7 +28,7 @@ from nfs.effects import make_effect
 from nfs.errors import NfsError
 from nfs.experiment import simulate_run
 from nfs.run import Run
-from nfs.io.scenario import load_scenario
+from nfs.config.scenario import load_scenario
 
 TEMPS = (-32.0, -5.0, 17.0, 43.0, 54.0)
 

@@ -67,7 +67,7 @@ from nfs.effects import make_effect
 from nfs.errors import NfsError
 from nfs.experiment import simulate_run
 from nfs.instrument import AuxChannel, instrument_from_dict, load_instrument, preset_path
-from nfs.io.scenario import load_scenario
+from nfs.config.scenario import load_scenario
 from nfs.io.tomlio import load_toml
 
 #: hidden effect -> (parameters, expected target)

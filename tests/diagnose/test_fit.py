@@ -20,7 +20,7 @@ from nfs.diagnose.params import get_param, set_params
 from nfs.errors import NfsError
 from nfs.experiment import simulate_run
 from nfs.instrument import load_instrument
-from nfs.io.scenario import load_scenario
+from nfs.config.scenario import load_scenario
 
 #: The perturbed parameters (+20 % of the default) and the truth.
 PERTURBED = {

@@ -23,7 +23,7 @@ from nfs.diagnose.params import get_param, set_params
 from nfs.diagnose.prior import PRIOR_WIDTHS, build_prior
 from nfs.errors import NfsError
 from nfs.experiment import simulate_run
-from nfs.io.scenario import load_scenario
+from nfs.config.scenario import load_scenario
 
 
 @pytest.fixture(scope="module")

@@ -19,7 +19,7 @@ import pytest
 from nfs.diagnose.refine import REFINE_FACTOR, fit_unit
 from nfs.diagnose.structure import thermometer_weight
 from nfs.experiment import simulate_run
-from nfs.io.scenario import load_scenario
+from nfs.config.scenario import load_scenario
 
 TEMPS = (-32.0, -5.0, 28.0, 54.0)
 

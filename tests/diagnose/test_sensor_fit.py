@@ -20,7 +20,7 @@ from nfs.diagnose.fit import fit_model
 from nfs.diagnose.params import get_param, set_params
 from nfs.diagnose.sensor_fit import LEVEL_PATHS, LevelData, level_from_means
 from nfs.experiment import simulate_run
-from nfs.io.scenario import load_scenario
+from nfs.config.scenario import load_scenario
 from nfs.sensors import axis_elevation_deg
 
 TRUTH = {"turntable.tilt_north_deg": 0.3, "turntable.tilt_east_deg": -0.2,

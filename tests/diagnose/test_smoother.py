@@ -50,7 +50,7 @@ from nfs.effects import make_effect
 from nfs.errors import NfsError
 from nfs.experiment import conditions_from_run, effect_context, simulate_run, thermal_power
 from nfs.run import Run
-from nfs.io.scenario import load_scenario
+from nfs.config.scenario import load_scenario
 
 DURATION_S = 3600.0
 T0_INDEX = (0, 3, 6)            # -32, 17, 54 C

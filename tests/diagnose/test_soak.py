@@ -16,7 +16,7 @@ from nfs.diagnose.params import set_params
 from nfs.diagnose.soak import soak_offsets
 from nfs.errors import NfsError
 from nfs.experiment import simulate_run
-from nfs.io.scenario import load_scenario
+from nfs.config.scenario import load_scenario
 
 OFFSETS = {"fog": 0.37, "acc_x": -0.21, "acc_y": 0.03}
 

@@ -30,7 +30,7 @@ from nfs.diagnose.thermal_residual import (prepare_thermal, start_states, therma
 from nfs.errors import InputError
 from nfs.experiment import simulate_run
 from nfs.instrument import load_instrument
-from nfs.io.scenario import load_scenario
+from nfs.config.scenario import load_scenario
 
 FLOOR_K = math.hypot(0.01, 0.0625 / math.sqrt(12.0))
 

@@ -27,7 +27,7 @@ from nfs.diagnose.fit import default_free, fit_model
 from nfs.diagnose.thermal_residual import prepare_thermal, thermal_residual_parts
 from nfs.errors import NfsError
 from nfs.experiment import simulate_run
-from nfs.io.scenario import load_scenario
+from nfs.config.scenario import load_scenario
 
 TEMPS = (-32.0, -5.0, 28.0, 54.0)
 FLOOR_K = math.hypot(0.01, 0.0625 / math.sqrt(12.0))

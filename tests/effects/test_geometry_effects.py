@@ -245,7 +245,8 @@ def test_instrument_and_scenario_files_with_geometry_effects_load(tmp_path):
     # Oracle: the files themselves; the instrument round-trips through its TOML form, and
     # a scenario naming it simulates with the effects in place.
     from nfs.instrument import preset_path
-    from nfs.io.scenario import default_scenario_path, load_scenario
+    from nfs.config.scenario import load_scenario
+    from nfs.config.presets import default_scenario_path
     text = preset_path("default").read_text()
     text = text.replace("tilt_north_deg = 0.02", "tilt_north_deg = 0.0").replace(
         "tilt_east_deg = -0.015", "tilt_east_deg = 0.0")

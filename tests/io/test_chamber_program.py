@@ -13,7 +13,7 @@ from nfs.instrument import preset_path
 from nfs.experiment import conditions_from_run, simulate_run
 from nfs.scenario_runs import run_scenario
 from nfs.io.measurement import read_run, write_run
-from nfs.io.scenario import load_scenario
+from nfs.config.scenario import load_scenario
 
 # The program of the chamber-program example, exactly as written in the README.
 EXAMPLE = """start_temperatures_c = [25.0]

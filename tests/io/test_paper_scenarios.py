@@ -11,7 +11,7 @@ import pytest
 
 from nfs.experiment import simulate_run
 from nfs.scenario_runs import northfind_runs
-from nfs.io.scenario import load_scenario
+from nfs.config.scenario import load_scenario
 
 SCENARIOS = Path(__file__).resolve().parents[2] / "scenarios"
 

@@ -27,7 +27,8 @@ from nfs.effects import available_effects, get_effect
 from nfs.errors import MeasurementError, ScenarioError
 from nfs.instrument import load_instrument, preset_path
 from nfs.io.measurement import read_run, write_run
-from nfs.io.scenario import default_scenario_path, load_scenario
+from nfs.config.scenario import load_scenario
+from nfs.config.presets import default_scenario_path
 from nfs.io.tomlio import dumps_toml
 from nfs.parameters import param_paths
 from nfs.ranges import (RANGES, RangeWarning, deferred_warnings, find, leaves,

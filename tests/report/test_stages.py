@@ -15,7 +15,7 @@ import math
 import numpy as np
 import pytest
 
-from nfs.io.scenario import load_scenario
+from nfs.config.scenario import load_scenario
 from nfs.report.compensation import drift_table_markdown
 from nfs.scoring.heading_table import HeadingTable, TableRow
 from nfs.scenario_runs import (chamber_moves, run_scenario, stage_names,

@@ -41,8 +41,9 @@ def test_medians_by_start_temperature_are_the_closed_form():
 
 
 def test_report_has_time_to_spec_and_error_figure(tmp_path, scenario_text):
-    from nfs.compensate.study import CompensationSettings, run_study
-    from nfs.io.scenario import load_scenario
+    from nfs.compensate.study import run_study
+    from nfs.compensate.settings import CompensationSettings
+    from nfs.config.scenario import load_scenario
     from nfs.report.compensation import write_study
     p = tmp_path / "s.toml"
     p.write_text(scenario_text("tts", 3, (-20.0, 40.0), 3900.0,

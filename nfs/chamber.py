@@ -49,8 +49,8 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import ScenarioError
-from ..ranges import KELVIN_OFFSET, TEMPERATURE_RANGE_C, check, check_tree, find
+from .errors import ScenarioError
+from .ranges import KELVIN_OFFSET, TEMPERATURE_RANGE_C, check, check_tree, find
 
 __all__ = ["ChamberStep", "ChamberProgram", "parse_program", "TEMPERATURE_RANGE_C",
            "check_temperature"]
