@@ -1,6 +1,7 @@
 """Wavelet denoising of the FOG output: the drift that compensators learn (docs/physics.md 6).
 
-``wavelet``: the DWT shrinkage denoiser, its threshold rules and level choice;
+``wavelet``: the DWT shrinkage denoiser; ``thresholds``: its threshold rules; ``levels``: the
+level of a cutoff period;
 ``drift``: the drift of a run (output minus Earth-rate projection), denoised.
 """
 
@@ -11,24 +12,11 @@ from nfs.denoise.drift import (
     earth_rate_projection_dph,
     separate_drift,
 )
-from nfs.denoise.wavelet import (
-    BOUNDARIES,
-    MAD_TO_SIGMA,
-    THRESHOLD_MODES,
-    THRESHOLD_RULES,
-    DenoiseResult,
-    ThresholdRule,
-    bayes_shrink_threshold,
-    cutoff_for_level,
-    edge_span_samples,
-    level_for_cutoff,
-    mad_sigma,
-    no_threshold,
-    sure_risk,
-    sure_threshold,
-    visu_threshold,
-    wavelet_denoise,
-)
+from nfs.denoise.levels import cutoff_for_level, edge_span_samples, level_for_cutoff
+from nfs.denoise.thresholds import (MAD_TO_SIGMA, THRESHOLD_RULES, ThresholdRule,
+                                    bayes_shrink_threshold, mad_sigma, no_threshold, sure_risk,
+                                    sure_threshold, visu_threshold)
+from nfs.denoise.wavelet import BOUNDARIES, THRESHOLD_MODES, DenoiseResult, wavelet_denoise
 
 __all__ = [
     "BOUNDARIES",

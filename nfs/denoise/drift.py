@@ -27,7 +27,8 @@ from nfs.errors import InputError, MeasurementError
 from nfs.run import Run
 from nfs.sensors.fog import earth_rate_along_axis_dph
 
-from .wavelet import DenoiseResult, ThresholdRule, wavelet_denoise
+from .thresholds import ThresholdRule
+from .wavelet import DenoiseResult, wavelet_denoise
 
 __all__ = [
     "DEFAULT_CUTOFF_PERIOD_S",

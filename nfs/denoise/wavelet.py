@@ -14,16 +14,16 @@ a level J, the detail coefficients of every level 1..J are shrunk toward zero wi
 Symbols and conventions:
 
 - ``level`` J: the approximation a_J holds the periods longer than 2^(J+1) samples
-  (:func:`level_for_cutoff`); at 1 Hz, J = 8 keeps periods above 512 s = 8.5 min.
+  (:func:`~nfs.denoise.levels.level_for_cutoff`); at 1 Hz, J = 8 keeps periods above 512 s = 8.5 min.
 - ``sigma``: standard deviation of the white noise per sample, estimated from the finest
-  details by the median absolute deviation (:func:`mad_sigma`). With an orthonormal wavelet
+  details by the median absolute deviation (:func:`~nfs.denoise.thresholds.mad_sigma`). With an orthonormal wavelet
   white noise of standard deviation sigma gives coefficients of standard deviation sigma at
   every level.
 - ``thresholds``: T_j per level, finest first (``thresholds[0]`` is level 1), in the units of
   the record.
 - A threshold rule is a function ``rule(detail, sigma, n_samples) -> T`` (``detail``: one
   level's coefficients, ``sigma``: that level's noise standard deviation, ``n_samples``: the
-  length of the record). :data:`THRESHOLD_RULES` maps the built-in names to rules; a user's own
+  length of the record). :data:`~nfs.denoise.thresholds.THRESHOLD_RULES` maps the built-in names to rules; a user's own
   function is passed as ``rule=`` the same way.
 
 Because the details below the cutoff are thresholded, not discarded, white noise is removed
@@ -38,40 +38,23 @@ from __future__ import annotations
 
 import functools
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
 import pywt
 
-from nfs.docfields import document_fields
-from nfs.errors import InputError
+from ..docfields import document_fields
+from ..errors import InputError
+from .levels import cutoff_for_level, edge_span_samples, level_for_cutoff, positive
+from .thresholds import ThresholdRule, mad_sigma, resolve_rule
 
 __all__ = [
-    "MAD_TO_SIGMA",
-    "THRESHOLD_RULES",
     "THRESHOLD_MODES",
     "BOUNDARIES",
     "DenoiseResult",
-    "ThresholdRule",
-    "level_for_cutoff",
-    "cutoff_for_level",
-    "edge_span_samples",
-    "mad_sigma",
-    "no_threshold",
-    "visu_threshold",
-    "sure_risk",
-    "sure_threshold",
-    "bayes_shrink_threshold",
     "wavelet_denoise",
 ]
-
-#: Phi^-1(3/4) = 0.6745: median(|d|) / MAD_TO_SIGMA is sigma for Gaussian d of zero mean.
-MAD_TO_SIGMA: float = 0.6744897501960817
-
-#: A threshold rule: ``rule(detail, sigma, n_samples) -> threshold`` in the units of ``detail``.
-ThresholdRule = Callable[[np.ndarray, float, int], float]
-
 #: Thresholding functions (``pywt.threshold`` modes) that :func:`wavelet_denoise` accepts.
 THRESHOLD_MODES: tuple[str, ...] = ("soft", "hard", "garrote")
 
@@ -79,260 +62,6 @@ THRESHOLD_MODES: tuple[str, ...] = ("soft", "hard", "garrote")
 #: extension about a fitted end value (see the comment "record ends"); every other name is a
 #: PyWavelets signal-extension mode passed to ``wavedec``/``waverec`` unchanged.
 BOUNDARIES: tuple[str, ...] = ("smooth-extend",) + tuple(pywt.Modes.modes)
-
-
-# --------------------------------------------------------------------------------------------
-# level and cutoff
-
-
-def level_for_cutoff(cutoff_period_s: float, sample_rate_hz: float) -> int:
-    """DWT level J whose approximation keeps the periods longer than ``cutoff_period_s``.
-
-    Each DWT level halves the band: the level-J approximation holds frequencies below
-    fs / 2^(J+1), i.e. periods longer than 2^(J+1) samples (the dyadic bands of a
-    multiresolution analysis: Mallat 2009, *A Wavelet Tour of Signal Processing*, 3rd ed.,
-    chapter 7; section not checked). Hence
-
-        J = round(log2(P fs)) - 1,   P: cutoff period [s], fs: sample rate [Hz],
-
-    rounded to the nearest dyadic cutoff on a log scale (P fs = 512 at 1 Hz gives J = 8; the
-    band edges of real wavelet filters are not sharp, so the cutoff is nominal).
-
-    Parameters
-    ----------
-    cutoff_period_s : float
-        P, the shortest period the approximation should keep [s].
-    sample_rate_hz : float
-        fs [Hz].
-
-    Returns
-    -------
-    int
-        J >= 1.
-
-    Raises
-    ------
-    InputError
-        A non-positive or non-finite argument, or P fs < 2^(1.5) (shorter than level 1 cuts).
-    """
-    p = _positive("cutoff_period_s", cutoff_period_s)
-    fs = _positive("sample_rate_hz", sample_rate_hz)
-    samples = p * fs
-    if samples < 2.0 ** 1.5:
-        raise InputError(f"cutoff_period_s = {p!r} s is {samples:.3g} samples at {fs!r} Hz; "
-                         "level 1 already cuts at 4 samples, so the cutoff must be at least "
-                         "about 3 samples")
-    return max(1, int(round(math.log2(samples))) - 1)
-
-
-def cutoff_for_level(level: int, sample_rate_hz: float) -> float:
-    """The nominal cutoff of level J: 2^(J+1) / fs [s] (inverse of :func:`level_for_cutoff`)."""
-    return 2.0 ** (int(level) + 1) / _positive("sample_rate_hz", sample_rate_hz)
-
-
-def edge_span_samples(level: int, filter_length: int) -> int:
-    """Samples at each end of a record that boundary effects reach at level J.
-
-        (L - 1)(2^J - 1)
-
-    is the support, in samples of the record, of a level-J wavelet or scaling function of a
-    filter of length L (the scaling function of a length-L filter is supported on [0, L - 1]
-    at scale 1: Daubechies 1992, *Ten Lectures on Wavelets*, chapter 6; section not checked).
-    A sample farther than this from an end is rebuilt only
-    from coefficients that never see the extension. At db4 (L = 8), J = 8: 1785 samples.
-    """
-    return (int(filter_length) - 1) * (2 ** int(level) - 1)
-
-
-# --------------------------------------------------------------------------------------------
-# noise level and threshold rules
-
-
-def mad_sigma(detail: np.ndarray) -> float:
-    """Noise standard deviation from detail coefficients by the median absolute deviation.
-
-        sigma = median(|d|) / 0.6745
-
-    (Donoho & Johnstone 1994, Biometrika 81(3) 425-455; Donoho 1995, IEEE Trans. Inf. Theory
-    41(3) 613-627; section numbers not checked against the papers), applied to the
-    finest-level details d_1, where a smooth signal leaves almost nothing and the median
-    ignores the few large coefficients it does leave. 0.6745 is Phi^-1(3/4) (:data:`MAD_TO_SIGMA`).
-
-    Parameters
-    ----------
-    detail : array_like
-        Detail coefficients [units of the record].
-
-    Returns
-    -------
-    float
-        sigma [units of the record]; 0 for an empty array.
-    """
-    d = np.asarray(detail, dtype=float)
-    if d.size == 0:
-        return 0.0
-    return float(np.median(np.abs(d)) / MAD_TO_SIGMA)
-
-
-def no_threshold(detail: np.ndarray, sigma: float, n_samples: int) -> float:
-    """The null rule: T = 0, every coefficient kept (the transform alone, a perfect
-    reconstruction up to round-off)."""
-    return 0.0
-
-
-def visu_threshold(sigma: float, n: int) -> float:
-    """Universal threshold of VisuShrink.
-
-        T = sigma sqrt(2 ln n)
-
-    (Donoho & Johnstone 1994, Biometrika 81(3) 425-455, the universal threshold; equation
-    number not checked against the paper: with probability tending to 1 every pure-noise
-    coefficient of n lies below T.)
-
-    Parameters
-    ----------
-    sigma : float
-        Noise standard deviation of the coefficients [units of the record].
-    n : int
-        Number of samples of the record (n >= 1; n = 1 gives T = 0).
-    """
-    n = int(n)
-    if n < 1:
-        raise InputError(f"visu_threshold needs n >= 1 samples, got {n}")
-    return float(sigma) * math.sqrt(2.0 * math.log(n))
-
-
-def sure_risk(t: float | np.ndarray, x: np.ndarray) -> np.ndarray:
-    """Stein's unbiased risk estimate of soft thresholding at t for unit-variance data.
-
-        SURE(t; x) = m - 2 #{i : |x_i| <= t} + sum_i min(|x_i|, t)^2
-
-    (Donoho & Johnstone 1995, JASA 90(432) 1200-1224, from Stein 1981, Ann. Stat. 9(6)
-    1135-1151; section number not checked), m = len(x):
-    an unbiased estimate of E ||eta_t(x) - mu||^2 for x ~ N(mu, I). Vectorised over t.
-    """
-    x = np.abs(np.asarray(x, dtype=float))
-    t = np.asarray(t, dtype=float)
-    tt = t[..., None]
-    return (x.size - 2.0 * np.sum(x <= tt, axis=-1)
-            + np.sum(np.minimum(x, tt) ** 2, axis=-1))
-
-
-def sure_threshold(coeffs: np.ndarray, sigma: float, *, hybrid: bool = True) -> float:
-    """SureShrink threshold of one level's coefficients (Donoho & Johnstone 1995).
-
-    With x = d / sigma (m coefficients) and t_u = sqrt(2 ln m):
-
-        t_S = argmin_{0 <= t <= t_u} SURE(t; x)            (:func:`sure_risk`)
-
-    SURE is piecewise increasing in t between the sorted |x_i|, so its minimum over
-    [0, t_u] lies at t = 0 or at one of the |x_i| <= t_u; those are the candidates searched
-    (with cumulative sums, O(m log m)). The hybrid rule (section 2.4 of the paper; WaveLab's
-    ``HybridThresh``) falls back to the universal threshold when the level is sparse, where
-    SURE is unreliable:
-
-        s^2 = (sum x_i^2 - m) / m,   gamma = (log2 m)^(3/2) / sqrt(m)
-        t = t_u  if s^2 <= gamma,  else  min(t_S, t_u)
-
-    Returns T = sigma t [units of the record]. (Section numbers not checked against the
-    paper; the formulas match WaveLab 802's ``ValSUREThresh`` and ``HybridThresh``.)
-
-    Parameters
-    ----------
-    coeffs : array_like
-        One level's detail coefficients [units of the record].
-    sigma : float
-        Their noise standard deviation [units of the record]; 0 gives T = 0.
-    hybrid : bool
-        Apply the sparsity test (SureShrink proper); False returns the pure SURE minimiser.
-    """
-    d = np.asarray(coeffs, dtype=float).ravel()
-    sigma = float(sigma)
-    m = d.size
-    if m == 0 or sigma <= 0.0:
-        return 0.0
-    x = np.abs(d) / sigma
-    t_u = math.sqrt(2.0 * math.log(m)) if m > 1 else 0.0
-    if hybrid:
-        s2 = (float(np.sum(x * x)) - m) / m
-        gamma = math.log2(m) ** 1.5 / math.sqrt(m)
-        if s2 <= gamma:
-            return sigma * t_u
-    xs = np.sort(x)
-    csum = np.cumsum(xs * xs)
-    k = np.arange(1, m + 1)
-    # SURE at t = xs[k-1]: m - 2k + sum_{i<=k} xs_i^2 + (m - k) xs_k^2 (ties: the last of a
-    # run of equal values counts them all, so take the risk at the last index of each value).
-    risk = m - 2.0 * k + csum + (m - k) * xs * xs
-    last_of_value = np.append(xs[1:] != xs[:-1], True)
-    ok = last_of_value & (xs <= t_u)
-    candidates = np.concatenate(([0.0], xs[ok]))
-    risks = np.concatenate(([float(m)], risk[ok]))  # SURE(0) = m
-    t_s = float(candidates[int(np.argmin(risks))])
-    return sigma * min(t_s, t_u)
-
-
-def bayes_shrink_threshold(coeffs: np.ndarray, sigma: float) -> float:
-    """BayesShrink threshold of one level's coefficients (Chang, Yu & Vetterli 2000).
-
-        T = sigma^2 / sigma_x,   sigma_x = sqrt(max(sigma_y^2 - sigma^2, 0)),
-        sigma_y^2 = mean(d^2)
-
-    (IEEE Trans. Image Process. 9(9) 1532-1546; section not checked against the paper, the
-    formula matches scikit-image's ``_bayes_thresh``: the threshold that nearly
-    minimises the Bayes risk of soft thresholding for a generalised-Gaussian prior, with the
-    signal variance sigma_x^2 estimated from the observed variance sigma_y^2.) When
-    sigma_y <= sigma the level looks like pure noise and T = max |d| (all coefficients set to
-    zero), as the paper prescribes.
-
-    Parameters
-    ----------
-    coeffs : array_like
-        One level's detail coefficients [units of the record], assumed of zero mean.
-    sigma : float
-        Their noise standard deviation [units of the record].
-    """
-    d = np.asarray(coeffs, dtype=float).ravel()
-    sigma = float(sigma)
-    if d.size == 0 or sigma <= 0.0:
-        return 0.0
-    var_x = float(np.mean(d * d)) - sigma * sigma
-    if var_x <= 0.0:
-        return float(np.max(np.abs(d)))
-    return sigma * sigma / math.sqrt(var_x)
-
-
-def _visu_rule(detail: np.ndarray, sigma: float, n_samples: int) -> float:
-    return visu_threshold(sigma, n_samples)
-
-
-def _sure_rule(detail: np.ndarray, sigma: float, n_samples: int) -> float:
-    return sure_threshold(detail, sigma)
-
-
-def _bayes_rule(detail: np.ndarray, sigma: float, n_samples: int) -> float:
-    return bayes_shrink_threshold(detail, sigma)
-
-
-#: Built-in threshold rules by name, each ``rule(detail, sigma, n_samples) -> T``:
-#: ``none`` (the null rule, T = 0), ``visu`` (:func:`visu_threshold` with n the record length),
-#: ``sure`` (:func:`sure_threshold`, hybrid) and ``bayes`` (:func:`bayes_shrink_threshold`).
-THRESHOLD_RULES: dict[str, ThresholdRule] = {
-    "none": no_threshold,
-    "visu": _visu_rule,
-    "sure": _sure_rule,
-    "bayes": _bayes_rule,
-}
-
-
-def _resolve_rule(rule: str | ThresholdRule) -> tuple[str, ThresholdRule]:
-    if callable(rule):
-        return getattr(rule, "__name__", "custom"), rule
-    if isinstance(rule, str) and rule in THRESHOLD_RULES:
-        return rule, THRESHOLD_RULES[rule]
-    raise InputError(f"unknown threshold rule {rule!r}; valid rules: "
-                     f"{', '.join(THRESHOLD_RULES)} (or a function "
-                     "rule(detail, sigma, n_samples) -> threshold)")
 
 
 # --------------------------------------------------------------------------------------------
@@ -426,7 +155,7 @@ class DenoiseResult:
     noise: np.ndarray
     """x - s_hat, what was removed [units of the record]."""
     sigma: float
-    """Noise standard deviation per sample from the finest details, :func:`mad_sigma`
+    """Noise standard deviation per sample from the finest details, :func:`~nfs.denoise.thresholds.mad_sigma`
     [units of the record]."""
     sigma_per_level: tuple[float, ...]
     """Noise standard deviation used at each level, finest first (all equal to ``sigma``
@@ -447,7 +176,7 @@ class DenoiseResult:
     """T_j of each level, finest first (``thresholds[0]`` is level 1) [units of the record]."""
     edge_samples: int
     """(L - 1)(2^J - 1), samples at each end that boundary effects reach
-    (:func:`edge_span_samples`; at most half the record)."""
+    (:func:`~nfs.denoise.levels.edge_span_samples`; at most half the record)."""
     edge_s: float
     """``edge_samples`` / fs [s]."""
     edge_error_estimate: tuple[float, float]
@@ -460,16 +189,6 @@ class DenoiseResult:
     within a factor 2 of the true edge error)."""
     sample_rate_hz: float
     """fs [Hz]."""
-
-
-def _positive(name: str, value: float) -> float:
-    try:
-        value = float(value)
-    except (TypeError, ValueError):
-        raise InputError(f"{name} must be a number, got {value!r}") from None
-    if not math.isfinite(value) or value <= 0.0:
-        raise InputError(f"{name} must be finite and > 0, got {value!r}")
-    return value
 
 
 def _wavelet(name: str | pywt.Wavelet) -> pywt.Wavelet:
@@ -570,13 +289,13 @@ def wavelet_denoise(x: np.ndarray, *, sample_rate_hz: float = 1.0,
     sample_rate_hz : float
         fs [Hz]; converts ``cutoff_period_s`` to a level and the edge span to seconds.
     cutoff_period_s : float, optional
-        Shortest period the approximation keeps [s]; gives J by :func:`level_for_cutoff`.
+        Shortest period the approximation keeps [s]; gives J by :func:`~nfs.denoise.levels.level_for_cutoff`.
     level : int, optional
         J directly. Give exactly one of ``cutoff_period_s`` and ``level``.
     wavelet : str
         A discrete PyWavelets wavelet (db4, sym8, coif3, ...).
     rule : str or callable
-        A name of :data:`THRESHOLD_RULES` or a function ``rule(detail, sigma, n_samples)``
+        A name of :data:`~nfs.denoise.thresholds.THRESHOLD_RULES` or a function ``rule(detail, sigma, n_samples)``
         (called once per level in each of the two passes: the result and the second guess
         behind ``edge_error_estimate``).
     mode : str
@@ -626,7 +345,7 @@ def wavelet_denoise(x: np.ndarray, *, sample_rate_hz: float = 1.0,
         bad = int(np.flatnonzero(~np.isfinite(x))[0])
         raise InputError(f"record holds a non-finite value at sample {bad} "
                          "(fill or interpolate missing samples first)")
-    fs = _positive("sample_rate_hz", sample_rate_hz)
+    fs = positive("sample_rate_hz", sample_rate_hz)
     if (cutoff_period_s is None) == (level is None):
         raise InputError("give exactly one of cutoff_period_s and level")
     if level is None:
@@ -635,7 +354,7 @@ def wavelet_denoise(x: np.ndarray, *, sample_rate_hz: float = 1.0,
         raise InputError(f"level must be an integer >= 1, got {level!r}")
     level = int(level)
     wav = _wavelet(wavelet)
-    rule_name, rule_fn = _resolve_rule(rule)
+    rule_name, rule_fn = resolve_rule(rule)
     fixed = None if thresholds is None else [float(v) for v in thresholds]
     if fixed is not None:
         if len(fixed) != level or not all(math.isfinite(v) and v >= 0 for v in fixed):

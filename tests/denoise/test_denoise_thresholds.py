@@ -1,4 +1,4 @@
-"""Tests of the threshold rules and noise level of nfs.denoise.wavelet.
+"""Tests of the threshold rules and noise level of nfs.denoise.thresholds.
 
 Each test names its oracle: the rule's closed form on a hand-computable case, a brute-force
 minimisation written out with loops, or Stein's unbiasedness checked by Monte Carlo."""
