@@ -13,7 +13,7 @@ from __future__ import annotations
 import time
 
 from nfs.experiment import simulate_run, simulate_runs
-from nfs.scenario_runs import northfind_runs
+from nfs.studies.scenario_runs import northfind_runs
 from nfs.config.scenario import load_scenario
 
 

@@ -40,7 +40,7 @@ import tempfile
 import time
 
 from nfs.experiment import simulate_run
-from nfs.scenario_runs import northfind_runs
+from nfs.studies.scenario_runs import northfind_runs
 from nfs.config.scenario import load_scenario
 from nfs.sweep import (BATCH_CELLS, LocalExecutor, cell_batches, cell_tasks, run_cell, run_cells,
                        run_sweep, sweep_from_dict)

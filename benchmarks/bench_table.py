@@ -18,7 +18,7 @@ import time
 import warnings
 
 from nfs.cli import main as nfs_main
-from nfs.compensate.study import run_study
+from nfs.studies.startup_study import run_study
 from nfs.config.scenario import load_scenario
 from nfs.report.compensation import write_study
 

@@ -26,7 +26,7 @@ import sys
 import time
 from pathlib import Path
 
-from nfs.compensate.study import run_study
+from nfs.studies.startup_study import run_study
 from nfs.config.scenario import load_scenario
 from nfs.scoring.heading_table import REFERENCE_ROWS
 

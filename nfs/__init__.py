@@ -3,7 +3,7 @@
 The pipeline, by subpackage: :mod:`thermal` (lumped network) -> :mod:`nfs.sensors` and
 :mod:`nfs.effects` (named drift effects) -> :mod:`nfs.noise` -> :mod:`nfs.denoise` ->
 :mod:`nfs.compensate` -> :mod:`nfs.northfind` -> :mod:`nfs.report`; :mod:`nfs.experiment`
-simulates runs (many together, their thermal states stacked), :mod:`nfs.scenario_runs` runs
+simulates runs (many together, their thermal states stacked), :mod:`nfs.studies.scenario_runs` runs
 a scenario end to end and :mod:`nfs.cli` is the ``nfs`` command.
 """
 

@@ -18,7 +18,7 @@ absolute [degC].  Steps, in order:
 ``{ repeat = N, steps = [...] }``
     the steps N >= 1 times in a row (nested repeats allowed); the iterations of the first
     repeat at the top level are the program's *cycles* (a study that trains on cycle 1 and
-    tests on the others, :mod:`nfs.compensate.cycles`);
+    tests on the others, :mod:`nfs.studies.cycle_study`);
 ``{ power_on = true }``
     the unit is powered on here (at most once, not inside a repeat).  The steps before it
     are the unpowered soak: simulated, not recorded.  The run, its time axis (t = 0 at

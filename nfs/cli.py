@@ -63,12 +63,12 @@ class Progress:
 
 def _cmd_table(args) -> int:
     from .compensate.modes import check_features_mode
-    from .scenario_runs import run_scenario, stage_errors_by_temperature, uncompensated_table
+    from .studies.scenario_runs import (run_scenario, stage_errors_by_temperature, uncompensated_table)
     from .config.scenario import load_scenario
     from .report import write_table
     if args.features_mode is not None:
         check_features_mode(args.features_mode, "--features-mode")
-    from .compensate.study import table_provenance
+    from .studies.startup_study import table_provenance
     from .compensate.settings import CompensationSettings
     scenario = _with_overrides(load_scenario(args.scenario), args)
     _file(args.json, "--json", args.overwrite)
@@ -81,7 +81,7 @@ def _cmd_table(args) -> int:
     table = None
     if args.no_compensation:
         # the start-ups of the full table's before row: its test start-ups
-        from .compensate.study import test_scenario
+        from .studies.startup_study import test_scenario
         progress.what = "simulating"
         res = run_scenario(test_scenario(scenario, settings), progress=progress)
         table = uncompensated_table(res).with_intervals(stage_errors_by_temperature(res),
@@ -90,8 +90,8 @@ def _cmd_table(args) -> int:
         paths = write_table(table, args.output, json_path=args.json, title=title)
         text = table.to_markdown()
     elif settings.protocol in ("cycles", "runs"):   # the drift table, trained once
-        from .compensate.cycles import run_cycle_study, run_runs_study
-        from .report.cycles import cycle_table_markdown, write_cycle_study
+        from .studies.cycle_study import run_cycle_study, run_runs_study
+        from .report.cycle_report import cycle_table_markdown, write_cycle_study
         run = run_cycle_study if settings.protocol == "cycles" else run_runs_study
         cycles = run(scenario, settings, progress=progress)
         text = cycle_table_markdown(cycles)
@@ -99,15 +99,15 @@ def _cmd_table(args) -> int:
                                   title=f"{scenario.name}: drift table of the "
                                         f"{settings.protocol}", provenance=provenance)
     elif settings.protocol == "parameters":   # every cycle calibrates the biases
-        from .compensate.parameters import run_parameter_study
-        from .report.parameters import parameter_table_markdown, write_parameter_study
+        from .studies.parameter_study import run_parameter_study
+        from .report.parameter_report import parameter_table_markdown, write_parameter_study
         pstudy = run_parameter_study(scenario, settings, progress=progress)
         text = parameter_table_markdown(pstudy)
         paths = write_parameter_study(
             pstudy, args.output, json_path=args.json,
             title=f"{scenario.name}: parameter-level compensation", provenance=provenance)
     else:
-        from .compensate.study import run_study
+        from .studies.startup_study import run_study
         from .report.compensation import write_study
         study = run_study(scenario, settings, progress=progress)
         table = dataclasses.replace(study.heading_table(), provenance=provenance)

@@ -29,8 +29,8 @@ import pytest
 
 from nfs.diagnose.compare import noise_free
 from nfs.experiment import simulate_run
-from nfs.scenario_runs import northfind_runs, run_scenario, stage_errors
-from nfs.scenario_runs import uncompensated_table
+from nfs.studies.scenario_runs import northfind_runs, run_scenario, stage_errors
+from nfs.studies.scenario_runs import uncompensated_table
 from nfs.northfind import tilt_model_error_deg
 from nfs.config.scenario import load_scenario
 

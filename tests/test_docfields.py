@@ -5,12 +5,12 @@ import pydoc
 
 import pytest
 
-from nfs.compensate.study import CompensationStudy, MethodResult, SeedResult
+from nfs.studies.startup_study import CompensationStudy, MethodResult, SeedResult
 from nfs.diagnose.fit import FitResult
 from nfs.diagnose.result import CandidateScore, Diagnosis
 from nfs.docfields import document_fields, field_docs
 from nfs.experiment import SimulationResult
-from nfs.scenario_runs import ScenarioResult
+from nfs.studies.scenario_runs import ScenarioResult
 from nfs.run import Run, RunMeta
 from nfs.scenario import Scenario
 from nfs.northfind.heading import NorthFindResult

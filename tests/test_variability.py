@@ -180,7 +180,7 @@ def test_two_start_ups_differ_beyond_noise(default):
 
 
 def test_run_names_and_notes_record_the_unit(default):
-    from nfs.scenario_runs import run_scenario, uncompensated_table
+    from nfs.studies.scenario_runs import run_scenario, uncompensated_table
     sc = dataclasses.replace(default, repeats=3, start_temperatures_c=(17.0,))
     names = [c.name for c in sc.conditions()]
     assert names == ["startup_7temps_T+17C_u0_r0", "startup_7temps_T+17C_u1_r0",
@@ -369,7 +369,7 @@ def test_unit_split_defaults(default):
 
 
 def test_study_trains_and_tests_on_different_units(tmp_path, scenario_text):
-    from nfs.compensate.study import run_study
+    from nfs.studies.startup_study import run_study
     sc = _scenario(tmp_path, scenario_text,
                    "units = 3\n[variability]\n[compensation]\nmethods = ['ls']\n"
                    "test_repeats = 1\ntrain_repeats = 1\n", temps=(-20.0, 40.0))

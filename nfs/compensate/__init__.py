@@ -1,4 +1,4 @@
-"""Drift compensation: features, compensators (scikit-learn estimators), tuners, the study.
+"""Drift compensation: features, compensators (scikit-learn estimators), tuners, settings.
 
 - :mod:`~nfs.compensate.features`: named features from the thermometers and aux channels,
   in a features mode (:mod:`~nfs.compensate.modes`: cycle, causal, offline) with their rates
@@ -8,12 +8,12 @@
 - :mod:`~nfs.compensate.tuners`, :mod:`~nfs.compensate.search`: metaheuristic tuners (grid,
   PSO, GWO, HHO, SSA, TPE) and a search-CV wrapper validating by whole runs;
 - :mod:`~nfs.compensate.dataset`, :mod:`~nfs.compensate.compensator`,
-  :mod:`~nfs.compensate.methods`, :mod:`~nfs.compensate.study`: training data, a saved
-  compensator, the method registry and the comparison behind ``nfs table``.
+  :mod:`~nfs.compensate.methods`, :mod:`~nfs.compensate.settings`: training data, a saved
+  compensator, the method registry and the ``[compensation]`` settings (the studies that
+  use them are in :mod:`nfs.studies`).
 """
 
 from .compensator import DriftCompensator, load_compensator, train_compensator
-from .cycles import CycleStudy, run_cycle_study
 from .dataset import DriftDataset, drift_dataset
 from .features import (FEATURE_SETS, FeatureError, available_features, compute_features,
                        feature_columns, rate_k_per_min, resolve_features)
@@ -23,7 +23,6 @@ from .modes import DEFAULT_FEATURE_MODE, FEATURE_MODES, FeatureModeError, check_
 from .neural import BPNetwork, RBFNetwork
 from .regression import CubicLeastSquares, StepwiseRegression
 from .search import Integer, MetaheuristicSearchCV, Real
-from .study import CompensationStudy, run_study
 from .settings import CompensationSettings
 from .tuners import TUNERS, TuneResult, minimize
 
@@ -33,7 +32,6 @@ __all__ = [
     "feature_columns", "rate_k_per_min", "resolve_features", "IRLSSVMRegressor",
     "LSSVMRegressor", "RVRRegressor", "SVRRegressor", "METHODS", "TABLE_METHODS", "MethodSpec",
     "get_method", "BPNetwork", "RBFNetwork", "CubicLeastSquares", "StepwiseRegression",
-    "Integer", "MetaheuristicSearchCV", "Real", "CompensationSettings", "CompensationStudy",
-    "run_study", "TUNERS", "TuneResult", "minimize", "DEFAULT_FEATURE_MODE", "FEATURE_MODES",
-    "FeatureModeError", "check_features_mode", "CycleStudy", "run_cycle_study",
+    "Integer", "MetaheuristicSearchCV", "Real", "CompensationSettings", "TUNERS", "TuneResult", "minimize", "DEFAULT_FEATURE_MODE", "FEATURE_MODES",
+    "FeatureModeError", "check_features_mode",
 ]

@@ -60,7 +60,7 @@ class CompensationSettings:
     protocol: str = "start-ups"
     """What ``nfs table`` trains and tests on: ``start-ups`` (training start-ups, then the
     test start-ups: the heading table), ``cycles`` (cycle 1 of the chamber program, then
-    the other cycles: the drift table of :mod:`nfs.compensate.cycles`), ``runs`` (the same
+    the other cycles: the drift table of :mod:`nfs.studies.cycle_study`), ``runs`` (the same
     drift table, training runs then test runs) or ``parameters``
     (the parameters every cycle calibrates, modelled against temperature on the training
-    runs and scored on the test runs: :mod:`nfs.compensate.parameters`)."""
+    runs and scored on the test runs: :mod:`nfs.studies.parameter_study`)."""

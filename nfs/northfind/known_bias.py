@@ -3,7 +3,7 @@
 A multiposition cycle fits the gyro bias b with the heading (docs/physics.md section 5):
 it needs three distinct positions, or two 180 deg apart and a hint for the sign.  When the
 biases are known instead (predicted from the temperatures by a parameter-level model,
-:mod:`nfs.compensate.parameters`, or calibrated), fewer positions do (Titterton and Weston,
+:mod:`nfs.studies.parameter_study`, or calibrated), fewer positions do (Titterton and Weston,
 "Strapdown Inertial Navigation Technology", 2004, section 10.2: gyrocompassing with the
 instrument errors calibrated):
 

@@ -3,13 +3,13 @@ against time, before and after compensation, each with the paper's published fig
 ours.
 
 - A drift table of a chamber program's cycles or of whole runs
-  (:class:`~nfs.compensate.cycles.CycleStudy`, Tao et al. 2019 and Cheng et al. 2015):
+  (:class:`~nfs.studies.cycle_study.CycleStudy`, Tao et al. 2019 and Cheng et al. 2015):
   :func:`plot_drift_vs_temperature` (the separated drift less the constant calibration, and
   the drift less each row's prediction, against the FOG thermometer: a loop is thermal
   hysteresis, a rate term the model lacks) and :func:`plot_residual_vs_time` (the 100 s
   means of the compensated bias, whose standard deviation is Tao et al.'s bias stability,
   with +-1 bias stability here and in the paper; the chamber's ramps shaded).
-- A parameter-level study (:class:`~nfs.compensate.parameters.ParameterStudy`, Liang et al.
+- A parameter-level study (:class:`~nfs.studies.parameter_study.ParameterStudy`, Liang et al.
   2021): :func:`plot_parameters_vs_temperature` (each cycle's calibrated parameter against
   its sensor's thermometer, with every model's curve) and :func:`plot_parameter_residuals`
   (calibrated minus predicted on the test cycles: the constant, before compensation, and
@@ -28,7 +28,7 @@ import textwrap
 import numpy as np
 from matplotlib.figure import Figure
 
-from ..compensate.cycles import BIAS_WINDOW_S, UNCOMPENSATED
+from ..studies.cycle_study import BIAS_WINDOW_S, UNCOMPENSATED
 from .reference import CHENG2015_TABLE2_MSD, LIANG2021_RVR_OVER_LS_PCT, TAO2019_BIAS_STABILITY
 
 __all__ = ["plot_drift_vs_temperature", "plot_residual_vs_time",

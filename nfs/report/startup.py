@@ -75,7 +75,7 @@ def time_to_spec_table(result, northfind: Mapping[str, Sequence], spec_deg: floa
     Parameters
     ----------
     result : ScenarioResult
-        The test start-ups (:func:`~nfs.scenario_runs.run_scenario`).
+        The test start-ups (:func:`~nfs.studies.scenario_runs.run_scenario`).
     northfind : mapping
         Row name -> the NorthFindResult of every run of ``result`` (``before``: the
         result's own).

@@ -28,7 +28,7 @@ __all__ = ["TableRow", "HeadingTable", "pooled_rmse", "REFERENCE_ROWS", "STAGE_R
 
 _NAN2 = (math.nan, math.nan)
 
-#: Rows of the uncompensated stages (:func:`nfs.scenario_runs.stage_names`): the start-up,
+#: Rows of the uncompensated stages (:func:`nfs.studies.scenario_runs.stage_names`): the start-up,
 #: the stable stage, or under a chamber program that moves, the cycles with the chamber held
 #: after the start-up and those with it ramping.
 STAGE_ROWS = ("before", "stable", "held", "ramping")

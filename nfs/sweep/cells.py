@@ -9,8 +9,8 @@ so a rerun finds the cells it already has.
 
 The worker (:func:`run_cell`) loads the base scenario with the point's scenario keys, sets
 the point's instrument parameters, simulates and north-finds every run of the cell
-(:func:`~nfs.scenario_runs.run_scenario`), or, with a method, trains and applies that
-compensator as ``nfs table`` does (:func:`~nfs.compensate.study.run_study`), and returns a
+(:func:`~nfs.studies.scenario_runs.run_scenario`), or, with a method, trains and applies that
+compensator as ``nfs table`` does (:func:`~nfs.studies.startup_study.run_study`), and returns a
 small record: per run, the cycle times and heading errors of each method, the stage RMSE,
 the white-noise floor and the drift statistics.
 """
@@ -31,10 +31,10 @@ from threadpoolctl import threadpool_limits
 
 import nfs
 
-from ..compensate.study import run_study
+from ..studies.startup_study import run_study
 from ..compensate.settings import CompensationSettings
 from ..errors import NfsError
-from ..scenario_runs import floor_deg, run_scenario, run_scenarios
+from ..studies.scenario_runs import floor_deg, run_scenario, run_scenarios
 from ..io.provenance import sha256_of_text
 from ..config.scenario import load_scenario
 from ..northfind import heading_rmse

@@ -15,7 +15,7 @@ import dataclasses
 import numpy as np
 import pytest
 
-from nfs.compensate.study import run_study
+from nfs.studies.startup_study import run_study
 from nfs.config.scenario import load_scenario
 from nfs.report.compensation import shape_checks
 
@@ -43,7 +43,7 @@ def test_a_perfect_compensator_is_at_the_stable_stage():
     # the start-up RMSE equals the stable one up to sampling error (+-6 % per stage).
     from dataclasses import replace
 
-    from nfs.scenario_runs import run_scenario
+    from nfs.studies.scenario_runs import run_scenario
     from nfs.northfind import heading_rmse, north_find
     sc = load_scenario(PRECISE)
     res = run_scenario(dataclasses.replace(sc, repeats=sc.compensation.test_repeats))

@@ -16,8 +16,7 @@ import numpy as np
 import pytest
 
 from nfs.compensate.compensator import prediction_plan
-from nfs.compensate.cycles import (BIAS_WINDOW_S, CYCLE_METRICS, UNCOMPENSATED, cut_run,
-                                   run_cycle_study)
+from nfs.studies.cycle_study import (BIAS_WINDOW_S, CYCLE_METRICS, UNCOMPENSATED, cut_run, run_cycle_study)
 from nfs.denoise import separate_drift
 from nfs.errors import ScenarioError
 from nfs.config.scenario import load_scenario

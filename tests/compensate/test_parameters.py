@@ -14,8 +14,7 @@ import json
 import numpy as np
 import pytest
 
-from nfs.compensate.parameters import (BIAS_FITTED, CONSTANT, PARAMETER_METRICS, PARAMETERS,
-                                       calibrate_cycles, run_parameter_study)
+from nfs.studies.parameter_study import (BIAS_FITTED, CONSTANT, PARAMETER_METRICS, PARAMETERS, calibrate_cycles, run_parameter_study)
 from nfs.errors import ScenarioError
 from nfs.config.scenario import load_scenario
 from nfs.northfind import north_find, synthetic_run

@@ -11,7 +11,7 @@ import dataclasses
 import numpy as np
 import pytest
 
-from nfs.compensate.study import run_study
+from nfs.studies.startup_study import run_study
 from nfs.compensate.settings import CompensationSettings
 from nfs.config.scenario import load_scenario
 

@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from nfs.compensate.study import run_study
+from nfs.studies.startup_study import run_study
 from nfs.compensate.settings import CompensationSettings
 from nfs.config.scenario import load_scenario
 from nfs.report.compensation import SVR_FAMILY, shape_checks

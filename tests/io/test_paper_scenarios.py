@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from nfs.experiment import simulate_run
-from nfs.scenario_runs import northfind_runs
+from nfs.studies.scenario_runs import northfind_runs
 from nfs.config.scenario import load_scenario
 
 SCENARIOS = Path(__file__).resolve().parents[2] / "scenarios"

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 
-from nfs.compensate.study import run_study
+from nfs.studies.startup_study import run_study
 from nfs.compensate.settings import CompensationSettings
 from nfs.config.scenario import load_scenario
 from nfs.report.compensation import plot_drift_vs_compensated

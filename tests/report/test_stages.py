@@ -18,8 +18,7 @@ import pytest
 from nfs.config.scenario import load_scenario
 from nfs.report.compensation import drift_table_markdown
 from nfs.scoring.heading_table import HeadingTable, TableRow
-from nfs.scenario_runs import (chamber_moves, run_scenario, stage_names,
-                               uncompensated_table)
+from nfs.studies.scenario_runs import chamber_moves, run_scenario, stage_names, uncompensated_table
 
 PROGRAM = """name = "held_then_ramp"
 start_temperatures_c = [20.0]

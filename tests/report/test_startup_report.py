@@ -41,7 +41,7 @@ def test_medians_by_start_temperature_are_the_closed_form():
 
 
 def test_report_has_time_to_spec_and_error_figure(tmp_path, scenario_text):
-    from nfs.compensate.study import run_study
+    from nfs.studies.startup_study import run_study
     from nfs.compensate.settings import CompensationSettings
     from nfs.config.scenario import load_scenario
     from nfs.report.compensation import write_study

@@ -39,14 +39,13 @@ from ..denoise import separate_drift
 from ..errors import NfsError
 from ..io.provenance import output_provenance
 from ..experiment import simulate_runs
-from ..scenario_runs import (northfind_runs, run_scenario, run_stage_errors, stage_names,
-                             uncompensated_table)
+from .scenario_runs import (northfind_runs, run_scenario, run_stage_errors, stage_names, uncompensated_table)
 from ..scoring.heading_table import TableRow, pooled_rmse
-from .compensator import DriftCompensator, PredictionPlan, prediction_plan, train_compensator
-from .dataset import DriftDataset, drift_dataset
-from .methods import MethodSpec, get_method
-from .modes import FEATURE_MODE_NOTES, check_features_mode
-from .settings import CompensationSettings
+from ..compensate.compensator import DriftCompensator, PredictionPlan, prediction_plan, train_compensator
+from ..compensate.dataset import DriftDataset, drift_dataset
+from ..compensate.methods import MethodSpec, get_method
+from ..compensate.modes import FEATURE_MODE_NOTES, check_features_mode
+from ..compensate.settings import CompensationSettings
 
 __all__ = ["train_scenario", "train_and_predict", "ticker", "MethodResult", "SeedResult",
            "CompensationStudy", "run_study", "test_scenario", "DriftRow", "errors_by_temperature",
@@ -116,7 +115,7 @@ class CompensationStudy:
 
     settings: CompensationSettings
     test: Any
-    """The :class:`~nfs.scenario_runs.ScenarioResult` of the test start-ups."""
+    """The :class:`~nfs.studies.scenario_runs.ScenarioResult` of the test start-ups."""
     train_runs: tuple[Any, ...]
     """The training runs (measurements)."""
     dataset: DriftDataset
@@ -128,7 +127,7 @@ class CompensationStudy:
 
     def startup_errors(self, method: str) -> list[list[np.ndarray]]:
         """Start-up heading errors [deg] of ``method``'s compensated test runs (a stage row
-        of :func:`~nfs.scenario_runs.stage_names`, ``before``, ``stable``, ...: that stage,
+        of :func:`~nfs.studies.scenario_runs.stage_names`, ``before``, ``stable``, ...: that stage,
         uncompensated), by start temperature, one array per run."""
         stages = stage_names(self.test.scenario)
         if method in stages:
@@ -243,11 +242,11 @@ def errors_by_temperature(result, northfind=None, *, stage: int = 0
     Parameters
     ----------
     result : ScenarioResult
-        The runs (:func:`~nfs.scenario_runs.run_scenario`).
+        The runs (:func:`~nfs.studies.scenario_runs.run_scenario`).
     northfind : sequence of NorthFindResult, optional
         North-finding of each run (default: the result's own, uncompensated).
     stage : int
-        Index into :func:`~nfs.scenario_runs.stage_names`: 0 the start-up stage; 1 the
+        Index into :func:`~nfs.studies.scenario_runs.stage_names`: 0 the start-up stage; 1 the
         stable stage (with a chamber program that moves the chamber: the held stage, 2 the
         ramping one).
     """
@@ -326,7 +325,7 @@ def run_study(scenario, settings: CompensationSettings | None = None, *,
               ) -> CompensationStudy:
     """Train every method of ``settings`` on training start-ups, apply to the test start-ups.
 
-    ``test`` is the scenario's :class:`~nfs.scenario_runs.ScenarioResult` if already computed.
+    ``test`` is the scenario's :class:`~nfs.studies.scenario_runs.ScenarioResult` if already computed.
     """
     s = settings or scenario.compensation or CompensationSettings()
     specs = [get_method(m) for m in s.methods]

@@ -8,11 +8,11 @@ from typing import Any, Callable
 
 import numpy as np
 
-from .docfields import document_fields
-from .experiment import SimulationResult, simulate_runs
-from .northfind import north_find, white_noise_floor_deg
-from .scoring.heading_table import HeadingTable, TableRow, pooled_rmse
-from .variability import describe_units
+from ..docfields import document_fields
+from ..experiment import SimulationResult, simulate_runs
+from ..northfind import north_find, white_noise_floor_deg
+from ..scoring.heading_table import HeadingTable, TableRow, pooled_rmse
+from ..variability import describe_units
 
 __all__ = ["ScenarioResult", "run_scenario", "run_scenarios", "northfind_runs", "stage_errors",
            "chamber_moves", "stage_names", "run_stage_errors", "stage_errors_by_temperature",

@@ -1,4 +1,4 @@
-"""Outputs of a temperature-cycling study (:mod:`nfs.compensate.cycles`): the drift table with
+"""Outputs of a temperature-cycling study (:mod:`nfs.studies.cycle_study`): the drift table with
 its intervals, the ramps separately, and the paper's figures beside ours.
 
 The paper set beside the table is Tao, Li, Zheng, Wu and Fu, "High Precision Compensation for

@@ -1,4 +1,4 @@
-"""Outputs of a parameter-level study (:mod:`nfs.compensate.parameters`): the parameter table
+"""Outputs of a parameter-level study (:mod:`nfs.studies.parameter_study`): the parameter table
 (RMSE, MAE, R^2, residual variance of each calibrated parameter's model, with intervals), the
 heading table by schedule, and Liang et al.'s figures beside them.
 
@@ -16,7 +16,7 @@ from pathlib import Path
 
 from .drift_figures import plot_parameter_residuals, plot_parameters_vs_temperature, png_bytes
 from ..scoring.intervals import json_number
-from .cycles import intervals_csv, write_table_files
+from .cycle_report import intervals_csv, write_table_files
 from .reference import LIANG2021_RVR_OVER_LS_PCT
 
 __all__ = ["parameter_table_markdown", "parameter_table_json", "write_parameter_study"]

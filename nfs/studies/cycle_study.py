@@ -48,16 +48,16 @@ from threadpoolctl import threadpool_limits
 from ..denoise import earth_rate_projection_dph, separate_drift
 from ..errors import NfsError
 from ..experiment import simulate_runs
-from ..scenario_runs import northfind_runs
+from .scenario_runs import northfind_runs
 from ..run import Run
 from ..scoring.intervals import MIN_REPLICATES, bc_interval, block_counts
 from ..scoring.heading_table import pooled_rmse
-from .compensator import DriftCompensator, prediction_plan
-from .dataset import drift_dataset
-from .methods import get_method
-from .modes import check_features_mode
-from .study import test_scenario, ticker, train_and_predict, train_scenario
-from .settings import CompensationSettings
+from ..compensate.compensator import DriftCompensator, prediction_plan
+from ..compensate.dataset import drift_dataset
+from ..compensate.methods import get_method
+from ..compensate.modes import check_features_mode
+from .startup_study import test_scenario, ticker, train_and_predict, train_scenario
+from ..compensate.settings import CompensationSettings
 
 __all__ = ["CycleRow", "CycleStudy", "PartTrace", "run_cycle_study", "run_runs_study",
            "cut_run", "CYCLE_METRICS", "BIAS_WINDOW_S", "BLOCK_S", "RAMP_RATE_C_PER_S",
@@ -284,8 +284,8 @@ def run_cycle_study(scenario, settings=None, *, n_boot: int = 2000,
 def run_runs_study(scenario, settings=None, *, n_boot: int = 2000,
                    progress: Callable[[int, int, str], None] | None = None) -> CycleStudy:
     """The drift table over whole runs: train every method on the scenario's training runs
-    (:func:`~nfs.compensate.study.train_scenario`), score it on its test runs
-    (:func:`~nfs.compensate.study.test_scenario`), as Cheng, Qi, Chen and Landry (Sensors
+    (:func:`~nfs.studies.startup_study.train_scenario`), score it on its test runs
+    (:func:`~nfs.studies.startup_study.test_scenario`), as Cheng, Qi, Chen and Landry (Sensors
     15(5), 11189, 2015, section 4.2) model one gyro on its runs and test it on five more.
     The scores are those of :func:`run_cycle_study`, each test run taking the place of a
     test cycle; :attr:`CycleRow.msd_by_part` holds each test run's mean square deviation

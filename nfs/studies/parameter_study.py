@@ -57,17 +57,17 @@ from sklearn.model_selection import KFold
 from ..constants import earth_rate_components_dph
 from ..errors import NfsError
 from ..experiment import simulate_runs
-from ..scenario_runs import chamber_moves, northfind_runs
+from .scenario_runs import chamber_moves, northfind_runs
 from ..run import Run
 from ..northfind.known_bias import north_find_known_bias
 from ..northfind.solve import _distinct_angles
 from ..scoring.intervals import MIN_REPLICATES, bc_interval, block_counts
-from .compensator import prediction_plan
-from .dataset import drift_dataset
-from .methods import get_method
-from .modes import check_features_mode
-from .study import test_scenario, ticker, train_and_predict, train_scenario
-from .settings import CompensationSettings
+from ..compensate.compensator import prediction_plan
+from ..compensate.dataset import drift_dataset
+from ..compensate.methods import get_method
+from ..compensate.modes import check_features_mode
+from .startup_study import test_scenario, ticker, train_and_predict, train_scenario
+from ..compensate.settings import CompensationSettings
 
 __all__ = ["PARAMETERS", "PARAMETER_METRICS", "BLOCK_CYCLES", "CONSTANT", "BIAS_FITTED",
            "CycleParameters", "ParameterRow", "HeadingRow", "ParameterStudy",
@@ -173,7 +173,7 @@ class ParameterStudy:
     startup_stage: str = "start-up"
     """Name of the start-up stage of the heading table: ``start-up``, or ``start-up, chamber
     ramping`` when the chamber program moves the chamber during a start-up cycle of a test run
-    (:func:`~nfs.scenario_runs.chamber_moves`)."""
+    (:func:`~nfs.studies.scenario_runs.chamber_moves`)."""
 
 
 def _schedule_angles(result) -> np.ndarray:

@@ -1,0 +1,21 @@
+"""Studies: simulate a scenario's start-ups, north-find them, train the compensators and score
+them, the chain behind ``nfs table``.
+
+- :mod:`~nfs.studies.scenario_runs`: a scenario's runs simulated and north-found, the
+  uncompensated table (before / stable / floor);
+- :mod:`~nfs.studies.startup_study`: the compensation study over start-ups (the FOG start-up
+  paper's Table 3);
+- :mod:`~nfs.studies.cycle_study`: the drift table over chamber-program cycles or runs;
+- :mod:`~nfs.studies.parameter_study`: the parameters every cycle calibrates, modelled
+  against temperature.
+"""
+
+from .cycle_study import CycleStudy, run_cycle_study, run_runs_study
+from .parameter_study import ParameterStudy, run_parameter_study
+from .scenario_runs import (ScenarioResult, northfind_runs, run_scenario, uncompensated_table)
+from .startup_study import CompensationStudy, run_study
+
+__all__ = ["ScenarioResult", "run_scenario", "northfind_runs", "uncompensated_table",
+           "CompensationStudy", "run_study", "CycleStudy", "run_cycle_study", "run_runs_study",
+           "ParameterStudy",
+           "run_parameter_study"]
