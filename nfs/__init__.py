@@ -1,21 +1,75 @@
 """nfs: start-up experiments on fiber-optic-gyroscope north finders.
 
-The pipeline, by subpackage: :mod:`thermal` (lumped network) -> :mod:`nfs.sensors` and
-:mod:`nfs.effects` (named drift effects) -> :mod:`nfs.noise` -> :mod:`nfs.denoise` ->
-:mod:`nfs.compensate` -> :mod:`nfs.northfind` -> :mod:`nfs.report`; :mod:`nfs.experiment`
-simulates runs (many together, their thermal states stacked), :mod:`nfs.studies.scenario_runs` runs
-a scenario end to end and :mod:`nfs.cli` is the ``nfs`` command.
+What a user scripts with is here, at the top (the ``nfs`` command calls the same)::
+
+    import nfs
+    scenario = nfs.load_scenario("startup_7temps")            # a file or a built-in name
+    result = nfs.ModelChain(scenario).run_model()             # simulate -> north-find ->
+    print(result.markdown)                                    #   compensate -> table
+    runs = nfs.read_runs("runs/")                             # measured runs
+    fit = nfs.fit_model(nfs.load_instrument("default"), runs) # the model fitted to them
+    found = nfs.diagnose.diagnose(fit.instrument, runs)       # which effect is missing
+
+The pipeline, by subpackage (each imports only those before it): :mod:`thermal` (lumped
+network) -> :mod:`nfs.sensors`, :mod:`nfs.effects` (named drift effects), :mod:`nfs.noise` ->
+:mod:`nfs.instrument`, :mod:`nfs.variability`, :mod:`nfs.chamber` -> :mod:`nfs.experiment`
+(simulate runs, :class:`nfs.run.Run`) -> :mod:`nfs.northfind`, :mod:`nfs.denoise` ->
+:mod:`nfs.learners`, :mod:`nfs.compensate` -> :mod:`nfs.scenario`, :mod:`nfs.config` ->
+:mod:`nfs.scoring` -> :mod:`nfs.studies` -> :mod:`nfs.report` -> :mod:`nfs.chain`,
+:mod:`nfs.sweep`; beside them, measurements -> :mod:`nfs.diagnose` (fit, compare, diagnose).
+:mod:`nfs.io` reads and writes files; :mod:`nfs.cli` is the ``nfs`` command.
+
+The names below load on first use (SPEC 1 lazy loading, as SciPy and scikit-image do):
+``import nfs`` stays quick, so ``nfs --help`` does not pay for scikit-learn and matplotlib.
 """
 
+from importlib import import_module
 from importlib.metadata import PackageNotFoundError, version
 
-from .errors import (EffectError, InputError, MeasurementError, NfsError, ScenarioError,
-                     ThermalError)
+from .errors import (USER_ERRORS, EffectError, InputError, MeasurementError, NfsError,
+                     ScenarioError, ThermalError)
 
 try:
     __version__ = version("nfs-startup")
 except PackageNotFoundError:  # pragma: no cover - running from a source tree
     __version__ = "0+unknown"
 
+#: Public name -> the module that defines it.
+_PUBLIC = {
+    # scenarios, instruments, runs
+    "Scenario": "nfs.scenario", "load_scenario": "nfs.config.scenario",
+    "Instrument": "nfs.instrument", "load_instrument": "nfs.instrument",
+    "Run": "nfs.run", "RunMeta": "nfs.run",
+    "read_run": "nfs.io.measurement", "read_runs": "nfs.io.measurement",
+    "write_run": "nfs.io.measurement",
+    # the chain and its stages
+    "simulate_run": "nfs.experiment", "simulate_runs": "nfs.experiment",
+    "RunConditions": "nfs.experiment", "SimulationResult": "nfs.experiment",
+    "north_find": "nfs.northfind", "separate_drift": "nfs.denoise",
+    "CompensationSettings": "nfs.compensate.settings",
+    "train_compensator": "nfs.compensate", "load_compensator": "nfs.compensate",
+    "ModelChain": "nfs.chain", "ModelChainResult": "nfs.chain",
+    "HeadingTable": "nfs.scoring.heading_table",
+    # measurements against the model
+    # (the diagnosis itself is nfs.diagnose.diagnose: the name nfs.diagnose is its subpackage)
+    "fit_model": "nfs.diagnose", "fit_unit": "nfs.diagnose", "compare": "nfs.diagnose",
+    # many cells
+    "load_sweep": "nfs.sweep", "run_sweep": "nfs.sweep",
+}
+
 __all__ = ["__version__", "NfsError", "InputError", "MeasurementError", "ScenarioError",
-           "EffectError", "ThermalError"]
+           "EffectError", "ThermalError", "USER_ERRORS", *_PUBLIC]
+
+
+def __getattr__(name: str):
+    """Load a public name from its module on first use (PEP 562)."""
+    module = _PUBLIC.get(name)
+    if module is None:
+        raise AttributeError(f"module 'nfs' has no attribute {name!r}")
+    value = getattr(import_module(module), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_PUBLIC))

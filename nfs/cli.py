@@ -62,58 +62,22 @@ class Progress:
 
 
 def _cmd_table(args) -> int:
+    from .chain import ModelChain
     from .compensate.modes import check_features_mode
-    from .studies.scenario_runs import (run_scenario, stage_errors_by_temperature, uncompensated_table)
+    from .compensate.settings import CompensationSettings
     from .config.scenario import load_scenario
-    from .report import write_table
     if args.features_mode is not None:
         check_features_mode(args.features_mode, "--features-mode")
-    from .studies.startup_study import table_provenance
-    from .compensate.settings import CompensationSettings
     scenario = _with_overrides(load_scenario(args.scenario), args)
     _file(args.json, "--json", args.overwrite)
     settings = _table_settings(args, scenario.compensation or CompensationSettings())
     baseline = _baseline(args, scenario, settings)
     folder = _folder(args, "table")
-    title = f"{scenario.name}: heading RMSE by start temperature"
-    progress = Progress("", args.quiet)
-    provenance = table_provenance(scenario, settings, compensated=not args.no_compensation)
-    table = None
-    if args.no_compensation:
-        # the start-ups of the full table's before row: its test start-ups
-        from .studies.startup_study import test_scenario
-        progress.what = "simulating"
-        res = run_scenario(test_scenario(scenario, settings), progress=progress)
-        table = uncompensated_table(res).with_intervals(stage_errors_by_temperature(res),
-                                                        random_state=scenario.seed)
-        table = dataclasses.replace(table, provenance=provenance)
-        paths = write_table(table, args.output, json_path=args.json, title=title)
-        text = table.to_markdown()
-    elif settings.protocol in ("cycles", "runs"):   # the drift table, trained once
-        from .studies.cycle_study import run_cycle_study, run_runs_study
-        from .report.cycle_report import cycle_table_markdown, write_cycle_study
-        run = run_cycle_study if settings.protocol == "cycles" else run_runs_study
-        cycles = run(scenario, settings, progress=progress)
-        text = cycle_table_markdown(cycles)
-        paths = write_cycle_study(cycles, args.output, json_path=args.json,
-                                  title=f"{scenario.name}: drift table of the "
-                                        f"{settings.protocol}", provenance=provenance)
-    elif settings.protocol == "parameters":   # every cycle calibrates the biases
-        from .studies.parameter_study import run_parameter_study
-        from .report.parameter_report import parameter_table_markdown, write_parameter_study
-        pstudy = run_parameter_study(scenario, settings, progress=progress)
-        text = parameter_table_markdown(pstudy)
-        paths = write_parameter_study(
-            pstudy, args.output, json_path=args.json,
-            title=f"{scenario.name}: parameter-level compensation", provenance=provenance)
-    else:
-        from .studies.startup_study import run_study
-        from .report.compensation import write_study
-        study = run_study(scenario, settings, progress=progress)
-        table = dataclasses.replace(study.heading_table(), provenance=provenance)
-        paths = write_study(study, args.output, json_path=args.json, title=title,
-                            table=table)
-        text = table.to_markdown()
+    progress = Progress("simulating" if args.no_compensation else "", args.quiet)
+    result = ModelChain(scenario, settings, compensate=not args.no_compensation,
+                        progress=progress).run_model()
+    provenance, table, text = result.provenance, result.table, result.markdown
+    paths = result.write(args.output, json_path=args.json)
     comparison = None
     if baseline is not None:
         from .report.baseline import compare_tables, write_baseline_comparison
