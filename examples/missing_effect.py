@@ -26,9 +26,8 @@ import sys
 import tempfile
 from pathlib import Path
 
-from nfs.diagnose import apply_candidate, compare, diagnose, fit_unit, write_fitted_model
-from nfs.instrument import load_instrument
-from nfs.io.measurement import read_runs
+import nfs
+from nfs.diagnose import apply_candidate, diagnose, write_fitted_model
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests" / "independent"))
@@ -41,18 +40,18 @@ SEED = 3
 def main(out_dir: str | Path | None = None) -> dict:
     out = Path(out_dir or tempfile.mkdtemp(prefix="nfs_missing_effect_"))
     truth = generate_set(out / "runs", hidden=HIDDEN, seed=SEED)
-    runs = read_runs(out / "runs")
+    runs = nfs.read_runs(out / "runs")
     print(f"0. {len(runs)} runs from the independent generator, hidden: {truth['hidden']} "
           f"{truth['params']}")
 
-    fit = fit_unit(load_instrument("default"), runs)   # what `nfs fit` does
+    fit = nfs.fit_unit(nfs.load_instrument("default"), runs)   # what `nfs fit` does
     write_fitted_model(fit, out / "fitted.toml")
     model = fit.instrument
     print("1. nfs fit: thermometer residual "
           + ", ".join(f"{k} {v:.3g} K" for k, v in fit.rms_after.items() if k.startswith("temp"))
           + f"; drift {fit.rms_after.get('drift_dph', float('nan')):.3g} deg/h")
 
-    before = compare(model, runs)
+    before = nfs.compare(model, runs)
     gyro = before.summaries["gyro_drift_dph"]
     print("2. the fitted model beside the measurements:")
     print("   " + gyro.sentence)
@@ -65,7 +64,7 @@ def main(out_dir: str | Path | None = None) -> dict:
 
     new, fit2, report = apply_candidate(model, runs, top.effect, top.target)
     write_fitted_model(fit2, out / "fitted2.toml")
-    after = compare(new, runs)
+    after = nfs.compare(new, runs)
     print(f"4. with {top.effect} added and refitted: "
           + ", ".join(f"{k} = {v:.4g}" for k, v in fit2.params.items() if top.effect in k))
     print("   " + after.summaries["gyro_drift_dph"].sentence)

@@ -36,8 +36,8 @@ from pathlib import Path
 import numpy as np
 
 from nfs.constants import OMEGA_IE_DPH, STANDARD_GRAVITY_M_S2
-from nfs.run import Run, RunMeta
-from nfs.northfind import NorthFindResult, north_find, wrap_deg_360
+import nfs
+from nfs.northfind import NorthFindResult, wrap_deg_360
 
 #: Default data folder: <repo>/../shared/data/spresense-gyrocompass.
 DATA_DIR = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "spresense-gyrocompass"
@@ -99,7 +99,7 @@ def load_logs(folder: str | Path = DATA_DIR) -> list[dict[str, np.ndarray]]:
 
 
 def spresense_run(logs: list[dict[str, np.ndarray]], *, latitude_deg: float,
-                  gap_s: float = 5.0) -> Run:
+                  gap_s: float = 5.0) -> nfs.Run:
     """One run from the 8 logs (see the module docstring)."""
     cols: dict[str, list[np.ndarray]] = {k: [] for k in (
         "time_s", "position_deg", "moving", "gyro_dph", "acc_x_g", "acc_y_g", "temp_fog_c")}
@@ -117,21 +117,23 @@ def spresense_run(logs: list[dict[str, np.ndarray]], *, latitude_deg: float,
     columns = {k: np.concatenate(v) for k, v in cols.items()}
     columns["temp_acc_x_c"] = columns["temp_fog_c"].copy()
     columns["temp_acc_y_c"] = columns["temp_fog_c"].copy()
-    meta = RunMeta(latitude_deg=latitude_deg, start_temperature_c=float(columns["temp_fog_c"][0]),
-                   positions_deg=NOMINAL_DEG, instrument="Sony Spresense CXD5602PWBIMU (MEMS)")
-    return Run(name="spresense-gyrocompass", columns=columns, meta=meta)
+    meta = nfs.RunMeta(latitude_deg=latitude_deg,
+                       start_temperature_c=float(columns["temp_fog_c"][0]),
+                       positions_deg=NOMINAL_DEG,
+                       instrument="Sony Spresense CXD5602PWBIMU (MEMS)")
+    return nfs.Run(name="spresense-gyrocompass", columns=columns, meta=meta)
 
 
 def north_find_spresense(logs: list[dict[str, np.ndarray]], *, max_iter: int = 10
-                         ) -> tuple[Run, NorthFindResult]:
+                         ) -> tuple[nfs.Run, NorthFindResult]:
     """North-find the run, with L from the fitted Omega_h (fixed point, see module docstring)."""
     run = spresense_run(logs, latitude_deg=0.0)
-    result = north_find(run, tilt_correction=False)
+    result = nfs.north_find(run, tilt_correction=False)
     for _ in range(max_iter):
         omega_h = float(result.horizontal_rate_dph[0])
         lat = math.degrees(math.acos(min(1.0, omega_h / OMEGA_IE_DPH)))
         run = replace(run, meta=replace(run.meta, latitude_deg=lat))
-        previous, result = result, north_find(run)
+        previous, result = result, nfs.north_find(run)
         if abs(result.horizontal_rate_dph[0] - previous.horizontal_rate_dph[0]) < 1e-9:
             break
     return run, result
@@ -177,7 +179,7 @@ def main(argv: list[str] | None = None) -> int:
           f"{PUBLISHER.radius_dph:>22.3f}")
     print(f"{'gyro bias x [deg/h]':34s}{res.bias_dph[0]:>14.3f} +- {sig_b:4.2f}"
           f"{PUBLISHER.bias_x_dph:>22.3f}")
-    raw = north_find(run, tilt_correction=False)  # the publisher's model
+    raw = nfs.north_find(run, tilt_correction=False)  # the publisher's model
     print(f"{'  same, no tilt correction':34s}{raw.bias_dph[0]:>14.3f} +- {sig_b:4.2f}")
     print(f"{'latitude from Omega_h [deg]':34s}{run.meta.latitude_deg:>22.2f}"
           f"{PUBLISHER.latitude_deg:>22.2f}")

@@ -15,12 +15,13 @@ you mean to keep, delete the baseline and run again.
 Point ``SCENARIO`` at your own scenario file (``nfs init DIR`` writes a starter).
 """
 
+import dataclasses
 import shutil
 from pathlib import Path
 
 import pytest
 
-from nfs.cli import main as nfs
+import nfs
 from nfs.testing import assert_compensator_no_worse, assert_table_within
 
 #: The baseline, kept beside this file and committed with it.
@@ -47,16 +48,23 @@ n_jobs = 1
 """
 
 
-def run_nfs(*argv) -> int:
-    """``nfs ARGV...`` in this process; its exit code."""
-    return nfs([str(a) for a in argv])
+def my_scenario(folder: Path) -> nfs.Scenario:
+    """The scenario above, as a file in ``folder`` and loaded (point this at your own file)."""
+    path = folder / "scenario.toml"
+    path.write_text(SCENARIO)
+    return nfs.load_scenario(path)
+
+
+def simulated_runs(scenario: nfs.Scenario, seed: int) -> list[nfs.Run]:
+    """The scenario's start-ups simulated with their own seed (as ``nfs simulate --seed``)."""
+    scenario = dataclasses.replace(scenario, seed=seed)
+    return [nfs.simulate_run(scenario.instrument, cond).run for cond in scenario.conditions()]
 
 
 def test_table_no_worse_than_baseline(tmp_path):
-    scenario = tmp_path / "scenario.toml"
-    scenario.write_text(SCENARIO)
+    result = nfs.ModelChain(my_scenario(tmp_path)).run_model()
     table = tmp_path / "table.json"
-    assert run_nfs("table", scenario, "-o", tmp_path / "out", "-q", "--json", table) == 0
+    result.write(tmp_path / "out", json_path=table)
     if not BASELINE.exists():
         shutil.copyfile(table, BASELINE)
         pytest.skip(f"baseline written to {BASELINE}: commit it")
@@ -64,11 +72,8 @@ def test_table_no_worse_than_baseline(tmp_path):
 
 
 def test_compensator_no_worse_than_none(tmp_path):
-    scenario = tmp_path / "scenario.toml"
-    scenario.write_text(SCENARIO)
+    scenario = my_scenario(tmp_path)
     # training start-ups and test start-ups of other seeds: no test noise seen in training
-    assert run_nfs("simulate", scenario, "-o", tmp_path / "train", "-q", "--seed", 1) == 0
-    assert run_nfs("simulate", scenario, "-o", tmp_path / "test", "-q", "--seed", 2) == 0
-    model = tmp_path / "ls.npz"
-    assert run_nfs("train", tmp_path / "train", "--method", "ls", "-o", model, "-q") == 0
-    assert_compensator_no_worse(model, tmp_path / "test")
+    train, test = simulated_runs(scenario, 1), simulated_runs(scenario, 2)
+    compensator = nfs.train_compensator("ls", train)
+    assert_compensator_no_worse(compensator, test)
