@@ -33,7 +33,7 @@ from .docfields import document_fields
 from .report.compensation import write_study
 from .report.cycle_report import cycle_table_markdown, write_cycle_study
 from .report.parameter_report import parameter_table_markdown, write_parameter_study
-from .report.table import write_table
+from .report.table_files import write_table
 from .scenario import Scenario
 from .scoring.heading_table import HeadingTable
 from .studies.cycle_study import run_cycle_study, run_runs_study

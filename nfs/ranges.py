@@ -27,7 +27,7 @@ matches any name; the first matching entry wins, so specific entries come before
 ones.  Every range is finite: a value of 1e300 is refused wherever it is written.
 
 This module imports nothing of the package but its errors: the loaders (:mod:`nfs.instrument`,
-:mod:`nfs.config.scenario`, :mod:`nfs.chamber`, :mod:`nfs.sweep.spec`,
+:mod:`nfs.config.scenario`, :mod:`nfs.chamber`, :mod:`nfs.sweep.definition`,
 :mod:`nfs.io.measurement`) call :func:`check_tree` on what they parsed and :func:`check`
 on derived values, inside :func:`deferred_warnings` so that a refused file shows its one
 error and no warnings.  The comments of ``nfs/presets/default_instrument.toml`` state the
@@ -484,7 +484,7 @@ _TABLE: list[Range] = [
     _R("sweep.spec_deg", "deg", (0, 180), (0.001, 1), "a heading specification is",
        f"{_PHYS} 1: start-up RMSE 0.01-0.02 deg", low_open=True),
     _I("sweep.rmse_window_cycles", (1, 1000), (1, 20), "a rolling RMSE spans cycles",
-       "nfs.northfind.spec: 5 cycles"),
+       "nfs.northfind.time_to_spec: 5 cycles"),
     _I("sweep.draws.count", (1, 65536), (1, 4096), "drawn points are",
        "Sobol sets of 2**k points"),
     _I("sweep.draws.seed", (0, 2 ** 63 - 1), (0, 2 ** 63 - 1), "a seed is",

@@ -37,7 +37,7 @@ class NorthFindSettings:
     """Samples skipped at the start of each dwell [s]."""
     spec_deg: float = 0.02
     """Heading specification of the time to spec in the reports [deg]
-    (:mod:`nfs.northfind.spec`); 0.02 deg is about the uncompensated start-up RMSE of the FOG
+    (:mod:`nfs.northfind.time_to_spec`); 0.02 deg is about the uncompensated start-up RMSE of the FOG
     start-up paper ("A FOG start-up drift compensation method at full temperatures", Table 3)."""
 
 

@@ -194,7 +194,7 @@ def assert_time_to_spec_below(runs, spec_deg: float, bound_s: float, *,
     Each run is north-found (after subtracting ``compensator``'s drift when one is given);
     its time to spec is the output time of the first cycle from which every later cycle's
     heading error stays within ``spec_deg`` (with ``rolling``, the rolling RMSE of
-    :data:`nfs.northfind.spec.DEFAULT_WINDOW` cycles: :func:`nfs.northfind.run_time_to_spec_s`);
+    :data:`nfs.northfind.time_to_spec.DEFAULT_WINDOW` cycles: :func:`nfs.northfind.run_time_to_spec_s`);
     a run that never stays within spec has an infinite time and fails.
 
     Parameters

@@ -7,7 +7,7 @@
 - :mod:`~nfs.northfind.known_bias`: the heading with the biases known, down to one position;
 - :mod:`~nfs.northfind.heading`: north-find a whole run and score the heading by stage;
 - :mod:`~nfs.northfind.budget`: the error budget in closed form;
-- :mod:`~nfs.northfind.spec`: time to spec, when after power-on the heading stays in spec;
+- :mod:`~nfs.northfind.time_to_spec`: time to spec, when after power-on the heading stays in spec;
 - :mod:`~nfs.northfind.synthetic`: an ideal run from the section 5 rate model, for checks.
 """
 
@@ -19,7 +19,7 @@ from nfs.northfind.known_bias import KnownBiasHeading, north_find_known_bias
 from nfs.northfind.segment import Cycle, Dwell, find_dwells, segment_cycles
 from nfs.northfind.solve import (HeadingSolution, solve_heading, tilt_correct, wrap_deg_180,
                                  wrap_deg_360)
-from nfs.northfind.spec import rolling_rmse_deg, run_time_to_spec_s, time_to_spec_s
+from nfs.northfind.time_to_spec import rolling_rmse_deg, run_time_to_spec_s, time_to_spec_s
 from nfs.northfind.synthetic import synthetic_run
 
 __all__ = [

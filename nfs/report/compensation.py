@@ -19,7 +19,7 @@ from .reference import (SEED004_TABLE1_SVR, SEED004_TABLE2_DRIFT_DPH,
                         SEED004_TABLE3_HEADING_RMSE_DEG, SEED004_TEMPERATURES_C)
 from .startup import plot_error_vs_time, time_to_spec_table
 from ..scoring.heading_table import NOT_APPLICABLE, UNCOMPENSATED_ROWS, HeadingTable
-from .table import write_table
+from .table_files import write_table
 
 __all__ = ["ShapeCheck", "shape_checks", "paper_comparison_markdown", "drift_table_markdown",
            "write_study", "plot_drift_vs_compensated"]

@@ -1,7 +1,7 @@
 """The start-up answers of the heading-RMSE table's report: time to spec by start temperature
 and method, and the heading error against time since power-on.
 
-Time to spec (:mod:`nfs.northfind.spec`): the output time of the first cycle after which
+Time to spec (:mod:`nfs.northfind.time_to_spec`): the output time of the first cycle after which
 every cycle's heading error stays within the spec (and the same for the RMSE of the last
 ``window`` cycles), per test start-up; a cell of the table is the median over the start-ups
 at that start temperature, ``never`` when that median is not within spec by the end of the
@@ -18,7 +18,7 @@ import numpy as np
 from matplotlib import colormaps
 from matplotlib.figure import Figure
 
-from ..northfind.spec import DEFAULT_WINDOW, median_time_s, run_time_to_spec_s
+from ..northfind.time_to_spec import DEFAULT_WINDOW, median_time_s, run_time_to_spec_s
 
 __all__ = ["TimeToSpecTable", "time_to_spec_table", "plot_error_vs_time"]
 

@@ -7,7 +7,7 @@ temperatures plus their mean.  Cells and means may carry 95 % intervals, and the
 paired comparisons of its rows (:mod:`nfs.scoring.intervals`: a two-level bootstrap over the
 start-ups and their cycles); a row that is not distinguishable from the best compensated row
 is marked as tied with it.  The table serialises itself as Markdown, CSV and JSON;
-:mod:`nfs.report.table` draws it and writes its files.
+:mod:`nfs.report.table_files` draws it and writes its files.
 """
 
 from __future__ import annotations

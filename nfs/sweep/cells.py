@@ -39,7 +39,7 @@ from ..io.provenance import sha256_of_text
 from ..config.scenario import load_scenario
 from ..northfind import heading_rmse
 from ..parameters import set_params
-from .spec import SweepSpec
+from .definition import SweepSpec
 
 __all__ = ["CellTask", "canonical", "digest", "scenario_digest", "cell_key", "cell_tasks",
            "run_cell", "run_cells", "cell_batches", "BATCH_CELLS", "STAGES", "STORE_FORMAT"]

@@ -25,11 +25,11 @@ from typing import Any
 from matplotlib.figure import Figure
 
 from ..io.atomic import atomic_output
-from ..northfind.spec import median_time_s
+from ..northfind.time_to_spec import median_time_s
 from .cells import STAGES
-from .spec import SweepSpec
+from .definition import SweepSpec
 from .store import CellStore
-from .table import iter_rows
+from .results_table import iter_rows
 
 __all__ = ["write_figures", "sweep_figures", "floor_groups", "axis_label", "MAX_PANELS"]
 

@@ -14,9 +14,9 @@ from ..io.atomic import atomic_write_text
 from .cells import canonical, cell_batches, cell_tasks, run_cells, scenario_digest
 from .executors import LocalExecutor, SweepProgress
 from .figures import write_figures
-from .spec import SweepSpec
+from .definition import SweepSpec
 from .store import CellStore
-from .table import write_csv, write_parquet
+from .results_table import write_csv, write_parquet
 
 __all__ = ["SweepResult", "run_sweep"]
 

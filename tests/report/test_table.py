@@ -5,7 +5,7 @@ def test_figure_panels_by_group_from_zero_with_distinct_colours():
     from matplotlib.colors import to_rgba
 
     from nfs.scoring.heading_table import HeadingTable, TableRow
-    from nfs.report.table import plot_heading_table
+    from nfs.report.table_files import plot_heading_table
     rows = [TableRow("before", (0.02, 0.0205)), TableRow("stable", (0.008, 0.0081))]
     rows += [TableRow(f"m{i}", (0.0203 + 1e-4 * i, 0.0204), group="A" if i < 7 else "B")
              for i in range(12)]
@@ -32,7 +32,7 @@ def test_figure_legends_stand_beside_the_bars_and_name_the_stages():
     from matplotlib.backends.backend_agg import FigureCanvasAgg
 
     from nfs.scoring.heading_table import HeadingTable, TableRow
-    from nfs.report.table import plot_heading_table
+    from nfs.report.table_files import plot_heading_table
     rows = (TableRow("before", (0.02,), cell_ci_deg=((0.015, 0.03),)),
             TableRow("held", (0.009,), cell_ci_deg=((0.007, 0.011),)),
             TableRow("ramping", (0.008,), cell_ci_deg=((0.006, 0.01),)),

@@ -54,7 +54,7 @@ from ..config.scenario import OVERRIDE_KEYS, load_scenario
 from ..config.presets import scenario_file
 from ..scenario import Scenario
 from ..io.tomlio import check_keys, load_toml
-from ..northfind.spec import DEFAULT_WINDOW
+from ..northfind.time_to_spec import DEFAULT_WINDOW
 from ..parameters import canonical_path, param_paths, set_params
 from ..ranges import check, check_tree, deferred_warnings, find
 

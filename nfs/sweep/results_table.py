@@ -11,7 +11,7 @@ Columns, in order:
 - ``heading_rmse_deg`` of the stage's cycles and their number ``n_cycles`` (``-`` when the
   stage has no cycle: a run that ends before the stable stage);
 - ``time_to_spec_s`` and ``time_to_spec_rmse_s`` [s after power-on] of the whole run at the
-  sweep's ``spec_deg`` (:mod:`nfs.northfind.spec`: ``inf`` never within spec up to the run's
+  sweep's ``spec_deg`` (:mod:`nfs.northfind.time_to_spec`: ``inf`` never within spec up to the run's
   end, ``-`` no error to judge), the same in both stage rows of a run and method;
 - ``floor_deg``, the white-noise floor sqrt(2/N) (ARW / sqrt(dwell)) / (Omega_ie cos L) of
   the cell's schedule and latitude (:func:`nfs.northfind.white_noise_floor_deg`);
@@ -36,10 +36,10 @@ from pathlib import Path
 from typing import Any, Iterator
 
 from ..io.atomic import atomic_output
-from ..northfind.spec import run_time_to_spec_s
+from ..northfind.time_to_spec import run_time_to_spec_s
 from ..scoring.heading_table import NOT_APPLICABLE
 from .cells import STAGES, cell_tasks
-from .spec import SweepSpec
+from .definition import SweepSpec
 from .store import CellStore
 
 __all__ = ["columns", "iter_rows", "write_csv", "write_parquet", "format_value"]
