@@ -45,7 +45,6 @@ the shortest run can be separated at, distinct start temperatures.
 from __future__ import annotations
 
 import copy
-import dataclasses
 import math
 import os
 from pathlib import Path
@@ -54,23 +53,19 @@ from typing import Any
 import numpy as np
 
 from ..chamber import check_temperature, parse_program
-from ..compensate.features import FeatureError, resolve_features
 from ..compensate.methods import get_method
-from ..compensate.modes import FeatureModeError, check_features_mode
-from ..compensate.settings import PROTOCOLS, CompensationSettings
 from ..denoise.wavelet import wavelet_denoise
 from ..effects import check_geometry, load_effects_file
 from ..errors import EffectError, NfsError, ScenarioError
 from ..instrument import (Instrument, _aux, _check_effect_targets, _check_heating,
                           load_instrument, parse_effects)
 from ..io.tomlio import check_keys, load_toml, number, number_list, string, table
-from ..parameters import ParameterError, expand_paths
 from ..ranges import check_tree, deferred_warnings, find, warn_unusual
 from ..scenario import ChamberProfile, NorthFindSettings, Scenario
 from ..sensors import ORDERS, Schedule
-from ..variability import (CYCLING_SHAPES, NO_VARIABILITY, VARIABILITY_KEYS,
-                           VARIABILITY_PRESETS, Variability)
 from .presets import default_scenario_path, scenario_file
+from .sections import (COMPENSATION_KEYS, VARIABILITY_TABLE_KEYS, boolean,
+                       compensation_table, integer, variability_table)
 
 __all__ = ["load_scenario", "OVERRIDE_KEYS", "TRUST_EFFECTS_ENV"]
 
@@ -78,12 +73,6 @@ _TOP = ("name", "description", "base", "instrument", "seed", "start_temperatures
         "duration_s", "sample_rate_hz", "latitude_deg", "true_heading_deg", "effects_files",
         "effects", "added_effects", "aux", "schedule", "northfind", "chamber", "compensation", "units",
         "variability")
-_COMPENSATION = ("methods", "features", "features_mode", "budget", "decimate_s",
-                 "cutoff_period_s",
-                 "train_seed", "train_repeats", "train_temperatures_c", "test_repeats",
-                 "train_units", "test_units", "random_state", "tuner_seeds", "n_jobs",
-                 "protocol")
-_VARIABILITY = ("preset", *VARIABILITY_KEYS, "parameters")
 _SCHEDULE = ("positions_deg", "order", "dwell_s", "move_s")
 _NORTHFIND = ("startup_end_s", "stable_start_s", "tilt_correction", "settle_s", "spec_deg")
 _CHAMBER = ("ripple_c", "ripple_period_s", "program")
@@ -95,166 +84,10 @@ OVERRIDE_KEYS: tuple[str, ...] = (
     "latitude_deg", "true_heading_deg", "units",
     *(f"schedule.{k}" for k in _SCHEDULE), *(f"northfind.{k}" for k in _NORTHFIND),
     *(f"chamber.{k}" for k in _CHAMBER),
-    *(f"variability.{k}" for k in _VARIABILITY if k != "parameters"),
-    *(f"compensation.{k}" for k in _COMPENSATION))
+    *(f"variability.{k}" for k in VARIABILITY_TABLE_KEYS if k != "parameters"),
+    *(f"compensation.{k}" for k in COMPENSATION_KEYS))
 
 
-def _bool(tbl, key, prefix, file, default):
-    if key not in tbl:
-        return default
-    v = tbl[key]
-    if not isinstance(v, bool):
-        raise ScenarioError(f"must be true or false, got {v!r}", file=file,
-                            key=f"{prefix}.{key}" if prefix else key)
-    return v
-
-
-def _int(tbl, key, prefix, file, default, minimum=None, allow_none=False):
-    name = f"{prefix}.{key}" if prefix else key
-    if key not in tbl:
-        return default
-    v = tbl[key]
-    if isinstance(v, bool) or not isinstance(v, int) or (minimum is not None and v < minimum):
-        raise ScenarioError(f"must be an integer{'' if minimum is None else f' >= {minimum}'}"
-                            f", got {v!r}", file=file, key=name)
-    return v
-
-
-def _unit_list(tbl, key, prefix, file, units):
-    """A list of distinct unit indices in 0 .. units-1, or None when absent."""
-    if key not in tbl:
-        return None
-    v = tbl[key]
-    name = f"{prefix}.{key}"
-    if (not isinstance(v, list) or not v
-            or not all(isinstance(u, int) and not isinstance(u, bool) for u in v)):
-        raise ScenarioError(f"must be a non-empty list of unit indices, got {v!r}", file=file,
-                            key=name)
-    bad = [u for u in v if not 0 <= u < units]
-    if bad:
-        raise ScenarioError(f"unit {bad[0]} is out of range: the scenario has units "
-                            f"0..{units - 1} (units = {units})", file=file, key=name)
-    if len(set(v)) != len(v):
-        raise ScenarioError(f"names a unit twice: {v!r}", file=file, key=name)
-    return tuple(v)
-
-
-def _variability(d: dict, inst: Instrument, seed: int, file) -> Variability:
-    """``[variability]``: its ``preset`` with the values written overriding the preset's.
-
-    ``realistic`` (the default when the table is given): the realistic set; ``custom``:
-    nothing varies but what is written; ``none``: no variability at all, the other keys
-    checked but not used (a table switched off without deleting it).  No table: ``none``.
-    """
-    p = "variability"
-    if "variability" not in d:
-        return NO_VARIABILITY
-    tbl = d["variability"]
-    if not isinstance(tbl, dict):
-        raise ScenarioError(f"must be a table, got {tbl!r}; write [variability] and "
-                            f"preset = \"none\", \"custom\" or \"realistic\"", file=file,
-                            key=p)
-    check_keys(tbl, _VARIABILITY, p, file)
-    preset = string(tbl, "preset", p, file, "realistic", choices=tuple(VARIABILITY_PRESETS))
-    base = VARIABILITY_PRESETS[preset]
-    kw: dict[str, Any] = {"preset": preset}
-    for key in VARIABILITY_KEYS:
-        default = getattr(base, key)
-        if key == "unfinished_soak":
-            kw[key] = _bool(tbl, key, p, file, default)
-        elif key == "cycling_shape":
-            kw[key] = string(tbl, key, p, file, default, choices=CYCLING_SHAPES)
-        elif key == "unit_seed":
-            kw[key] = _int(tbl, key, p, file, seed, minimum=0)
-        elif key == "soak_from_c":
-            kw[key] = number(tbl, key, p, file, default, minimum=-273.15)
-        elif key in ("soak_h", "chamber_wander_tau_s", "cycling_period_s"):
-            kw[key] = number(tbl, key, p, file, default, positive=True)
-        else:                                           # standard deviations
-            kw[key] = number(tbl, key, p, file, default, minimum=0.0)
-    kw["parameters"] = _variability_parameters(table(tbl, "parameters", p, file, {}), inst,
-                                               file)
-    out = Variability(**kw)
-    if preset == "none":
-        return NO_VARIABILITY
-    if preset == "realistic" and out != dataclasses.replace(base, unit_seed=out.unit_seed):
-        out = dataclasses.replace(out, preset=f"{preset} (modified)")
-    return out
-
-
-def _variability_parameters(tbl: dict, inst: Instrument, file):
-    """``[variability.parameters]``: "path or pattern" = relative std, or { std = K }."""
-    out = []
-    for pattern, v in tbl.items():
-        name = f'variability.parameters."{pattern}"'
-        if isinstance(v, dict):
-            if set(v) != {"std"}:
-                raise ScenarioError(
-                    "must be a relative standard deviation or { std = value } (quote a "
-                    "dotted path: \"effects.shupe_gradient.k_r\" = 0.3)", file=file, key=name)
-            std, rel = number(v, "std", name, file, minimum=0.0), False
-        else:
-            std, rel = number({name: v}, name, "", file, minimum=0.0), True
-        try:
-            expand_paths(inst, pattern)
-        except ParameterError as exc:
-            raise ScenarioError(str(exc), file=file, key=name) from None
-        out.append((pattern, std, rel))
-    return tuple(out)
-
-
-def _compensation(tbl: dict, file, units: int = 1) -> Any:
-    p = "compensation"
-    check_keys(tbl, _COMPENSATION, p, file)
-    d = CompensationSettings()
-    methods = tbl.get("methods", list(d.methods))
-    if not isinstance(methods, list) or not all(isinstance(m, str) for m in methods):
-        raise ScenarioError("must be a list of method names", file=file, key=f"{p}.methods")
-    if not methods:
-        raise ScenarioError("must name at least one method (nfs table --no-compensation "
-                            "gives the uncompensated rows alone)", file=file,
-                            key=f"{p}.methods")
-    try:
-        methods = tuple(get_method(m).key for m in methods)
-    except NfsError as exc:
-        raise ScenarioError(str(exc), file=file, key=f"{p}.methods") from None
-    feats = tbl.get("features", list(d.features))
-    if isinstance(feats, str):
-        feats = [feats]
-    if not isinstance(feats, list) or not all(isinstance(f, str) for f in feats):
-        raise ScenarioError("must be a feature name or a list of them", file=file,
-                            key=f"{p}.features")
-    try:
-        resolve_features(feats, ["aux_*"])
-    except FeatureError as exc:
-        raise ScenarioError(str(exc), file=file, key=f"{p}.features") from None
-    try:
-        mode = check_features_mode(tbl.get("features_mode", d.features_mode), option="")
-    except FeatureModeError as exc:
-        raise ScenarioError(str(exc), file=file, key=f"{p}.features_mode") from None
-    temps = number_list(tbl, "train_temperatures_c", p, file, None)
-    n_jobs = tbl.get("n_jobs", d.n_jobs)
-    if n_jobs is not None and (isinstance(n_jobs, bool) or not isinstance(n_jobs, int)):
-        raise ScenarioError(f"must be an integer, got {n_jobs!r}", file=file, key=f"{p}.n_jobs")
-    return CompensationSettings(
-        methods=methods, features=tuple(feats), features_mode=mode,
-        budget=_int(tbl, "budget", p, file, d.budget, minimum=1),
-        decimate_s=number(tbl, "decimate_s", p, file, d.decimate_s, positive=True),
-        cutoff_period_s=number(tbl, "cutoff_period_s", p, file, d.cutoff_period_s,
-                               positive=True),
-        train_seed=_int(tbl, "train_seed", p, file, d.train_seed, minimum=0),
-        train_repeats=_int(tbl, "train_repeats", p, file, d.train_repeats, minimum=1),
-        train_temperatures_c=temps,
-        test_repeats=_int(tbl, "test_repeats", p, file, d.test_repeats, minimum=1),
-        train_units=_unit_list(tbl, "train_units", p, file, units),
-        test_units=_unit_list(tbl, "test_units", p, file, units),
-        random_state=_int(tbl, "random_state", p, file, d.random_state, minimum=0),
-        tuner_seeds=_int(tbl, "tuner_seeds", p, file, d.tuner_seeds, minimum=1),
-        n_jobs=n_jobs,
-        protocol=string(tbl, "protocol", p, file, d.protocol, choices=PROTOCOLS))
-
-
-#: Keys a scenario never takes from its base.
 _NOT_INHERITED = ("name", "description")
 
 
@@ -523,7 +356,7 @@ def _load(path: Path, overrides, chain: tuple[Path, ...]) -> tuple[Scenario, dic
     settings = NorthFindSettings(
         startup_end_s=number(nf, "startup_end_s", "northfind", f, 3600.0, positive=True),
         stable_start_s=number(nf, "stable_start_s", "northfind", f, 5400.0, minimum=0.0),
-        tilt_correction=_bool(nf, "tilt_correction", "northfind", f, True),
+        tilt_correction=boolean(nf, "tilt_correction", "northfind", f, True),
         settle_s=number(nf, "settle_s", "northfind", f, 0.0, minimum=0.0),
         spec_deg=number(nf, "spec_deg", "northfind", f, 0.02, positive=True))
     ch = table(d, "chamber", "", f, {})
@@ -548,8 +381,8 @@ def _load(path: Path, overrides, chain: tuple[Path, ...]) -> tuple[Scenario, dic
         raise ScenarioError(f"names {twice:g} C twice (runs are named by their start "
                             "temperature; write repeats = N for more start-ups at one "
                             "temperature)", file=f, key="start_temperatures_c")
-    units = _int(d, "units", "", f, 1, minimum=1)
-    variability = _variability(d, inst, seed, f)
+    units = integer(d, "units", "", f, 1, minimum=1)
+    variability = variability_table(d, inst, seed, f)
     fs = number(d, "sample_rate_hz", "", f, 1.0, positive=True)
     duration = number(d, "duration_s", "", f, 9000.0 if chamber.program is None else None,
                       positive=True)
@@ -562,7 +395,7 @@ def _load(path: Path, overrides, chain: tuple[Path, ...]) -> tuple[Scenario, dic
                                 f"cycle ({schedule.cycle_s:g} s)", file=f,
                                 key="duration_s" if duration is not None
                                 else "chamber.program")
-    comp = _compensation(table(d, "compensation", "", f, {}), f, units)
+    comp = compensation_table(table(d, "compensation", "", f, {}), f, units)
     if comp.protocol == "cycles":
         if chamber.program is None or len(chamber.program.cycles) < 2:
             raise ScenarioError("\"cycles\" trains on cycle 1 of the chamber program and "
