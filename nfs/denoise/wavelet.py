@@ -66,7 +66,7 @@ __all__ = [
     "wavelet_denoise",
 ]
 
-#: Phi^-1(3/4) = 0.6745: median(|d|) / MAD_TO_SIGMA is sigma for Gaussian d of zero mean.
+#: Phi^-1(3/4) = 0.6745: ``median(|d|) / MAD_TO_SIGMA`` is sigma for Gaussian d of zero mean.
 MAD_TO_SIGMA: float = 0.6744897501960817
 
 #: A threshold rule: ``rule(detail, sigma, n_samples) -> threshold`` in the units of ``detail``.
@@ -151,7 +151,7 @@ def edge_span_samples(level: int, filter_length: int) -> int:
 def mad_sigma(detail: np.ndarray) -> float:
     """Noise standard deviation from detail coefficients by the median absolute deviation.
 
-        sigma = median(|d|) / 0.6745
+        ``sigma = median(|d|) / 0.6745``
 
     (Donoho & Johnstone 1994, Biometrika 81(3) 425-455; Donoho 1995, IEEE Trans. Inf. Theory
     41(3) 613-627; section numbers not checked against the papers), applied to the
@@ -205,7 +205,7 @@ def visu_threshold(sigma: float, n: int) -> float:
 def sure_risk(t: float | np.ndarray, x: np.ndarray) -> np.ndarray:
     """Stein's unbiased risk estimate of soft thresholding at t for unit-variance data.
 
-        SURE(t; x) = m - 2 #{i : |x_i| <= t} + sum_i min(|x_i|, t)^2
+        ``SURE(t; x) = m - 2 #{i : |x_i| <= t} + sum_i min(|x_i|, t)^2``
 
     (Donoho & Johnstone 1995, JASA 90(432) 1200-1224, from Stein 1981, Ann. Stat. 9(6)
     1135-1151; section number not checked), m = len(x):
@@ -225,8 +225,8 @@ def sure_threshold(coeffs: np.ndarray, sigma: float, *, hybrid: bool = True) -> 
 
         t_S = argmin_{0 <= t <= t_u} SURE(t; x)            (:func:`sure_risk`)
 
-    SURE is piecewise increasing in t between the sorted |x_i|, so its minimum over
-    [0, t_u] lies at t = 0 or at one of the |x_i| <= t_u; those are the candidates searched
+    SURE is piecewise increasing in t between the sorted ``|x_i|``, so its minimum over
+    [0, t_u] lies at t = 0 or at one of the ``|x_i| <= t_u``; those are the candidates searched
     (with cumulative sums, O(m log m)). The hybrid rule (section 2.4 of the paper; WaveLab's
     ``HybridThresh``) falls back to the universal threshold when the level is sparse, where
     SURE is unreliable:
@@ -282,7 +282,7 @@ def bayes_shrink_threshold(coeffs: np.ndarray, sigma: float) -> float:
     formula matches scikit-image's ``_bayes_thresh``: the threshold that nearly
     minimises the Bayes risk of soft thresholding for a generalised-Gaussian prior, with the
     signal variance sigma_x^2 estimated from the observed variance sigma_y^2.) When
-    sigma_y <= sigma the level looks like pure noise and T = max |d| (all coefficients set to
+    sigma_y <= sigma the level looks like pure noise and T = ``max |d|`` (all coefficients set to
     zero), as the paper prescribes.
 
     Parameters
@@ -557,8 +557,8 @@ def wavelet_denoise(x: np.ndarray, *, sample_rate_hz: float = 1.0,
 
         x -> DWT to level J -> d_j shrunk with T_j (rule) -> IDWT -> s_hat;  noise = x - s_hat
 
-    with T_j = rule(d_j, sigma_j, n), sigma_j = median(|d_1|) / 0.6745 for white noise
-    (Donoho 1995) or median(|d_j|) / 0.6745 per level for correlated noise (Johnstone &
+    with T_j = rule(d_j, sigma_j, n), sigma_j = ``median(|d_1|) / 0.6745`` for white noise
+    (Donoho 1995) or ``median(|d_j|) / 0.6745`` per level for correlated noise (Johnstone &
     Silverman 1997, JRSS B 59(2) 319-351). The level-J approximation is kept, so what is
     slower than 2^(J+1) samples passes untouched, and what is faster passes only where it
     stands out of the noise.
@@ -599,7 +599,7 @@ def wavelet_denoise(x: np.ndarray, *, sample_rate_hz: float = 1.0,
     trusted : array of bool, optional
         False at samples that carry no measured noise (bridged gaps, filled moves): the noise
         level and the threshold rules then use only coefficients computed from trusted
-        samples (a bridged gap would otherwise pull the median of |d_1| down). Every sample
+        samples (a bridged gap would otherwise pull the median of ``|d_1|`` down). Every sample
         is still denoised. Default: all trusted.
     thresholds : sequence of float, optional
         T_j of every level, finest first (as :attr:`DenoiseResult.thresholds`), used instead
