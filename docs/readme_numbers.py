@@ -1,13 +1,16 @@
-"""The README's numbers, rebuilt: each heading-RMSE table the README shows, with its sentences.
+"""The README's numbers, rebuilt: each heading-RMSE table the README and the user guide show,
+with its sentences.
 
-    python docs/readme_numbers.py                      # check README.md (exit 1 if it differs)
+    python docs/readme_numbers.py                      # check every page (exit 1 if one differs)
     python docs/readme_numbers.py --write              # rewrite every marked block
     python docs/readme_numbers.py --only default-table # one block
 
-Each block between ``<!-- readme-numbers:NAME -->`` and ``<!-- /readme-numbers:NAME -->`` in
-README.md is this script's output for one scenario (:data:`BLOCKS`), never typed by hand;
+Each block between ``<!-- readme-numbers:NAME -->`` and ``<!-- /readme-numbers:NAME -->`` is
+this script's output for one scenario (:data:`BLOCKS`), never typed by hand, on every page
+:data:`PAGES` names for it: the default table in README.md and in the user guide's
+docs/compensation.md, the fleet and precise tables in docs/compensation.md.
 ``tests/test_readme.py`` checks the default table on every test run and the others among the
-slow tests, so the README cannot drift from what the package prints.
+slow tests, so no page can drift from what the package prints.
 
 What must agree: the uncompensated rows (``before``, ``stable``, ``floor``) digit for digit
 (the simulation is seeded and its arithmetic fixed); every compensated row's mean within the
@@ -35,6 +38,10 @@ ROOT = Path(__file__).resolve().parents[1]
 BLOCKS = {"default-table": None,
           "fleet-table": ROOT / "scenarios" / "startup_7temps_fleet.toml",
           "precise-table": ROOT / "scenarios" / "startup_7temps_precise.toml"}
+#: Block name -> the pages that show it (each checked and rewritten alike).
+PAGES = {"default-table": (ROOT / "README.md", ROOT / "docs" / "compensation.md"),
+         "fleet-table": (ROOT / "docs" / "compensation.md",),
+         "precise-table": (ROOT / "docs" / "compensation.md",)}
 #: Rows that must agree digit for digit on every machine.
 EXACT_ROWS = REFERENCE_ROWS
 
@@ -91,7 +98,7 @@ def differences(name: str, readme_text: str, table) -> list[str]:
     """What in the README's block ``name`` disagrees with ``table`` (empty: it agrees)."""
     begin, end = markers(name)
     if begin not in readme_text or end not in readme_text:
-        return [f"README has no block {begin} ... {end}"]
+        return [f"the page has no block {begin} ... {end}"]
     stated = parse(name, readme_text)
     fresh = parse(name, block(name, table))
     problems = []
@@ -126,31 +133,42 @@ def rewrite(text: str, name: str, table) -> str:
 
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("--write", action="store_true", help="rewrite the README's blocks")
+    p.add_argument("--write", action="store_true", help="rewrite the pages' blocks")
     p.add_argument("--only", nargs="+", choices=sorted(BLOCKS), default=sorted(BLOCKS),
                    help="blocks to check or rewrite (default: all)")
-    p.add_argument("--readme", default=str(ROOT / "README.md"), help="the README")
+    p.add_argument("--page", default=None,
+                   help="only this page (default: every page of PAGES that shows the block)")
     args = p.parse_args(argv)
-    readme = Path(args.readme)
-    text = readme.read_text(encoding="utf-8")
+    only_page = None if args.page is None else Path(args.page).resolve()
+    texts = {}
+    for name in args.only:
+        for page in PAGES[name]:
+            if only_page is None or page.resolve() == only_page:
+                texts.setdefault(page, page.read_text(encoding="utf-8"))
     problems = []
     for name in args.only:
-        begin, end = markers(name)
-        if begin not in text or end not in text:
-            print(f"{readme}: no block {begin} ... {end}", file=sys.stderr)
-            return 2
+        pages = [pg for pg in PAGES[name] if pg in texts]
+        if not pages:
+            continue
+        for page in pages:
+            begin, end = markers(name)
+            if begin not in texts[page] or end not in texts[page]:
+                print(f"{page}: no block {begin} ... {end}", file=sys.stderr)
+                return 2
         table, seconds = compute(name)
         print(f"{name}: computed in {seconds:.1f} s", file=sys.stderr)
-        if args.write:
-            text = rewrite(text, name, table)
-        else:
-            problems += differences(name, text, table)
+        for page in pages:
+            if args.write:
+                texts[page] = rewrite(texts[page], name, table)
+            else:
+                problems += [f"{page}: {line}" for line in differences(name, texts[page], table)]
     if args.write:
-        readme.write_text(text, encoding="utf-8")
-        print(f"rewrote {', '.join(args.only)} in {readme}")
+        for page, text in texts.items():
+            page.write_text(text, encoding="utf-8")
+        print(f"rewrote {', '.join(args.only)} in {', '.join(str(pg) for pg in texts)}")
         return 0
     for line in problems:
-        print(f"{readme}: {line}")
+        print(line)
     return 1 if problems else 0
 
 

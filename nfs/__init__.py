@@ -45,7 +45,8 @@ _PUBLIC = {
     # the chain and its stages
     "simulate_run": "nfs.experiment", "simulate_runs": "nfs.experiment",
     "RunConditions": "nfs.experiment", "SimulationResult": "nfs.experiment",
-    "north_find": "nfs.northfind", "separate_drift": "nfs.denoise",
+    "run_scenario": "nfs.studies.scenario_runs", "north_find": "nfs.northfind",
+    "separate_drift": "nfs.denoise",
     "CompensationSettings": "nfs.compensate.settings",
     "train_compensator": "nfs.compensate", "load_compensator": "nfs.compensate",
     "ModelChain": "nfs.chain", "ModelChainResult": "nfs.chain",

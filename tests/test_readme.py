@@ -1,4 +1,6 @@
-"""The README's numbers are rebuilt by docs/readme_numbers.py and must agree with it."""
+"""The README's numbers (and the user guide's tables, docs/compensation.md) are rebuilt by
+docs/readme_numbers.py and must agree with it: every page that shows a block
+(readme_numbers.PAGES) is checked."""
 
 import importlib.util
 from pathlib import Path
@@ -12,9 +14,12 @@ _spec.loader.exec_module(readme_numbers)
 
 
 def _check(name):
-    text = (ROOT / "README.md").read_text(encoding="utf-8")
     table, _ = readme_numbers.compute(name)
-    assert readme_numbers.differences(name, text, table) == []
+    pages = readme_numbers.PAGES[name]
+    assert pages
+    for page in pages:
+        text = page.read_text(encoding="utf-8")
+        assert readme_numbers.differences(name, text, table) == [], page
 
 
 def test_default_table_in_readme_is_what_the_package_prints():
@@ -31,6 +36,7 @@ def test_the_check_fails_on_a_changed_number():
     # Oracle: a README whose before row is off by one in the last digit, or whose compensated
     # mean lies outside its own stated interval, is reported.
     text = (ROOT / "README.md").read_text(encoding="utf-8")
+    assert ROOT / "README.md" in readme_numbers.PAGES["default-table"]
     rows = readme_numbers.parse("default-table", text)
     assert {"before", "stable", "floor", "SSA-SVR"} <= set(rows)
     from nfs.scoring.heading_table import HeadingTable, TableRow
@@ -43,7 +49,9 @@ def test_the_check_fails_on_a_changed_number():
     ok = [row(n) for n in rows if n in readme_numbers.EXACT_ROWS]
     far = TableRow("SSA-SVR", (1.0,) * n_t)          # a mean of 1 deg: outside any interval
     bad = HeadingTable(temps, tuple([row("before", 1e-4)] + ok[1:] + [far]))
-    problems = readme_numbers.differences("default-table", text, bad)
-    assert any(p.startswith("default-table: before: README") for p in problems)
-    assert any(p.startswith("default-table: SSA-SVR: mean 1.0000 outside the README's "
-                            "interval") for p in problems)
+    for page in readme_numbers.PAGES["default-table"]:   # the README and the user guide
+        problems = readme_numbers.differences("default-table",
+                                              page.read_text(encoding="utf-8"), bad)
+        assert any(p.startswith("default-table: before: README") for p in problems), page
+        assert any(p.startswith("default-table: SSA-SVR: mean 1.0000 outside the README's "
+                                "interval") for p in problems), page

@@ -246,7 +246,7 @@ class Network:
         With no input, T(t) - T_amb = sum_i a_i v_i exp(-t / tau_i).  From the symmetric
         form S = C^-1/2 L C^-1/2 = U diag(mu) U^T, A = -C^-1/2 S C^1/2, so column i of V is
         v_i = C^-1/2 u_i and tau_i = 1 / mu_i (``inf`` for a node set with no path to the
-        chamber).  Each column is scaled to max |v_i| = 1 with its largest entry positive:
+        chamber).  Each column is scaled to ``max |v_i| = 1`` with its largest entry positive:
         a_i is then the kelvins the mode puts on the node it moves most.
         """
         laplacian, _ = self.conductances()

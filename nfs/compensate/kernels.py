@@ -391,7 +391,7 @@ class SVRRegressor(_KernelRegressor):
         min 1/2 ||w||^2 + C sum_k (xi_k + xi_k*),  |y~_k - f~(x~_k)| <= epsilon + xi_k(*)
 
     with k the Gaussian kernel of width ``sigma`` (LIBSVM's ``gamma = 1/(2 sigma^2)``,
-    :func:`sigma_to_gamma`) and the prediction y = y_mean_ + y_scale_ f~(x~).
+    :func:`sigma_to_gamma`) and the prediction ``y = y_mean_ + y_scale_ f~(x~)``.
 
     Parameters
     ----------
@@ -462,7 +462,7 @@ class LSSVMRegressor(_KernelRegressor):
         y(x) = sum_k alpha_k k(x~, x~_k) + b
 
     with k the Gaussian kernel of width ``sigma`` (Tao et al. (2019) eq. (11)).  The solution is
-    linear in y, so the target is not rescaled: alpha_ and b_ are in units of y.
+    linear in y, so the target is not rescaled: ``alpha_`` and ``b_`` are in units of y.
 
     Parameters
     ----------
@@ -479,7 +479,7 @@ class LSSVMRegressor(_KernelRegressor):
     Attributes
     ----------
     alpha_ : array (n_samples,)
-        Support values [unit of y]; sum(alpha_) = 0 (the constraint from dL/db = 0).
+        Support values [unit of y]; ``sum(alpha_) = 0`` (the constraint from dL/db = 0).
     b_ : float
         Bias [unit of y].
     X_fit_ : array (n_samples, n_features)
@@ -534,7 +534,7 @@ class IRLSSVMRegressor(LSSVMRegressor):
     3. weights v_k = W(e_k / s) with W one of :data:`WEIGHT_FUNCTIONS`;
     4. solve the weighted system (Tao et al. (2019) eq. (14)): diagonal K + diag(1 / (gamma v_k));
        new residuals e_k = alpha_k / (gamma v_k) (= y_k - f(x_k));
-    5. repeat 2-4 until the weights change by less than ``tol`` (max |v_new - v_old|) or
+    5. repeat 2-4 until the weights change by less than ``tol`` (``max |v_new - v_old|``) or
        ``max_iter`` weighted solves.  ``max_iter=1`` is the single reweighting of Suykens et
        al. 2002 and of Tao et al.'s (2019) algorithm.
 
@@ -555,7 +555,7 @@ class IRLSSVMRegressor(LSSVMRegressor):
     max_iter : int, default 10
         Maximum number of weighted solves (>= 1).
     tol : float, default 1e-4
-        Stop when max_k |v_k(new) - v_k(old)| < tol [-].
+        Stop when ``max_k |v_k(new) - v_k(old)| < tol`` [-].
     beta : float, default 1.345
         Huber corner [-] (:func:`huber_weight`).
     c1, c2 : float, default 2.5, 3.0
@@ -568,7 +568,7 @@ class IRLSSVMRegressor(LSSVMRegressor):
     Attributes
     ----------
     alpha_, b_, X_fit_, x_mean_, x_scale_, n_features_in_ : as :class:`LSSVMRegressor`
-        (sum(alpha_) = 0 still holds).
+        (``sum(alpha_) = 0`` still holds).
     weights_ : array (n_samples,)
         Final weights v_k [-] (small for the points treated as outliers).
     scale_ : float
@@ -658,12 +658,12 @@ class RVRRegressor(_KernelRegressor):
 
     iterated from alpha_i = 1/N^2 and beta = 100 / var(t) (noise at a tenth of the target's
     standard deviation), pruning each basis function whose alpha_i exceeds
-    ``alpha_threshold`` (its weight is then zero), until max |Delta log alpha_i| < ``tol``
+    ``alpha_threshold`` (its weight is then zero), until ``max |Delta log alpha_i|`` < ``tol``
     over the kept ones.  Prediction (eq. (21)-(22))::
 
         y(x) = phi(x)^T mu,   var(x) = 1/beta + phi(x)^T Sigma phi(x)
 
-    mapped back as y_mean_ + y_scale_ y(x) and y_scale_ sqrt(var(x)).  Not yet checked
+    mapped back as ``y_mean_ + y_scale_ y(x)`` and ``y_scale_ sqrt(var(x))``.  Not yet checked
     against Tipping 2001 down to the equation numbers above.
 
     Parameters
@@ -677,7 +677,7 @@ class RVRRegressor(_KernelRegressor):
     max_iter : int, default 300
         Maximum number of re-estimation sweeps (>= 1).
     tol : float, default 1e-3
-        Convergence threshold on max |Delta log alpha_i| [-].
+        Convergence threshold on ``max |Delta log alpha_i|`` [-].
     alpha_threshold : float, default 1e9
         Prune a basis function once its precision exceeds this [1/unit of t^2; t is the
         standardised target when ``standardize``].

@@ -82,7 +82,7 @@ class BPNetwork(RegressorMixin, BaseEstimator):
 
     Attributes
     ----------
-    mean_, scale_ : ndarray, shape (n_features_in_,)
+    mean_, scale_ : ndarray, shape (``n_features_in_``,)
         Input standardisation [unit of each feature].
     y_mean_, y_scale_ : float
         Target standardisation [unit of y].
@@ -147,7 +147,7 @@ class BPNetwork(RegressorMixin, BaseEstimator):
 
     def predict(self, X) -> np.ndarray:
         """Predicted drift [unit of the training target, e.g. deg/h] for X
-        (n_samples, n_features_in_)."""
+        (n_samples, ``n_features_in_``)."""
         check_is_fitted(self, "mlp_")
         X = _validate(self, X, reset=False)
         t = self.mlp_.predict((X - self.mean_) / self.scale_)
@@ -197,9 +197,9 @@ class RBFNetwork(RegressorMixin, BaseEstimator):
 
     Attributes
     ----------
-    mean_, scale_ : ndarray, shape (n_features_in_,)
+    mean_, scale_ : ndarray, shape (``n_features_in_``,)
         Input standardisation [unit of each feature].
-    centers_ : ndarray, shape (K, n_features_in_)
+    centers_ : ndarray, shape (K, ``n_features_in_``)
         Centres c_j [standardised input units].
     width_ : float
         Common width sigma [standardised input units].
@@ -256,7 +256,7 @@ class RBFNetwork(RegressorMixin, BaseEstimator):
 
     def predict(self, X) -> np.ndarray:
         """Predicted drift [unit of the training target, e.g. deg/h] for X
-        (n_samples, n_features_in_)."""
+        (n_samples, ``n_features_in_``)."""
         check_is_fitted(self, "weights_")
         X = _validate(self, X, reset=False)
         return self._hidden((X - self.mean_) / self.scale_) @ self.weights_ + self.intercept_

@@ -215,7 +215,7 @@ class _PolynomialModel(RegressorMixin, BaseEstimator):
 
     def predict(self, X) -> np.ndarray:
         """Predicted drift y [unit of the training target, e.g. deg/h] for X
-        (n_samples, n_features_in_)."""
+        (n_samples, ``n_features_in_``)."""
         check_is_fitted(self, "coef_")
         X = _validate(self, X, reset=False)
         return self._design(X) @ self.coef_ + self.intercept_
@@ -225,7 +225,7 @@ class _PolynomialModel(RegressorMixin, BaseEstimator):
 
         Returns
         -------
-        powers : ndarray of int, shape (n_raw_terms, n_features_in_)
+        powers : ndarray of int, shape (n_raw_terms, ``n_features_in_``)
             Exponents of each monomial of x (degree, then lexicographic order).
         coef : ndarray, shape (n_raw_terms,)
             Its coefficient [unit of y per unit of the monomial].
@@ -285,9 +285,9 @@ class CubicLeastSquares(_PolynomialModel):
 
     Attributes
     ----------
-    mean_, scale_ : ndarray, shape (n_features_in_,)
+    mean_, scale_ : ndarray, shape (``n_features_in_``,)
         Standardisation of each feature [unit of the feature].
-    powers_ : ndarray of int, shape (n_terms, n_features_in_)
+    powers_ : ndarray of int, shape (n_terms, ``n_features_in_``)
         Exponent of each feature in each monomial (order of
         ``sklearn.preprocessing.PolynomialFeatures`` without the bias column).
     feature_names_out_ : ndarray of str, shape (n_terms,)
@@ -410,11 +410,11 @@ class StepwiseRegression(_PolynomialModel):
 
     Attributes
     ----------
-    mean_ : ndarray, shape (n_features_in_,)
+    mean_ : ndarray, shape (``n_features_in_``,)
         Zeros (the features are not centred).
-    scale_ : ndarray, shape (n_features_in_,)
+    scale_ : ndarray, shape (``n_features_in_``,)
         Root mean square of each feature [unit of the feature].
-    candidate_powers_ : ndarray of int, shape (n_candidates, n_features_in_)
+    candidate_powers_ : ndarray of int, shape (n_candidates, ``n_features_in_``)
         The candidate library.
     candidate_names_ : ndarray of str, shape (n_candidates,)
         Name of each candidate, e.g. ``'x0 x1'`` (``feature_names_in_`` when fitted on a
@@ -423,7 +423,7 @@ class StepwiseRegression(_PolynomialModel):
         Rows of ``candidate_powers_`` in the final model, in the order they entered.
     selected_names_ : ndarray of str, shape (n_terms,)
         Their names.
-    powers_ : ndarray of int, shape (n_terms, n_features_in_)
+    powers_ : ndarray of int, shape (n_terms, ``n_features_in_``)
         ``candidate_powers_[selected_]``.
     feature_names_out_ : ndarray of str
         Same as ``selected_names_``.

@@ -263,7 +263,7 @@ def _overridden(d: dict, overrides: dict[str, Any], file) -> dict:
     return d
 
 
-#: The environment variable that lets a scenario's ``effects_files`` run (``nfs ...
+#: The environment variable that lets a scenario's ``effects_files`` run (``nfs COMMAND
 #: --trust-effects`` sets it, so that a sweep's worker processes inherit it): a scenario
 #: passed between colleagues must not run code because it was loaded.
 TRUST_EFFECTS_ENV = "NFS_TRUST_EFFECTS_FILES"

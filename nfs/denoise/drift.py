@@ -73,7 +73,7 @@ def earth_rate_projection_dph(run: Run, *, scale_factor: float = 1.0) -> np.ndar
     Raises
     ------
     MeasurementError
-        The run has no ``true_heading_deg`` (the drift is then unknown), or |acc_x_g| > 1 g.
+        The run has no ``true_heading_deg`` (the drift is then unknown), or ``|acc_x_g|`` > 1 g.
     """
     heading = run.meta.true_heading_deg
     if heading is None:
@@ -199,7 +199,7 @@ def separate_drift(run: Run, *, cutoff_period_s: float | None = DEFAULT_CUTOFF_P
     Raises
     ------
     MeasurementError
-        No ``true_heading_deg`` (the message names the run), |acc_x_g| > 1 g.
+        No ``true_heading_deg`` (the message names the run), ``|acc_x_g|`` > 1 g.
     InputError
         Non-uniform time steps, no trusted sample, bad denoising options.
     """

@@ -17,7 +17,7 @@ __all__ = ["MAD_TO_SIGMA", "ThresholdRule", "THRESHOLD_RULES", "mad_sigma", "no_
            "visu_threshold", "sure_risk", "sure_threshold", "bayes_shrink_threshold",
            "resolve_rule"]
 
-#: Phi^-1(3/4) = 0.6745: median(|d|) / MAD_TO_SIGMA is sigma for Gaussian d of zero mean.
+#: Phi^-1(3/4) = 0.6745: ``median(|d|) / MAD_TO_SIGMA`` is sigma for Gaussian d of zero mean.
 MAD_TO_SIGMA: float = 0.6744897501960817
 
 #: A threshold rule: ``rule(detail, sigma, n_samples) -> threshold`` in the units of ``detail``.
@@ -31,7 +31,7 @@ ThresholdRule = Callable[[np.ndarray, float, int], float]
 def mad_sigma(detail: np.ndarray) -> float:
     """Noise standard deviation from detail coefficients by the median absolute deviation.
 
-        sigma = median(|d|) / 0.6745
+        ``sigma = median(|d|) / 0.6745``
 
     (Donoho & Johnstone 1994, Biometrika 81(3) 425-455; Donoho 1995, IEEE Trans. Inf. Theory
     41(3) 613-627; section numbers not checked against the papers), applied to the
@@ -85,7 +85,7 @@ def visu_threshold(sigma: float, n: int) -> float:
 def sure_risk(t: float | np.ndarray, x: np.ndarray) -> np.ndarray:
     """Stein's unbiased risk estimate of soft thresholding at t for unit-variance data.
 
-        SURE(t; x) = m - 2 #{i : |x_i| <= t} + sum_i min(|x_i|, t)^2
+        ``SURE(t; x) = m - 2 #{i : |x_i| <= t} + sum_i min(|x_i|, t)^2``
 
     (Donoho & Johnstone 1995, JASA 90(432) 1200-1224, from Stein 1981, Ann. Stat. 9(6)
     1135-1151; section number not checked), m = len(x):
@@ -105,8 +105,8 @@ def sure_threshold(coeffs: np.ndarray, sigma: float, *, hybrid: bool = True) -> 
 
         t_S = argmin_{0 <= t <= t_u} SURE(t; x)            (:func:`sure_risk`)
 
-    SURE is piecewise increasing in t between the sorted |x_i|, so its minimum over
-    [0, t_u] lies at t = 0 or at one of the |x_i| <= t_u; those are the candidates searched
+    SURE is piecewise increasing in t between the sorted ``|x_i|``, so its minimum over
+    [0, t_u] lies at t = 0 or at one of the ``|x_i| <= t_u``; those are the candidates searched
     (with cumulative sums, O(m log m)). The hybrid rule (section 2.4 of the paper; WaveLab's
     ``HybridThresh``) falls back to the universal threshold when the level is sparse, where
     SURE is unreliable:
@@ -162,7 +162,7 @@ def bayes_shrink_threshold(coeffs: np.ndarray, sigma: float) -> float:
     formula matches scikit-image's ``_bayes_thresh``: the threshold that nearly
     minimises the Bayes risk of soft thresholding for a generalised-Gaussian prior, with the
     signal variance sigma_x^2 estimated from the observed variance sigma_y^2.) When
-    sigma_y <= sigma the level looks like pure noise and T = max |d| (all coefficients set to
+    sigma_y <= sigma the level looks like pure noise and T = ``max |d|`` (all coefficients set to
     zero), as the paper prescribes.
 
     Parameters

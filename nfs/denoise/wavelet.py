@@ -276,8 +276,8 @@ def wavelet_denoise(x: np.ndarray, *, sample_rate_hz: float = 1.0,
 
         x -> DWT to level J -> d_j shrunk with T_j (rule) -> IDWT -> s_hat;  noise = x - s_hat
 
-    with T_j = rule(d_j, sigma_j, n), sigma_j = median(|d_1|) / 0.6745 for white noise
-    (Donoho 1995) or median(|d_j|) / 0.6745 per level for correlated noise (Johnstone &
+    with T_j = rule(d_j, sigma_j, n), sigma_j = ``median(|d_1|) / 0.6745`` for white noise
+    (Donoho 1995) or ``median(|d_j|) / 0.6745`` per level for correlated noise (Johnstone &
     Silverman 1997, JRSS B 59(2) 319-351). The level-J approximation is kept, so what is
     slower than 2^(J+1) samples passes untouched, and what is faster passes only where it
     stands out of the noise.
@@ -318,7 +318,7 @@ def wavelet_denoise(x: np.ndarray, *, sample_rate_hz: float = 1.0,
     trusted : array of bool, optional
         False at samples that carry no measured noise (bridged gaps, filled moves): the noise
         level and the threshold rules then use only coefficients computed from trusted
-        samples (a bridged gap would otherwise pull the median of |d_1| down). Every sample
+        samples (a bridged gap would otherwise pull the median of ``|d_1|`` down). Every sample
         is still denoised. Default: all trusted.
     thresholds : sequence of float, optional
         T_j of every level, finest first (as :attr:`DenoiseResult.thresholds`), used instead

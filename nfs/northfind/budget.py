@@ -38,14 +38,14 @@ def white_noise_floor_deg(arw_deg_per_rth_h: float, dwell_s: float, n_positions:
 
     N = 2 (angles theta_a and theta_a + 180 deg, the two-position method):
 
-        sigma_psi = (ARW / sqrt(tau)) / (sqrt(2 v) Omega_ie cos L |sin(psi + theta_a)|)   [rad]
+        ``sigma_psi = (ARW / sqrt(tau)) / (sqrt(2 v) Omega_ie cos L |sin(psi + theta_a)|)``   [rad]
 
     Derivation: u = Omega_h cos(psi + theta_a) is half the difference of the two angles'
     mean rates, var(u) = sigma_w^2 / (2 v); psi + theta_a = arccos(u / Omega_h), so
     d psi = -du / (Omega_h sin(psi + theta_a)).  Assumptions: Omega_h = Omega_ie cos L is
     known (the latitude) and not fitted, the bias is constant over the cycle, the right
     branch is chosen (a heading hint), and first order in the noise, i.e. sigma_w <<
-    Omega_h |sin(psi + theta_a)|: near the axis pointing north or south at theta_a the
+    ``Omega_h |sin(psi + theta_a)|``: near the axis pointing north or south at theta_a the
     arccos flattens, the floor grows without bound (inf at sin = 0) and the formula stops
     describing the scatter.  It depends on the heading, which N >= 3 does not.
 

@@ -54,7 +54,7 @@ def time_to_spec_s(t_s, error_deg, spec_deg: float) -> float:
     error_deg : array_like
         Heading error of each cycle [deg] (NaN: no data, left out).
     spec_deg : float
-        The specification s > 0 [deg]; |e| <= s is within spec.
+        The specification s > 0 [deg]; ``|e| <= s`` is within spec.
 
     Returns
     -------

@@ -15,7 +15,7 @@ from .parameter_study import ParameterStudy, run_parameter_study
 from .scenario_runs import (ScenarioResult, northfind_runs, run_scenario, uncompensated_table)
 from .startup_study import CompensationStudy, run_study
 
-__all__ = ["ScenarioResult", "run_scenario", "northfind_runs", "uncompensated_table",
+__all__ = ["ScenarioResult", "run_scenario", "northfind_runs", "uncompensated_table", "floor_deg",
            "CompensationStudy", "run_study", "CycleStudy", "run_cycle_study", "run_runs_study",
            "ParameterStudy",
            "run_parameter_study"]

@@ -173,7 +173,7 @@ def _two_positions(schedule) -> bool:
 def floor_deg(scenario) -> float:
     """White-noise floor of the scenario's schedule (:func:`~nfs.northfind.white_noise_floor_deg`):
     sqrt(2/N) (ARW/sqrt(dwell)) / Omega_h, or for two positions 180 deg apart
-    (ARW/sqrt(dwell)) / (sqrt(2 v) Omega_h |sin(psi + theta_a)|) at the scenario's heading."""
+    ``(ARW/sqrt(dwell)) / (sqrt(2 v) Omega_h |sin(psi + theta_a)|)`` at the scenario's heading."""
     sched = scenario.schedule
     if _two_positions(sched):
         return white_noise_floor_deg(scenario.instrument.gyro.arw_deg_per_rth_h,

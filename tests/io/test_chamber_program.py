@@ -15,7 +15,8 @@ from nfs.studies.scenario_runs import run_scenario
 from nfs.io.measurement import read_run, write_run
 from nfs.config.scenario import load_scenario
 
-# The program of the chamber-program example, exactly as written in the README.
+# The program of the chamber-program example, exactly as written in the user guide
+# (docs/scenarios.md, "Chamber programs").
 EXAMPLE = """start_temperatures_c = [25.0]
 [chamber]
 program = [

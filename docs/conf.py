@@ -1,0 +1,166 @@
+"""Sphinx configuration of the nfs-startup documentation.
+
+Build from the repository root (what ``.ci/run`` does)::
+
+    python -m sphinx -W --keep-going -b html docs docs/_build/html
+
+The site documents the checkout it lives in: the repository root goes first on
+``sys.path``. The API reference lists what each package exports (its ``__all__``), read at
+build time by the ``nfs-exports`` directive below, so a module moved between files inside a
+package changes nothing here.
+"""
+
+from __future__ import annotations
+
+import importlib
+import inspect
+import os
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+os.environ.setdefault("MPLBACKEND", "Agg")
+# one BLAS thread per process: the gallery's small fits gain nothing from more on 2 cores
+for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")
+
+import nfs  # noqa: E402
+
+project = "nfs-startup"
+author = "the nfs-startup authors"
+copyright = "the nfs-startup authors"
+release = nfs.__version__
+version = release
+
+extensions = [
+    "sphinx.ext.autodoc",
+    "sphinx.ext.autosummary",
+    "sphinx.ext.mathjax",
+    "sphinx.ext.viewcode",
+    "numpydoc",
+    "myst_parser",
+    "sphinx_gallery.gen_gallery",
+]
+
+source_suffix = {".rst": "restructuredtext", ".md": "markdown"}
+root_doc = "index"
+exclude_patterns = ["_build", "auto_examples/*.ipynb", "auto_examples/*.py",
+                    "auto_examples/*.zip", "auto_examples/*.json", "auto_examples/*.md5",
+                    "**.ipynb_checkpoints"]
+templates_path: list[str] = []
+
+# -- MyST: the user guide pages are Markdown that reads the same on GitHub ------------------
+myst_heading_anchors = 4
+myst_enable_extensions = ["colon_fence"]
+
+# -- autodoc / numpydoc ---------------------------------------------------------------------
+autodoc_default_options = {"member-order": "bysource"}
+autodoc_typehints = "none"          # numpydoc's parameter lists carry the types and units
+autosummary_generate = False        # the API pages list each package's __all__ themselves
+numpydoc_show_class_members = False
+numpydoc_class_members_toctree = False
+numpydoc_attributes_as_param_list = True
+# scikit-learn's generated metadata-routing methods are documented by scikit-learn
+_SKLEARN_MEMBERS = {"set_fit_request", "set_predict_request", "set_score_request",
+                    "set_partial_fit_request", "set_transform_request",
+                    "get_metadata_routing", "set_output"}
+
+# -- sphinx-gallery -------------------------------------------------------------------------
+sphinx_gallery_conf = {
+    "examples_dirs": str(ROOT / "examples" / "gallery"),
+    "gallery_dirs": "auto_examples",
+    "filename_pattern": r"/plot_",
+    "ignore_pattern": r"__init__\.py",
+    "download_all_examples": False,
+    "remove_config_comments": True,
+    "matplotlib_animations": False,
+    "image_scrapers": ("matplotlib",),
+    "show_memory": False,
+}
+
+# -- HTML -----------------------------------------------------------------------------------
+html_theme = "alabaster"
+html_theme_options = {
+    "description": "Start-up experiments on FOG north finders",
+    "fixed_sidebar": True,
+    "page_width": "1180px",
+    "sidebar_width": "240px",
+}
+html_static_path: list[str] = []
+html_title = f"nfs-startup {release}"
+
+
+# -- the API reference: a package's exports, read from its __all__ --------------------------
+
+def _defining_module(package, name, obj):
+    """The module under ``package`` whose top level binds ``name`` to ``obj`` (data only)."""
+    prefix = package.__name__ + "."
+    for modname, mod in sorted(sys.modules.items()):
+        if (modname == package.__name__ or modname.startswith(prefix)) and mod is not None:
+            for key, value in vars(mod).items():
+                if value is obj and modname != package.__name__:
+                    return modname, key
+    return package.__name__, name
+
+
+def _data_doc(package, name, obj) -> list[str]:
+    """The ``#:`` comment or docstring of a re-exported constant, from the module defining it."""
+    from sphinx.pycode import ModuleAnalyzer
+
+    modname, key = _defining_module(package, name, obj)
+    try:
+        docs = ModuleAnalyzer.for_module(modname).find_attr_docs()
+    except Exception:  # pragma: no cover - a module without source
+        return []
+    return list(docs.get(("", key), []))
+
+
+def _export_rst(modname: str) -> list[str]:
+    """reST documenting every name in ``modname.__all__``: a summary, then each object."""
+    mod = importlib.import_module(modname)
+    names = list(getattr(mod, "__all__", ()))
+    lines = [f".. currentmodule:: {modname}", "", ".. autosummary::", "   :nosignatures:", ""]
+    lines += [f"   {n}" for n in names if n != "__version__"] + [""]
+    for n in names:
+        obj = getattr(mod, n)
+        if n == "__version__":
+            lines += [f".. py:data:: {modname}.__version__", "",
+                      "   The installed package's version (``nfs-startup``).", ""]
+        elif inspect.isclass(obj) and issubclass(obj, BaseException):
+            lines += [f".. autoexception:: {modname}.{n}", "   :show-inheritance:", ""]
+        elif inspect.isclass(obj):
+            lines += [f".. autoclass:: {modname}.{n}", "   :members:", ""]
+        elif callable(obj) and not isinstance(obj, (dict, list, tuple)):
+            lines += [f".. autofunction:: {modname}.{n}", ""]
+        else:
+            doc = _data_doc(mod, n, obj)
+            lines += [f".. py:data:: {modname}.{n}", ""]
+            lines += [f"   {d}" if d.strip() else "" for d in doc] + [""]
+    return lines
+
+
+def setup(app):
+    from docutils.statemachine import StringList
+    from sphinx.util.docutils import SphinxDirective
+
+    class Exports(SphinxDirective):
+        """``.. nfs-exports:: nfs.compensate``: document what the package exports."""
+
+        required_arguments = 1
+        has_content = False
+
+        def run(self):
+            from docutils import nodes
+
+            text = _export_rst(self.arguments[0])
+            container = nodes.container()
+            self.state.nested_parse(StringList(text, source=f"<{self.arguments[0]}.__all__>"),
+                                    self.content_offset, container, match_titles=True)
+            return container.children
+
+    app.add_directive("nfs-exports", Exports)
+    app.connect("autodoc-skip-member",
+                lambda app, what, name, obj, skip, options:
+                True if name in _SKLEARN_MEMBERS else None)
+    return {"parallel_read_safe": True}
