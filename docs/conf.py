@@ -122,17 +122,20 @@ def _export_rst(modname: str) -> list[str]:
     names = list(getattr(mod, "__all__", ()))
     lines = [f".. currentmodule:: {modname}", "", ".. autosummary::", "   :nosignatures:", ""]
     lines += [f"   {n}" for n in names if n != "__version__"] + [""]
+    # the top-level package re-exports names its subpackages document: list them there
+    # without indexing them twice
+    opts = ["   :no-index:"] if modname == "nfs" else []
     for n in names:
         obj = getattr(mod, n)
         if n == "__version__":
             lines += [f".. py:data:: {modname}.__version__", "",
                       "   The installed package's version (``nfs-startup``).", ""]
         elif inspect.isclass(obj) and issubclass(obj, BaseException):
-            lines += [f".. autoexception:: {modname}.{n}", "   :show-inheritance:", ""]
+            lines += [f".. autoexception:: {modname}.{n}", "   :show-inheritance:", *opts, ""]
         elif inspect.isclass(obj):
-            lines += [f".. autoclass:: {modname}.{n}", "   :members:", ""]
+            lines += [f".. autoclass:: {modname}.{n}", "   :members:", *opts, ""]
         elif callable(obj) and not isinstance(obj, (dict, list, tuple)):
-            lines += [f".. autofunction:: {modname}.{n}", ""]
+            lines += [f".. autofunction:: {modname}.{n}", *opts, ""]
         else:
             doc = _data_doc(mod, n, obj)
             lines += [f".. py:data:: {modname}.{n}", ""]

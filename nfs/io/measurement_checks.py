@@ -25,7 +25,7 @@ from ..run import NO_MISSING_COLUMNS, REQUIRED_COLUMNS, RunMeta
 __all__ = ["MAX_ABS_ACC_G", "MAX_TEMPERATURE_C", "SAMPLE_RATE_RTOL", "check_columns",
            "check_units", "check_sample_rate", "check_header"]
 
-#: Largest physically possible |specific force| of an ``acc_*_g`` column [g] (the spec;
+#: Largest physically possible ``|specific force|`` of an ``acc_*_g`` column [g] (the spec;
 #: :mod:`nfs.ranges`, ``measurement.columns.acc_*_g``).
 MAX_ABS_ACC_G = find("measurement.columns.acc_x_g").hard[1]
 
@@ -155,7 +155,7 @@ def check_units(meta: RunMeta, columns: Mapping[str, np.ndarray], *,
       theta_k) over every heading psi (sqrt(2) for 0/90/180/270).  A span 3600x too small
       is deg/s, 206265x rad/s, 57x rad/h (``measurement.columns.gyro_dph.earth_rate``);
       skipped for positions on one line and within 6 deg of a pole;
-    - the median |specific force| of each ``acc_*_g`` column on a levelled table: above
+    - the median ``|specific force|`` of each ``acc_*_g`` column on a levelled table: above
       0.5 g impossible, above 0.05 g (a 3 deg tilt) unusual; m/s^2 is 9.81x.
     """
     t0 = meta.start_temperature_c

@@ -42,7 +42,7 @@ are its replicates around it; the correction moves the interval up accordingly, 
 mean, where the bias of seven cells adds up while their spread averages down.
 
 An interval holds its estimate.  The estimate's own rank among the replicates is Phi(z0), and
-the bounds' ranks are Phi(2 z0 -+ z_{1-a/2}): the estimate stays inside while |z0| <=
+the bounds' ranks are Phi(2 z0 -+ z_{1-a/2}): the estimate stays inside while ``|z0|`` <=
 z_{1-a/2}.  Beyond that, more than 97.5 % of the replicates fall on one side of the estimate:
 a statistic at or near a bound of its range (the R^2 of a constant prediction c is
 -n (ybar - c)^2 / SST <= 0 with ybar - c close to 0: resampling moves ybar* - c and SST*
@@ -108,7 +108,7 @@ def bc_interval(replicates: np.ndarray, estimate: float, level: float = LEVEL, *
     -------
     (low, high) : tuple of float
         low <= estimate <= high (module docstring: the correction limited to
-        |z0| <= z_{(1+level)/2}); NaN when there are fewer finite replicates than
+        ``|z0| <= z_{(1+level)/2}``); NaN when there are fewer finite replicates than
         ``min_replicates`` (or none) or the estimate is not finite.
     """
     b = np.asarray(replicates, dtype=float)

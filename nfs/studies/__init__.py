@@ -12,7 +12,8 @@ them, the chain behind ``nfs table``.
 
 from .cycle_study import CycleStudy, run_cycle_study, run_runs_study
 from .parameter_study import ParameterStudy, run_parameter_study
-from .scenario_runs import (ScenarioResult, northfind_runs, run_scenario, uncompensated_table)
+from .scenario_runs import (ScenarioResult, floor_deg, northfind_runs, run_scenario,
+                            uncompensated_table)
 from .startup_study import CompensationStudy, run_study
 
 __all__ = ["ScenarioResult", "run_scenario", "northfind_runs", "uncompensated_table", "floor_deg",
