@@ -28,7 +28,8 @@ from pathlib import Path
 
 from timing import best_of
 
-from nfs.diagnose.fit import default_free, fit_model
+from nfs.diagnose.fit import fit_model
+from nfs.diagnose.free_set import default_free
 from nfs.diagnose.params import get_param, set_params
 from nfs.diagnose.thermal_residual import prepare_thermal, thermal_residual_parts
 from nfs.experiment import simulate_run

@@ -771,7 +771,7 @@ def build_parser() -> argparse.ArgumentParser:
     fi.add_argument("-o", "--output", required=True, help="fitted model TOML to write")
     fi.add_argument("--overwrite", action="store_true", help="replace an existing -o file")
     fi.add_argument("--free", nargs="+", default=None,
-                    help="free parameter paths or patterns (default: see nfs.diagnose.fit)")
+                    help="free parameter paths or patterns (default: nfs.diagnose.default_free)")
     fi.add_argument("--stages", nargs="+", default=["thermal", "drift"],
                     choices=["thermal", "drift"],
                     help="what to fit: thermal (network against the thermometers), drift "

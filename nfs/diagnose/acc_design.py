@@ -2,7 +2,7 @@
 
 An accelerometer effect (``acc_bias_temperature`` on an axis) shows first in its own
 accelerometer, not in the gyro: the x axis's error enters the drift only through the
-vertical-rate removal of the north finder, Omega_ie sin L b_x (4e-5 deg/h per ug at 45 deg),
+vertical-rate removal of the north finder, Omega_ie sin L b_x (1.1e-5 deg/h per ug at 45 deg),
 while the accelerometer itself reads it directly against a white-noise floor of a few ug per
 10 s window.  So an accelerometer candidate is scored on its axis's readings at rest.
 
@@ -29,10 +29,10 @@ import numpy as np
 
 from ..effects.registry import EffectInstance
 from ..instrument import Instrument
-from ..io.measurement import Run
+from ..run import Run
 from ..sensors import axis_elevation_deg
 from .candidates import Candidate, effect_of, shape_grid, split_parameters
-from .fit import _block, _prepare_drift
+from .drift_residual import prepare_drift, window_means
 
 __all__ = ["ACC_AXES", "AccRun", "acc_channel", "model_acc_paths", "prepare_acc",
            "acc_candidate_columns", "acc_grid_columns"]
@@ -48,7 +48,8 @@ class AccRun:
     """One run on one accelerometer channel."""
 
     rd: Any
-    """Its preparation with the accelerometer channels (:func:`nfs.diagnose.fit._prepare_drift`)."""
+    """Its preparation with the accelerometer channels
+    (:func:`nfs.diagnose.drift_residual.prepare_drift`)."""
     ctx: Any
     """Effect context of the run (the drift candidates' node temperatures)."""
     y: np.ndarray
@@ -99,15 +100,16 @@ def prepare_acc(inst: Instrument, runs: Sequence[Run], contexts: Sequence[Any],
     effects = _axis_effects(inst, axis)
     out = []
     for run, ctx in zip(runs, contexts):
-        rd = _prepare_drift(run, decimate_s, True, "raw")
+        rd = prepare_drift(run, decimate_s, True, "raw")
         a = rd.azimuth + ACC_AXES[axis]
         e = np.radians(axis_elevation_deg(a, tt.tilt_north_deg, tt.tilt_east_deg))
-        cols = [_DEG * _block(rd, np.cos(np.radians(a))), _DEG * _block(rd, np.sin(np.radians(a)))]
+        cols = [_DEG * window_means(rd, np.cos(np.radians(a))),
+                _DEG * window_means(rd, np.sin(np.radians(a)))]
         cols.append(np.ones_like(cols[0]))
         for eff, c in effects:
             coefs, _, _ = split_parameters(eff.spec)
-            cols.append(_block(rd, _unit_term(eff, c, coefs, ctx)))
-        y = rd.measured[col] - _block(rd, np.sin(e) - e)
+            cols.append(window_means(rd, _unit_term(eff, c, coefs, ctx)))
+        y = rd.measured[col] - window_means(rd, np.sin(e) - e)
         out.append(AccRun(rd, ctx, y, np.column_stack(cols)))
     return out
 
@@ -117,7 +119,7 @@ def acc_candidate_columns(c: Candidate, shapes: dict[str, float], acc: list[AccR
     """The candidate's window-mean columns on its accelerometer channel, one per coefficient
     (that coefficient 1, the others 0, shapes fixed), per run."""
     e = effect_of(c, {**{k: 0.0 for k in c.coefficients}, **shapes})
-    return [np.column_stack([_block(a.rd, _unit_term(e, k, c.coefficients, a.ctx))
+    return [np.column_stack([window_means(a.rd, _unit_term(e, k, c.coefficients, a.ctx))
                              for k in c.coefficients]) for a in acc]
 
 

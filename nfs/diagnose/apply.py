@@ -9,15 +9,17 @@ import numpy as np
 from ..effects import get_effect
 from ..errors import NfsError
 from ..instrument import Instrument
-from ..io.measurement import Run
+from ..run import Run
 from .candidates import (FAST_KINDS, SHAPE_GRID, Candidate, effect_of, split_parameters,
                          targets)
 from .design import (PreparedRun, bare_instrument, fit_shapes, model_drift_paths,
                      prepare_runs, startup_heading_rmse)
 from .start_state import StartModel
 from .thermal_residual import DEFAULT_START, start_states
-from .fit import (DEFAULT_DECIMATE_S, FitResult, _drift_context, _prepare_drift, default_free,
-                  fit_model, model_drift_dph)
+from .drift_residual import drift_context, model_drift_dph, prepare_drift
+from .fit import DEFAULT_DECIMATE_S, fit_model
+from .fit_result import FitResult
+from .free_set import default_free
 
 __all__ = ["apply_candidate"]
 
@@ -80,8 +82,8 @@ def apply_candidate(inst: Instrument, runs: Sequence[Run], name: str,
         preps_m = []
         full = []
         for run in runs:
-            rd = _prepare_drift(run, decimate_s, False, "raw")
-            ctx = _drift_context(model, rd, start_c.get(run.name))
+            rd = prepare_drift(run, decimate_s, False, "raw")
+            ctx = drift_context(model, rd, start_c.get(run.name))
             p = PreparedRun(run, rd, ctx, rd.cond.latitude_deg, rd.measured["drift_dph"],
                       np.zeros(0), np.zeros((0, 0)), np.zeros((0, 0)))
             preps_m.append(p)

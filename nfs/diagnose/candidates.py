@@ -19,14 +19,14 @@ from ..effects import available_effects, get_effect, make_effect
 from ..effects.registry import EffectInstance, EffectSpec
 from ..effects.thermometer import THERMOMETERS
 from ..instrument import Instrument
-from ..io.measurement import Run
+from ..run import Run
 
 __all__ = ["Candidate", "candidates", "SHAPE_GRID", "FAST_KINDS", "shape_grid",
            "target_parameter", "split_parameters", "aux_columns", "targets", "effect_of"]
 
 #: Grid of the shape (nonlinear) parameters of the built-in effects; a shape parameter not
 #: named here is held at its default.  A candidate's test pays for the choice over the grid
-#: (Bonferroni over its grid points, :mod:`nfs.diagnose.diagnose`).
+#: (Bonferroni over its grid points, :mod:`nfs.diagnose.candidate_score`).
 SHAPE_GRID: dict[str, tuple[float, ...]] = {
     "tau": (60.0, 150.0, 300.0, 600.0, 1200.0),
     "D_mag": (0.0, 45.0, 90.0, 135.0),

@@ -2,7 +2,7 @@
 
 :func:`write_report` writes ``report.md`` (where the model fails, in words; the summary table;
 the heading RMSE; per channel and run, per turntable position), ``comparison.json``
-(:meth:`~nfs.diagnose.compare.Comparison.to_dict`) and PNG figures: per run, the measured
+(:meth:`~nfs.diagnose.comparison.Comparison.to_dict`) and PNG figures: per run, the measured
 channels beside the model's deterministic prediction with its noise band
 (:func:`plot_overlay`) and the residuals over time (:func:`plot_residuals`); over the runs,
 the residual RMS against the start temperature (:func:`plot_rms_vs_t0`).  Figures are made
@@ -22,7 +22,9 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from ..io.atomic import atomic_write_bytes, atomic_write_text
-from .compare import CHANNEL_BY_KEY, CHANNELS, STAGES, Comparison, format_sig
+from .channel_residual import CHANNEL_BY_KEY, CHANNELS, STAGES
+from .channel_summary import format_sig
+from .comparison import Comparison
 
 __all__ = ["plot_overlay", "plot_residuals", "plot_rms_vs_t0", "to_markdown", "write_report"]
 
@@ -45,8 +47,8 @@ def _scale(unit: str) -> tuple[float, str]:
 def plot_overlay(comparison: Comparison, i_run: int):
     """Measured against the model's deterministic prediction, with its +-1 sigma noise band,
     for the gyro drift and the FOG thermometer of run ``i_run`` (a matplotlib Figure, made
-    without pyplot).  The band is the run's noise floor (module docstring): where the model is
-    right, about two thirds of the measured points fall inside it."""
+    without pyplot).  The band is the run's noise floor (:mod:`nfs.diagnose.comparison`):
+    where the model is right, about two thirds of the measured points fall inside it."""
     fig = Figure(figsize=(8.0, 6.0), dpi=100)
     for j, key in enumerate(("gyro_drift_dph", "temp_fog_c")):
         cr = comparison.per_run[key][i_run]

@@ -1,10 +1,10 @@
 """Design matrices of the candidate scores: the drift window means and the thermometers.
 
 Drift channel.  The thermal solution of every run is computed once from the model's
-(already fitted) thermal parameters (:func:`nfs.diagnose.fit._drift_context`) and the
-measured drift is reduced to means over windows of ``decimate_s`` at rest
-(:func:`nfs.diagnose.fit._prepare_drift`).  The model drift
-(:func:`~nfs.diagnose.fit.model_drift_dph`) is linear in ``gyro.bias_dph`` and in the
+(already fitted) thermal parameters (:func:`nfs.diagnose.drift_residual.drift_context`) and
+the measured drift is reduced to means over windows of ``decimate_s`` at rest
+(:func:`nfs.diagnose.drift_residual.prepare_drift`).  The model drift
+(:func:`~nfs.diagnose.drift_residual.model_drift_dph`) is linear in ``gyro.bias_dph`` and in the
 coefficients of the gyro effects (b1, b2, k_r, k_s, k_p, k_m, a, m, A_p, k, s1), so each is a
 column of a design matrix on the window means (:class:`PreparedRun`); a candidate adds its
 own columns, one per coefficient, at fixed shape parameters (:func:`candidate_columns`).
@@ -29,19 +29,19 @@ from scipy.optimize import least_squares
 
 from ..effects.registry import EffectInstance
 from ..effects import get_effect
-from ..errors import NfsError
-from ..experiment import effect_context
 from ..instrument import Instrument
-from ..io.measurement import Run
+from ..run import Run
 from ..northfind import heading_rmse, north_find
 from .candidates import Candidate, SHAPE_GRID, effect_of, shape_grid, split_parameters
-from .fit import _block, _drift_context, _prepare_drift, default_free, model_drift_dph
+from .drift_residual import (DriftRun, drift_context, drift_context_on, model_drift_dph,
+                             prepare_drift, window_means)
+from .free_set import default_free
 from .start_state import StartModel
 from .thermal_residual import DEFAULT_START, prepare_thermal, thermal_residual_parts
 from .params import fit_bounds, get_param, set_params
 from .stats import run_grams, solve
 
-__all__ = ["PreparedRun", "prepare_runs", "drift_context_on", "bare_instrument", "model_drift_paths",
+__all__ = ["PreparedRun", "prepare_runs", "bare_instrument", "model_drift_paths",
            "candidate_columns", "grid_columns", "fit_shapes", "startup_heading_rmse",
            "refit_heading_rmse", "ThermalDesign", "thermal_design",
            "thermal_candidate_columns", "same_signature", "thermal_step_instrument"]
@@ -53,8 +53,8 @@ class PreparedRun:
 
     run: Run
     """The measured run."""
-    rd: Any
-    """Its drift-stage preparation (:func:`nfs.diagnose.fit._prepare_drift`)."""
+    rd: DriftRun
+    """Its drift-stage preparation (:func:`nfs.diagnose.drift_residual.prepare_drift`)."""
     ctx: Any
     """Effect context: on the model's open-loop thermal solution or on smoothed node
     temperatures (:func:`prepare_runs`)."""
@@ -103,18 +103,6 @@ def _unit_effects(e: EffectInstance, coefs: Sequence[str]) -> list[EffectInstanc
     return out
 
 
-def drift_context_on(inst: Instrument, rd: Any, thermal: Any):
-    """The effect context of a prepared run on given node temperatures ``thermal`` (a
-    :class:`thermal.ThermalResult` or :class:`nfs.diagnose.smoother.SmoothedThermal` on the
-    run's own time base) instead of the model's open-loop solution."""
-    t = rd.cond.time_s
-    if np.shape(thermal.time_s) != t.shape:
-        raise NfsError(f"run '{rd.run.name}': node temperatures on {np.size(thermal.time_s)} "
-                       f"samples for a run of {t.size}")
-    _, moving = rd.cond.turntable(t)
-    return effect_context(inst, thermal, rd.azimuth, rd.projection, moving, rd.aux)
-
-
 def prepare_runs(inst: Instrument, runs: Sequence[Run], decimate_s: float,
                  thermal: Sequence[Any] | None = None,
                  start_c: Mapping[str, np.ndarray] | None = None
@@ -130,8 +118,8 @@ def prepare_runs(inst: Instrument, runs: Sequence[Run], decimate_s: float,
     zero = set_params(inst, {p: 0.0 for p in paths})
     out = []
     for i, run in enumerate(runs):
-        rd = _prepare_drift(run, decimate_s, False, "raw")
-        ctx = (_drift_context(inst, rd, start_c.get(run.name)) if thermal is None
+        rd = prepare_drift(run, decimate_s, False, "raw")
+        ctx = (drift_context(inst, rd, start_c.get(run.name)) if thermal is None
                else drift_context_on(inst, rd, thermal[i]))
         lat = rd.cond.latitude_deg
         offset = model_drift_dph(zero, ctx, lat)
@@ -139,8 +127,8 @@ def prepare_runs(inst: Instrument, runs: Sequence[Run], decimate_s: float,
         for p in paths[1:]:
             cols.append(model_drift_dph(set_params(zero, {p: 1.0}), ctx, lat) - offset)
         X_full = np.column_stack(cols)
-        X = np.column_stack([_block(rd, c) for c in X_full.T])
-        y = rd.measured["drift_dph"] - _block(rd, offset)
+        X = np.column_stack([window_means(rd, c) for c in X_full.T])
+        y = rd.measured["drift_dph"] - window_means(rd, offset)
         out.append(PreparedRun(run, rd, ctx, lat, y, offset, X_full, X))
     return out, paths
 
@@ -154,7 +142,7 @@ def candidate_columns(c: Candidate, shapes: dict[str, float], preps: list[Prepar
     out = []
     for p in preps:
         F = _columns(bare, units, p.ctx, p.lat)
-        out.append(F if full else np.column_stack([_block(p.rd, f) for f in F.T]))
+        out.append(F if full else np.column_stack([window_means(p.rd, f) for f in F.T]))
     return out
 
 
@@ -274,7 +262,7 @@ def _thermal_resid(models: Sequence[Instrument], data, start: StartModel | None
 def thermal_design(inst: Instrument, runs: Sequence[Run], decimate_s: float,
                    start: StartModel | None = DEFAULT_START) -> ThermalDesign:
     """The thermometer residual of the model and its Jacobian in the free thermal parameters
-    (:func:`~nfs.diagnose.fit.default_free`, thermal stage), by forward differences, each
+    (:func:`~nfs.diagnose.free_set.default_free`, thermal stage), by forward differences, each
     run's start profiled (``start``, :mod:`nfs.diagnose.start_state`)."""
     data = [prepare_thermal(r, decimate_s) for r in runs]
     paths = default_free(inst, ("thermal",))

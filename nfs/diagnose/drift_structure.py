@@ -20,10 +20,9 @@ significant there has a direction of its own (an azimuth term, a scale factor, a
 channel): it is named plainly.  One that does not is *tied* with the alternative: the runs
 cannot tell the named effect from a Shupe weighting the model lacks, and the verdict says so
 beside the name.  The tie is not a rejection: right after power-on every node's rate decays
-like a turn-on transient, so a genuine electronic transient is often tied too (on the
-package's own simulator, where the model's structure is the truth's, a hidden transient of
-0.1 deg/h is tied at p = 0.07); only knowledge of the unit (a coil whose windings the model
-lumps, a source whose warm-up is known) breaks it.  ``shupe_rate`` on any node lies in the
+like a turn-on transient, so a genuine electronic transient is often tied too, even where
+the model's structure is the unit's; only knowledge of the unit (a coil whose windings the
+model lumps, a source whose warm-up is known) breaks it.  ``shupe_rate`` on any node lies in the
 alternative's span: the message names the best of them as the first thing to try.
 """
 
@@ -36,7 +35,7 @@ import numpy as np
 
 from ..docfields import document_fields
 from .design import PreparedRun
-from .fit import _block
+from .drift_residual import window_means
 from .stats import RunGrams, augmented_grams, clustered_fit, group_cv_rms
 
 __all__ = ["DriftStructure", "rate_columns", "beyond_alternative"]
@@ -103,7 +102,7 @@ class DriftStructure:
 def rate_columns(preps: Sequence[PreparedRun]) -> tuple[tuple[str, ...], list[np.ndarray]]:
     """(node names, per run the window means of every node's rate dT_i/dt [K/min])."""
     nodes = tuple(preps[0].ctx.node_names)
-    return nodes, [np.column_stack([_block(p.rd, _S_PER_MIN * p.ctx.rate_c_per_s[:, j])
+    return nodes, [np.column_stack([window_means(p.rd, _S_PER_MIN * p.ctx.rate_c_per_s[:, j])
                                     for j in range(len(nodes))]) for p in preps]
 
 

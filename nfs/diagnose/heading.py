@@ -2,7 +2,7 @@
 
 A model can be within the noise on the drift channel in RMS and still miss what the north
 finder sees: a bias that follows the turntable positions does not cancel in a cycle, and a
-small one is diluted in the drift's RMS.  So :func:`nfs.diagnose.compare.compare` sets the
+small one is diluted in the drift's RMS.  So :func:`nfs.diagnose.comparison.compare` sets the
 measured heading RMSE of every run beside the model's and gives the heading a verdict of its
 own (:func:`heading_comparison`), with an interval from the run-to-run scatter.
 """

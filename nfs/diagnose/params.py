@@ -15,12 +15,8 @@ from ..parameters import (PARAM_KINDS, ParameterError, canonical_path, expand_pa
                           get_param, list_params, param_kind, param_paths, set_params)
 
 __all__ = ["ParameterError", "PARAM_KINDS", "get_param", "set_params", "list_params",
-           "expand_paths", "param_kind", "default_bounds", "canonical_path", "effect_unit",
-           "fit_bounds"]
-
-#: (path, kind) of every number of an instrument (the fit's name for
-#: :func:`nfs.parameters.param_paths`).
-_all_paths = param_paths
+           "expand_paths", "param_kind", "param_paths", "default_bounds", "canonical_path",
+           "effect_unit", "fit_bounds"]
 
 _INF = math.inf
 

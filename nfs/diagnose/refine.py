@@ -12,12 +12,13 @@ candidate follows it.  So :func:`fit_unit` refines the structure before the drif
    are scored on the leave-one-start-temperature-out thermometer residual
    (:func:`nfs.diagnose.adequacy.thermal_adequacy`);
 2. the best one is adopted when it pays: its held-out RMS lower than the current
-   structure's by more than :data:`~nfs.diagnose.adequacy.CV_DROP` and lower run by run (a
-   paired one-sided t test over the runs, :func:`~nfs.diagnose.adequacy.better_run_by_run`):
+   structure's by more than :data:`~nfs.diagnose.alternative_score.CV_DROP` and lower run by
+   run (a paired one-sided t test over the runs,
+   :func:`~nfs.diagnose.alternative_score.better_run_by_run`):
    a structure change is a claim about the unit, held to the standard of a named effect;
 3. the adopted structure is checked again in full (the screening linearises the held-out
    fit; a change whose full check does not lower the held-out residual by
-   :data:`~nfs.diagnose.adequacy.CV_DROP` is dropped and the chain stops there);
+   :data:`~nfs.diagnose.alternative_score.CV_DROP` is dropped and the chain stops there);
 4. repeated on the new structure until every thermometer's held-out residual is within the
    factor, no alternative pays, or :data:`MAX_STEPS` changes were made.
 
@@ -34,10 +35,12 @@ from typing import Any, Sequence
 
 from ..docfields import document_fields
 from ..instrument import Instrument
-from ..io.measurement import Run
-from .adequacy import (BEATS_ALPHA, CV_DROP, ThermalAdequacy, better_run_by_run,
-                       thermal_adequacy)
-from .fit import FitResult, default_free, fit_model
+from ..run import Run
+from .adequacy import ThermalAdequacy, thermal_adequacy
+from .alternative_score import BEATS_ALPHA, CV_DROP, better_run_by_run
+from .fit import fit_model
+from .fit_result import FitResult
+from .free_set import default_free
 from .params import expand_paths
 from .start_state import StartModel
 from .thermal_residual import DEFAULT_START

@@ -9,7 +9,7 @@ from ..docfields import document_fields
 from .adequacy import ThermalAdequacy
 from .candidates import Candidate
 from .drift_structure import DriftStructure
-from .fit import FitResult
+from .fit_result import FitResult
 
 __all__ = ["ANSWER_KINDS", "Answer", "CandidateScore", "Diagnosis", "candidate_finding",
            "label_of"]
@@ -93,7 +93,7 @@ class CandidateScore:
     """The same with the candidate added [deg]."""
     explained_by: str | None = None
     """Label of the top significant candidate when that one explains this one too (its CV
-    drop over the model plus the top candidate is below :data:`CV_DROP`)."""
+    drop over the model plus the top candidate is below :data:`nfs.diagnose.ranking.CV_DROP`)."""
     channel: str = "drift_dph"
     """Residual the CV RMS is taken on: ``drift_dph`` (window means, deg/h), ``acc_x_g`` /
     ``acc_y_g`` (an accelerometer's window means, g) or ``thermometers`` (the three
@@ -144,8 +144,8 @@ class Diagnosis:
     unexplained: dict[str, Any]
     """Ljung-Box test of the baseline residual and its cross-correlation with every channel."""
     baseline: FitResult | None
-    """The model's own drift refit (:func:`fit_model`, drift stage); None when the diagnosis
-    failed."""
+    """The model's own drift refit (:func:`~nfs.diagnose.fit.fit_model`, drift stage); None
+    when the diagnosis failed."""
     time_s: float
     """Wall time [s]."""
     alpha: float = 0.05

@@ -30,7 +30,7 @@ temperatures it is given.
 What the thermometers cannot tell: no thermometer sees the coil's inner layers, and the FOG
 thermometer reads a weighted mean of the electronics and coil_outer, so how the unmodelled
 heat splits among those nodes comes from the network's dynamics and the prior, not from a
-reading.  The figures of tests/diagnose/test_smoother.py show what that costs.
+reading.
 """
 
 from __future__ import annotations
@@ -50,7 +50,7 @@ from ..effects.thermometer import THERMOMETERS
 from ..errors import InputError, NfsError, ThermalError
 from ..experiment import conditions_from_run, thermal_effects
 from ..instrument import Instrument
-from ..io.measurement import Run
+from ..run import Run
 
 __all__ = ["SmoothedThermal", "RunSmoothing", "smooth_runs", "thermometer_sensors",
            "DEFAULT_DECIMATE_S"]
@@ -276,7 +276,7 @@ def smooth_runs(inst: Instrument, runs: Sequence[Run], *,
         default 0 lets the unmodelled heat grow from zero (a wrong capacity or conductance
         errs only once the unit warms); a heat source the model lacks is present from
         power-on and is found at the right node only with a prior here (e.g. 0.3 W, against
-        node powers of 0.45-7 W), see tests/diagnose/test_smoother.py.
+        node powers of 0.45-7 W).
     noise_weights : mapping node -> float, optional
         Relative spectral densities of the unmodelled heat (default 1 at every node).
     initial_power_bounds_w : (float, float), optional

@@ -6,8 +6,7 @@ T0.  A thermometer's reading there is T0 + offset (+ noise, quantisation).  Over
 seconds (:data:`DEFAULT_WINDOW_S`) the instrument already warms; the model predicts the shape
 of that warming, w(t) = m(t) - T0 with m the model's noise-free, offset-free reading through
 the thermometer's lag, but the unit may warm faster or slower than the model (a preset is not
-the unit: an independent unit's thermometers warmed 5x slower than the preset's in the first
-minute).  So each run's readings y are fitted by linear least squares with
+the unit).  So each run's readings y are fitted by linear least squares with
 
     y(t) = T0 + offset + a w(t),    t < W                                           [degC]
 
@@ -33,7 +32,7 @@ from ..effects.thermometer import THERMOMETERS
 from ..errors import InputError
 from ..experiment import conditions_from_run, thermal_power
 from ..instrument import Instrument
-from ..io.measurement import Run
+from ..run import Run
 from ..sensors import thermometer_reading
 from .prior import Prior
 from .start_state import StartModel, soak_history, start_basis, start_prior

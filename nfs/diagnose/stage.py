@@ -220,8 +220,8 @@ def _errors(jac: np.ndarray, r: np.ndarray, paths: Sequence[str],
     prior rows P give cov = (J^T J / s^2 + P^T P)^-1 (Tarantola 2005, *Inverse Problem
     Theory*, sec. 3.2: the Gaussian linear case).  A direction the data rows do not
     constrain gives the parameters in it an infinite standard error (the value there is the
-    prior's, not a measurement; :attr:`nfs.diagnose.fit.FitResult.prior_sigma` holds its width) and names
-    them.
+    prior's, not a measurement; :attr:`nfs.diagnose.fit_result.FitResult.prior_sigma` holds
+    its width) and names them.
     """
     m, n = jac.shape
     s2 = float(r @ r) / max(m - n, 1)

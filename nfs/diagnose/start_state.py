@@ -47,7 +47,7 @@ import numpy as np
 import thermal
 
 from ..errors import InputError
-from ..io.measurement import Run
+from ..run import Run
 
 __all__ = ["SLOW_WIDTH_C", "FAST_WIDTH_C", "HISTORY_WIDTH_C", "DEFAULT_SLOW_MODES",
            "SOAK_KEYS", "StartModel", "start_basis", "soak_history", "start_prior",

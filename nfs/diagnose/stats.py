@@ -1,6 +1,7 @@
-"""Run-level statistics of the candidate scores: clustered inference, grouped CV, Holm.
+"""Run-level statistics of the candidate scores: clustered inference, grouped CV, Holm,
+one-sided tests.
 
-Every candidate of :mod:`nfs.diagnose.diagnose` is a linear least-squares problem over runs,
+Every candidate of :mod:`nfs.diagnose.missing_effect` is a linear least-squares problem over runs,
 y_r = Z_r beta + e_r (r = 1..G runs; y_r the run's residual window means or thermometer
 readings, Z_r the model's columns beside the candidate's).  Within a run the errors are
 strongly autocorrelated (bias instability, a slowly wandering thermal residual), between
@@ -25,6 +26,8 @@ distribution has run-level degrees of freedom:
   temperature); with several candidate designs (the grid points of a shape parameter) each
   fold chooses the design on its training runs only.
 - :func:`holm`: Holm's step-down family-wise control (Holm 1979, Scand. J. Statist. 6(2) 65).
+- :func:`one_sided`: the one-sided test and constrained estimate of a coefficient that
+  physics keeps above a bound (a heat power >= 0 W, a lag >= 0 s).
 """
 
 from __future__ import annotations
@@ -34,10 +37,12 @@ from dataclasses import dataclass
 from typing import Sequence
 
 import numpy as np
-from scipy.stats import f as f_dist, t as t_dist
+from scipy.stats import f as f_dist, norm, t as t_dist
+
+from ..errors import NfsError
 
 __all__ = ["RunGrams", "run_grams", "augmented_grams", "solve", "ClusteredFit", "clustered_fit",
-           "group_cv_rms", "holm"]
+           "group_cv_rms", "holm", "OneSided", "one_sided"]
 
 #: Largest per-run leverage eigenvalue kept in the CR2 correction (a run that alone
 #: determines a direction has leverage 1 there, and its (1 - leverage)^-1/2 is unbounded).
@@ -268,3 +273,65 @@ def holm(p_values: Sequence[float], alpha: float) -> tuple[np.ndarray, np.ndarra
     adj = np.empty(m)
     adj[order] = adj_sorted
     return adj <= alpha, adj
+
+
+# ---------------------------------------------------------------------------------------------
+# One-sided physics
+
+@dataclass(frozen=True)
+class OneSided:
+    """A coefficient that physics keeps on one side of a bound, tested on that side."""
+
+    estimate: float
+    """The unconstrained fitted value."""
+    stderr: float
+    """Its standard error."""
+    lower: float
+    """The physical lower bound (0 W for a heat source, 0 s for a lag)."""
+    z: float
+    """(estimate - lower) / stderr."""
+    p_value: float
+    """One-sided p-value of H0: value <= lower against H1: value > lower, 1 - Phi(z)."""
+    constrained: float
+    """The constrained estimate max(estimate, lower)."""
+    alpha: float
+    """Significance level."""
+
+    @property
+    def significant(self) -> bool:
+        """p_value < alpha (never for an estimate at or below the bound: p >= 0.5)."""
+        return self.p_value < self.alpha
+
+    @property
+    def at_bound(self) -> bool:
+        """The data push the coefficient to the unphysical side."""
+        return self.estimate <= self.lower
+
+
+def one_sided(estimate: float, stderr: float, *, lower: float = 0.0,
+              alpha: float = 0.01) -> OneSided:
+    """One-sided test and constrained fit of a coefficient with a physical lower bound.
+
+    z = (theta_hat - lower) / se, p = 1 - Phi(z) (the one-sided Wald test; for the
+    likelihood-ratio test on the boundary the null distribution is the 50:50 mixture of
+    chi^2_0 and chi^2_1, which gives the same p for theta_hat > lower: Self and Liang,
+    J. Am. Stat. Assoc. 82 (1987) 605, theorem 2 case 1; Chernoff, Ann. Math. Stat. 25
+    (1954) 573).  A negative estimate of a heat power has p >= 0.5: never significant.
+    The constrained estimate is the clamp max(theta_hat, lower), the exact minimiser of
+    the quadratic (Gauss-Newton) cost in theta with the other coefficients profiled out.
+
+    Raises NfsError for a non-finite estimate or a negative or NaN standard error.
+    """
+    est, se = float(estimate), float(stderr)
+    if not math.isfinite(est):
+        raise NfsError(f"one_sided: the estimate must be finite, got {estimate}")
+    if not se >= 0.0:
+        raise NfsError(f"one_sided: the standard error must be >= 0, got {stderr}")
+    d = est - lower
+    if se == 0.0:
+        z = math.inf if d > 0 else (-math.inf if d < 0 else 0.0)
+    else:
+        z = d / se
+    p = float(norm.sf(z))
+    return OneSided(estimate=est, stderr=se, lower=float(lower), z=z, p_value=p,
+                    constrained=max(est, float(lower)), alpha=float(alpha))

@@ -18,6 +18,10 @@ difference Jacobian; stacked, the Python loop over the knots runs once instead o
 as a stack of many (tested).
 """
 
+# About 530 lines, one concept: the grid, the stacked network solve, the readings and the
+# residual share the stacking convention (instrument, run, knot) and the ThermalRun and Knots
+# types; split, each part would need the others' internals.
+
 from __future__ import annotations
 
 import math
@@ -34,12 +38,12 @@ from ..effects.thermometer import THERMOMETERS
 from ..errors import InputError, NfsError
 from ..experiment import conditions_from_run, thermal_effects, thermal_power
 from ..instrument import Instrument
-from ..io.measurement import Run
+from ..run import Run
 from ..sensors import thermometer_reading
 from ..signal import uniform_steps
 from .start_state import StartModel, solve_amplitudes, start_basis, soak_history, start_prior
 
-__all__ = ["MAX_STACK", "THERMAL_COLUMNS", "DEFAULT_START", "ThermalRun", "Knots",
+__all__ = ["MAX_STACK", "THERMAL_COLUMNS", "DEFAULT_START", "ThermalRun", "Knots", "StatefulLaw",
            "ThermalResidual", "prepare_thermal", "simulate_knots", "readings",
            "thermometer_floors", "thermal_residual", "thermal_residual_parts", "start_states",
            "require_columns", "decimation_step", "window_mean"]
@@ -140,7 +144,7 @@ class Knots:
     rate_c_per_s: np.ndarray
 
 
-class _StatefulLaw:
+class StatefulLaw:
     """A state-dependent thermal law (the TEC) of every instrument, for all runs at once.
 
     Called with the node temperature of every (instrument, run) row; the parameters may
@@ -277,7 +281,7 @@ def simulate_knots(insts: Sequence[Instrument], data: Sequence[ThermalRun],
             if e.spec.state_dependent:
                 if j not in cols:
                     cols.append(j)
-                stateful.append((_StatefulLaw(e.spec.function, [eff[k_e][2] for eff in effects],
+                stateful.append((StatefulLaw(e.spec.function, [eff[k_e][2] for eff in effects],
                                               r), j, cols.index(j)))
                 continue
             if varying is None:

@@ -23,7 +23,7 @@ from ..effects.thermometer import THERMOMETERS
 from ..instrument import Instrument
 from ..noise import rest_window_segments, whiteness_test, window_mean_covariance
 from .design import PreparedRun
-from .fit import _block
+from .drift_residual import window_means
 
 __all__ = ["unexplained"]
 
@@ -96,26 +96,26 @@ def unexplained(inst: Instrument, preps: list[PreparedRun], e_parts: list[np.nda
     chans: dict[str, list[np.ndarray]] = {}
     for p in preps:
         run, rd = p.run, p.rd
-        t = _block(rd, np.asarray(run["time_s"], dtype=float))
+        t = window_means(rd, np.asarray(run["time_s"], dtype=float))
         series = {}
         for col in THERMOMETERS.values():
             if col in run.columns:
-                v = _block(rd, np.asarray(run[col], dtype=float))
+                v = window_means(rd, np.asarray(run[col], dtype=float))
                 series[col] = v
                 series[f"d{col}/dt"] = np.gradient(v, t) if v.size > 1 else v * 0
         for col in ("acc_x_g", "acc_y_g"):
             if col in run.columns:
-                series[col] = _block(rd, np.asarray(run[col], dtype=float))
+                series[col] = window_means(rd, np.asarray(run[col], dtype=float))
         pos = np.radians(np.asarray(run["position_deg"], dtype=float))
         for k in (1, 2):  # first and second harmonics of the turntable position
             suffix = "" if k == 1 else "_2"
             for f, fn in (("cos", np.cos), ("sin", np.sin)):
                 v = fn(k * pos)
                 v[np.abs(v) < 1e-9] = 0.0  # sin(pi) = 1e-16 is not a signal
-                series[f"{f}{suffix}_position"] = _block(rd, v)
+                series[f"{f}{suffix}_position"] = window_means(rd, v)
         for col in run.columns:
             if col.startswith("aux_"):
-                series[col] = _block(rd, np.asarray(run[col], dtype=float))
+                series[col] = window_means(rd, np.asarray(run[col], dtype=float))
         for k, v in series.items():
             chans.setdefault(k, []).append(v)
     rows = []

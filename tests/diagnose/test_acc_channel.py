@@ -18,7 +18,8 @@ import pytest
 
 from nfs.diagnose.acc_design import model_acc_paths, prepare_acc
 from nfs.diagnose.design import prepare_runs
-from nfs.diagnose.diagnose import candidates, diagnose
+from nfs.diagnose.candidates import candidates
+from nfs.diagnose.missing_effect import diagnose
 from nfs.diagnose.stats import clustered_fit, run_grams
 from nfs.experiment import simulate_run
 from nfs.instrument import load_instrument

@@ -15,8 +15,9 @@ import pytest
 
 import importlib
 
-from nfs.diagnose.diagnose import _physical, _rank_key, _Scored
+from nfs.diagnose.candidate_score import ScoredCandidate
 from nfs.diagnose.drift_structure import DriftStructure
+from nfs.diagnose.ranking import is_physical, rank_key
 from nfs.diagnose.result import ANSWER_KINDS, CandidateScore, Diagnosis
 
 
@@ -87,7 +88,7 @@ def test_failure_is_undetermined(monkeypatch):
 
     def broken(*args, **kwargs):
         raise np.linalg.LinAlgError("Eigenvalues did not converge")
-    diagnose_module = importlib.import_module("nfs.diagnose.diagnose")
+    diagnose_module = importlib.import_module("nfs.diagnose.missing_effect")
     monkeypatch.setattr(diagnose_module, "diagnose_candidates", broken)
     got = diagnose_module.diagnose(None, [])
     assert got.answer.kind == "undetermined" and "Eigenvalues did not converge" in got.verdict
@@ -96,13 +97,13 @@ def test_failure_is_undetermined(monkeypatch):
 
 def test_ranking_puts_unphysical_rows_last():
     neg = _score("heat_source", "board", coef={"power": -4.6}, drop=0.3)
-    assert not _physical(neg) and _physical(_score("heat_source", coef={"power": 0.5}))
-    rows = [_Scored(candidate=None, score=s, shapes={}, beta=None, cols=[]) for s in (
+    assert not is_physical(neg) and is_physical(_score("heat_source", coef={"power": 0.5}))
+    rows = [ScoredCandidate(candidate=None, score=s, shapes={}, beta=None, cols=[]) for s in (
         neg.__class__(**{**neg.__dict__, "physical": False}),
         _score("magnetic", drop=0.01),
         _score("shupe_rate", significant=True, drop=0.05),
         _score("heat_source", "coil", coef={"power": 1.0}, significant=True, drop=0.02,
                channel="thermometers"))]
-    order = [r.score.effect for r in sorted(rows, key=_rank_key)]
+    order = [r.score.effect for r in sorted(rows, key=rank_key)]
     assert order == ["heat_source", "shupe_rate", "magnetic", "heat_source"]
-    assert sorted(rows, key=_rank_key)[-1].score.physical is False
+    assert sorted(rows, key=rank_key)[-1].score.physical is False

@@ -12,7 +12,8 @@ import dataclasses
 
 import pytest
 
-from nfs.diagnose.diagnose import candidates, diagnose
+from nfs.diagnose.candidates import candidates
+from nfs.diagnose.missing_effect import diagnose
 from nfs.effects import make_effect
 from nfs.errors import EffectError, NfsError
 from nfs.experiment import simulate_run

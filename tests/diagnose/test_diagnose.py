@@ -1,4 +1,4 @@
-"""Tests of nfs.diagnose.diagnose: name the effect a model lacks, add it, watch the error fall.
+"""Tests of nfs.diagnose.missing_effect: name the effect a model lacks, add it, watch the error fall.
 
 "Measured" runs: the default scenario's 7 start temperatures, 2.5 h at 1 Hz, simulated
 (nfs.experiment.simulate_run) with noise from an instrument with ONE effect the model lacks;
@@ -35,7 +35,7 @@ divided by the floor, measured with seed 11:
   p = 0.076.  The diagnosis reports the tie instead of naming it (it did name it, on that
   0.05 % margin, before the run-by-run comparison).
 
-Significance is run-level (nfs.diagnose.diagnose: a test clustered by run with run-level
+Significance is run-level (nfs.diagnose.missing_effect: a test clustered by run with run-level
 degrees of freedom, the shape grid paid for by Bonferroni, Holm over all candidates at 5 %,
 and a drop of the leave-one-start-temperature-out RMS).  Holm-adjusted p of the hidden
 effect, seeds 11 / 12: shupe_product 2e-4 / 2e-4, turn_on_transient 3e-6 / 2e-6, magnetic
@@ -61,7 +61,10 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from nfs.diagnose.diagnose import (CV_DROP, apply_candidate, candidates, diagnose)
+from nfs.diagnose.apply import apply_candidate
+from nfs.diagnose.candidates import candidates
+from nfs.diagnose.missing_effect import diagnose
+from nfs.diagnose.ranking import CV_DROP
 from nfs.diagnose.fit import fit_model
 from nfs.effects import make_effect
 from nfs.errors import NfsError

@@ -20,7 +20,7 @@ import numpy as np
 import pytest
 from scipy.linalg import expm
 
-from nfs.diagnose.diagnose import diagnose
+from nfs.diagnose.missing_effect import diagnose
 from nfs.diagnose.fit import fit_model
 from nfs.diagnose.refine import fit_unit
 from nfs.diagnose.start_state import (FAST_WIDTH_C, SLOW_WIDTH_C, StartModel, solve_amplitudes,

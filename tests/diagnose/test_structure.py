@@ -19,11 +19,13 @@ import math
 import numpy as np
 import pytest
 
-from nfs.diagnose.adequacy import ADEQUACY_FACTOR, beats_structure, one_sided, thermal_adequacy
+from nfs.diagnose.adequacy import ADEQUACY_FACTOR, beats_structure, thermal_adequacy
 from nfs.diagnose.structure import (effect_alternative, free_link, insert_node, physical_lower,
                                     set_thermometer_fraction, split_node,
                                     structural_alternatives, thermometer_weight)
-from nfs.diagnose.fit import default_free, fit_model
+from nfs.diagnose.fit import fit_model
+from nfs.diagnose.free_set import default_free
+from nfs.diagnose.stats import one_sided
 from nfs.diagnose.thermal_residual import prepare_thermal, thermal_residual_parts
 from nfs.errors import NfsError
 from nfs.experiment import simulate_run

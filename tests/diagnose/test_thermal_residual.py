@@ -19,10 +19,10 @@ from scipy.optimize._numdiff import approx_derivative
 
 import thermal
 from independent import generator as g
-from nfs.diagnose.fit import default_free
+from nfs.diagnose.free_set import default_free
 from nfs.diagnose.params import get_param, set_params
 from nfs.diagnose.stage import FTOL, XTOL, forward_jacobian, solve_stage
-from nfs.diagnose.thermal_residual import (_StatefulLaw, prepare_thermal, simulate_knots,
+from nfs.diagnose.thermal_residual import (StatefulLaw, prepare_thermal, simulate_knots,
                                            thermal_residual_parts)
 from nfs.effects import make_effect
 from nfs.errors import NfsError
@@ -146,14 +146,14 @@ def test_state_law_for_scalars_only():
     mv = np.zeros(3)
     want = np.array([[0.0, 5.0, 15.0], [0.2, 0.0, 5.0]])
     for f, mode in ((scalar_law, "per run"), (array_law, "per instrument")):
-        law = _StatefulLaw(f, [{"c": 1.0}, {"c": 0.2}], 3)
+        law = StatefulLaw(f, [{"c": 1.0}, {"c": 0.2}], 3)
         np.testing.assert_allclose(law(0.0, temp, mv, np.tile(mv, 2)), want, rtol=1e-15)
         assert law.mode == mode
 
     def named_law(t, temperature, moving, *, c, curve):  # a parameter that is no number
         return (c if curve == "linear" else 2 * c) * np.maximum(0.0, temperature - 25.0)
 
-    law = _StatefulLaw(named_law, [{"c": 1.0, "curve": "linear"},
+    law = StatefulLaw(named_law, [{"c": 1.0, "curve": "linear"},
                                    {"c": 0.1, "curve": "double"}], 3)
     assert law.mode == "per instrument"
     np.testing.assert_allclose(law(0.0, temp, mv, np.tile(mv, 2)), want, rtol=1e-15)
