@@ -2,7 +2,10 @@
 
 Oracles: invariants.  A model file holds the fitted arrays and is read back onto the same
 classes, so the loaded model predicts bit for bit as the one saved, and saving it again gives
-the same bytes.  A file whose unpickling would create a marker file (``__reduce__`` calling
+the same bytes; a file that names the classes by their paths before the estimators moved to
+nfs.learners reads as the same model.  Stored data: model files and a pickle written before
+that move (tests/data/model_files, README.md there), whose predictions when written are
+stored beside them.  A file whose unpickling would create a marker file (``__reduce__`` calling
 ``os.system``; a control shows the marker appears when the bytes are unpickled) is refused
 by ``nfs compensate`` with one line and exit 2, and the marker does not appear.
 """
@@ -12,21 +15,27 @@ import json
 import os
 import pickle
 import shlex
+import sys
 import warnings
 import zipfile
+from pathlib import Path
 
 import joblib
 import numpy as np
 import pytest
 
 from nfs.cli import main
-from nfs.compensate import (CubicLeastSquares, DriftCompensator, IRLSSVMRegressor,
-                            load_compensator, train_compensator)
+from nfs.compensate import DriftCompensator, load_compensator, train_compensator
 from nfs.compensate.methods import METHODS
-from nfs.compensate.model_file import (ESTIMATORS, FORMAT, ModelFileError, ModelVersionWarning,
+from nfs.compensate.model_file import (ESTIMATORS, FORMAT, FORMER_NAMES, RECORDS,
+                                       ModelFileError, ModelVersionWarning, former_modules,
                                        model_file_kind, read_model_file, write_model_file)
+from nfs.learners import CubicLeastSquares, IRLSSVMRegressor
 from nfs.io.measurement import read_runs
 from nfs.io.provenance import sha256_of_file
+
+#: Model files and a pickle written before the estimators moved to nfs.learners.
+STORED = Path(__file__).resolve().parent / "data" / "model_files"
 
 
 def _data(n=60, seed=0):
@@ -60,6 +69,12 @@ def test_every_method_round_trips_bit_for_bit(tmp_path, key):
     assert again.read_bytes() == path.read_bytes()
     if spec.tuned:
         assert loaded.estimator.best_params_ == est.best_params_
+    # the same file with every class named by its path before the move to nfs.learners
+    former = _with_former_names(path, tmp_path / "former.npz")
+    assert former.read_bytes() != path.read_bytes()
+    loaded = load_compensator(former)
+    assert type(loaded.estimator) is type(est)
+    assert loaded.estimator.predict(X_new).tobytes() == est.predict(X_new).tobytes()
 
 
 def test_the_header_names_the_class_its_parameters_the_features_and_the_runs(tmp_path):
@@ -74,7 +89,7 @@ def test_the_header_names_the_class_its_parameters_the_features_and_the_runs(tmp
     assert doc["format"] == FORMAT and doc["features_mode"] == "cycle"
     assert doc["feature_names"] == ["T_fog", "dT_fog", "G"]
     assert doc["provenance"]["runs"][0]["sha256"] == "ab"
-    assert doc["estimator"]["$estimator"] == "nfs.compensate.regression.CubicLeastSquares"
+    assert doc["estimator"]["$estimator"] == "nfs.learners.linear.CubicLeastSquares"
     assert doc["estimator"]["params"] == {"degree": 2, "include_interactions": True,
                                           "alpha": 0.0}
     with np.load(path, allow_pickle=False) as npz:   # the arrays need no pickle
@@ -250,8 +265,78 @@ def test_a_trusted_pickle_of_an_earlier_version_still_loads(runs, tmp_path, caps
 
 def test_every_estimator_on_the_list_is_the_packages_or_inside_one():
     # The list is the package's estimators and the two scikit-learn models they hold.
-    outside = sorted(n for n in ESTIMATORS if not n.startswith("nfs.compensate."))
+    outside = sorted(n for n in ESTIMATORS if not n.startswith("nfs.learners."))
     assert outside == ["sklearn.neural_network.MLPRegressor", "sklearn.svm.SVR"]
+
+
+def test_every_name_on_the_lists_is_where_its_class_is_found():
+    # The name written is the class's module and qualified name (scikit-learn's: the public
+    # module it is imported from), so a name in a file says where its class is defined.
+    for name, cls in {**ESTIMATORS, **RECORDS}.items():
+        module, _, qualname = name.rpartition(".")
+        if name.startswith("nfs."):
+            assert (cls.__module__, cls.__qualname__) == (module, qualname)
+        else:
+            __import__(module)
+            assert getattr(sys.modules[module], qualname) is cls
+
+
+def test_every_former_name_reads_as_the_class_of_the_same_name():
+    # Oracle: the former paths (nfs.compensate.kernels, regression, neural, search, tuners)
+    # of every class a file of that time could name, each to a listed class of its name.
+    listed = {**ESTIMATORS, **RECORDS}
+    assert {n for n in listed if n.startswith("nfs.")} == set(FORMER_NAMES.values())
+    for former, current in FORMER_NAMES.items():
+        assert former.startswith("nfs.compensate.") and former not in listed
+        assert former.rsplit(".", 1)[1] == current.rsplit(".", 1)[1]
+
+
+def _with_former_names(path, out):
+    """A copy of the model file ``path`` at ``out`` whose header names every class by its
+    path before the move to nfs.learners."""
+    with zipfile.ZipFile(path) as zf:
+        members = {n: zf.read(n) for n in zf.namelist()}
+    text = members["header.json"].decode()
+    for former, current in FORMER_NAMES.items():
+        text = text.replace(json.dumps(current), json.dumps(former))
+    members["header.json"] = text.encode()
+    with zipfile.ZipFile(out, "w") as zf:
+        for name, data in members.items():
+            zf.writestr(name, data)
+    return out
+
+
+@pytest.mark.parametrize("key", ["ls", "stepwise", "rbf", "lssvm", "ir-lssvm", "hho-rvr"])
+def test_a_file_written_before_the_learners_moved_still_loads(tmp_path, key):
+    # Stored data: written by nfs before the move (tests/data/model_files/README.md), with
+    # its predictions at X_new then.  Tolerance 1e-12 relative: the same arrays through the
+    # same arithmetic, up to another machine's BLAS summation order.
+    path = STORED / f"{key}.npz"
+    with zipfile.ZipFile(path) as zf:
+        names = json.loads(zf.read("header.json"))["estimator"]
+    assert names["$estimator"].startswith("nfs.compensate.")   # a file of that time
+    header, est = read_model_file(path)
+    assert header["method"] == key
+    np.testing.assert_allclose(est.predict(header["X_new"]), header["prediction"],
+                               rtol=1e-12, atol=1e-15)
+    again = write_model_file(tmp_path / "again.npz", header, est)
+    with zipfile.ZipFile(again) as zf:
+        text = zf.read("header.json").decode()
+    assert all(former not in text for former in FORMER_NAMES) and "nfs.learners." in text
+
+
+def test_a_trusted_pickle_written_before_the_learners_moved_still_loads():
+    # Stored data: a joblib pickle of an LS compensator that names its estimator
+    # nfs.compensate.regression.CubicLeastSquares, with the predictions when written.
+    path = STORED / "ls.joblib"
+    assert b"nfs.compensate.regression" in path.read_bytes()
+    comp = load_compensator(path, trust_pickle=True)
+    assert type(comp.estimator) is CubicLeastSquares
+    assert "nfs.compensate.regression" not in sys.modules     # the stand-in was removed
+    with former_modules():
+        stored = joblib.load(path)                             # X_new and the prediction
+    np.testing.assert_allclose(comp.estimator.predict(stored["X_new"]), stored["prediction"],
+                               rtol=1e-12, atol=1e-15)
 
 
 def test_a_prepared_training_set_is_recorded_by_run_name(runs):

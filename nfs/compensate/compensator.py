@@ -25,7 +25,8 @@ from ..io.provenance import library_versions, runs_provenance
 from .dataset import DriftDataset, drift_dataset
 from .features import compute_features
 from .methods import get_method
-from .model_file import FORMAT, model_file_kind, read_model_file, write_model_file
+from .model_file import (FORMAT, former_modules, model_file_kind, read_model_file,
+                         write_model_file)
 from .modes import (
     DEFAULT_FEATURE_MODE,
     FeatureModeError,
@@ -272,7 +273,8 @@ def _load_pickle(path: Path) -> DriftCompensator:
     """A compensator pickled by joblib (earlier versions' ``save``): runs the file's code."""
     import joblib
     try:
-        obj = joblib.load(path)
+        with former_modules():              # its classes by their paths of that time
+            obj = joblib.load(path)
     except Exception as exc:  # a corrupt or foreign file
         raise NfsError(f"{path}: not a compensator model file ({type(exc).__name__}: {exc})") \
             from None

@@ -2,7 +2,7 @@
 
 Each method is a recipe that builds a scikit-learn estimator mapping thermometer features to
 drift [deg/h].  Tuned methods wrap their model in
-:class:`~nfs.compensate.search.MetaheuristicSearchCV`: every tuned row gets the same budget of
+:class:`~nfs.learners.search.MetaheuristicSearchCV`: every tuned row gets the same budget of
 evaluations of the same leave-one-run-out validation error, so the tuners are compared on
 equal terms.
 
@@ -46,10 +46,9 @@ from typing import Any, Callable
 import numpy as np
 
 from ..errors import NfsError
-from .kernels import IRLSSVMRegressor, LSSVMRegressor, RVRRegressor, SVRRegressor
-from .neural import BPNetwork, RBFNetwork
-from .regression import CubicLeastSquares, StepwiseRegression
-from .search import MetaheuristicSearchCV, Real
+from ..learners import (BPNetwork, CubicLeastSquares, IRLSSVMRegressor, LSSVMRegressor,
+                        MetaheuristicSearchCV, RBFNetwork, Real, RVRRegressor,
+                        StepwiseRegression, SVRRegressor)
 
 __all__ = ["MethodSpec", "METHODS", "TABLE_METHODS", "STARTUP_GROUP", "get_method",
            "svr_space", "rvr_space", "neg_residual_std"]

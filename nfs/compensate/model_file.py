@@ -18,7 +18,12 @@ in the BP network).  An estimator is written as its class, its hyper-parameters
 (``get_params(deep=False)``) and its fitted state (every other attribute), and read back by
 setting that state on a bare instance of the listed class, without calling ``fit``: the
 loaded model predicts with the same arrays through the same code, bit for bit.  Reading a
-name that is not on the lists is an error; nothing in a file selects code to run.
+name that is not on the lists is an error; nothing in a file selects code to run.  A name
+is the class's module and qualified name (``nfs.learners.svr.SVRRegressor``); the names of
+the files written before the estimators moved to :mod:`nfs.learners`
+(``nfs.compensate.kernels.SVRRegressor``, ...) are read as the same classes
+(:data:`FORMER_NAMES`), and so are the classes of a trusted pickle of that time
+(:func:`former_modules`).
 
 Value encoding in the tree (a JSON object with a key starting with ``$`` is one of these):
 
@@ -50,13 +55,16 @@ it gets a warning, and its private attributes may have changed.
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import io
 import json
 import math
+import sys
+import types
 import warnings
 import zipfile
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
@@ -70,15 +78,19 @@ from sklearn.svm import SVR
 from .. import __version__
 from ..errors import InputError
 from ..io.atomic import atomic_write_bytes
-from .kernels import IRLSSVMRegressor, LSSVMRegressor, RVRRegressor, SVRRegressor
+from ..learners.linear import CubicLeastSquares
+from ..learners.lssvm import IRLSSVMRegressor, LSSVMRegressor
+from ..learners.neural import BPNetwork, RBFNetwork
+from ..learners.rvr import RVRRegressor
+from ..learners.search import Integer, MetaheuristicSearchCV, Real
+from ..learners.stepwise import StepwiseRegression, StepwiseStep
+from ..learners.svr import SVRRegressor
+from ..learners.tuners.evaluation import TuneResult
 from .methods import neg_residual_std
-from .neural import BPNetwork, RBFNetwork
-from .regression import CubicLeastSquares, StepwiseRegression, StepwiseStep
-from .search import Integer, MetaheuristicSearchCV, Real
-from .tuners import TuneResult
 
-__all__ = ["FORMAT", "HEADER_NAME", "ESTIMATORS", "RECORDS", "FUNCTIONS", "ModelFileError",
-           "ModelVersionWarning", "write_model_file", "read_model_file", "model_file_kind"]
+__all__ = ["FORMAT", "HEADER_NAME", "ESTIMATORS", "RECORDS", "FUNCTIONS", "FORMER_NAMES",
+           "ModelFileError", "ModelVersionWarning", "write_model_file", "read_model_file",
+           "model_file_kind", "former_modules"]
 
 #: Format tag of a model file.
 FORMAT = "nfs-model/1"
@@ -86,28 +98,77 @@ FORMAT = "nfs-model/1"
 #: The zip member that holds the JSON header.
 HEADER_NAME = "header.json"
 
-#: Estimators a model file may hold, by the name written in it.
+#: Estimators a model file may hold, by the name written in it: the module and qualified
+#: name of the package's own classes, the public path of scikit-learn's.
 ESTIMATORS: dict[str, type] = {
-    "nfs.compensate.regression.CubicLeastSquares": CubicLeastSquares,
-    "nfs.compensate.regression.StepwiseRegression": StepwiseRegression,
-    "nfs.compensate.neural.BPNetwork": BPNetwork,
-    "nfs.compensate.neural.RBFNetwork": RBFNetwork,
-    "nfs.compensate.kernels.LSSVMRegressor": LSSVMRegressor,
-    "nfs.compensate.kernels.IRLSSVMRegressor": IRLSSVMRegressor,
-    "nfs.compensate.kernels.SVRRegressor": SVRRegressor,
-    "nfs.compensate.kernels.RVRRegressor": RVRRegressor,
-    "nfs.compensate.search.MetaheuristicSearchCV": MetaheuristicSearchCV,
+    "nfs.learners.linear.CubicLeastSquares": CubicLeastSquares,
+    "nfs.learners.stepwise.StepwiseRegression": StepwiseRegression,
+    "nfs.learners.neural.BPNetwork": BPNetwork,
+    "nfs.learners.neural.RBFNetwork": RBFNetwork,
+    "nfs.learners.lssvm.LSSVMRegressor": LSSVMRegressor,
+    "nfs.learners.lssvm.IRLSSVMRegressor": IRLSSVMRegressor,
+    "nfs.learners.svr.SVRRegressor": SVRRegressor,
+    "nfs.learners.rvr.RVRRegressor": RVRRegressor,
+    "nfs.learners.search.MetaheuristicSearchCV": MetaheuristicSearchCV,
     "sklearn.svm.SVR": SVR,                              # inside SVRRegressor
     "sklearn.neural_network.MLPRegressor": MLPRegressor,  # inside BPNetwork
 }
 
 #: Frozen dataclasses an estimator's state may hold, by name (rebuilt by their constructor).
 RECORDS: dict[str, type] = {
-    "nfs.compensate.regression.StepwiseStep": StepwiseStep,
-    "nfs.compensate.search.Real": Real,
-    "nfs.compensate.search.Integer": Integer,
-    "nfs.compensate.tuners.TuneResult": TuneResult,
+    "nfs.learners.stepwise.StepwiseStep": StepwiseStep,
+    "nfs.learners.search.Real": Real,
+    "nfs.learners.search.Integer": Integer,
+    "nfs.learners.tuners.evaluation.TuneResult": TuneResult,
 }
+
+#: The names that files written before the estimators and tuners moved to
+#: :mod:`nfs.learners` (nfs 0.1.0 up to that move) give the same classes, and the names read
+#: in their place.  Read, never written.
+FORMER_NAMES: dict[str, str] = {
+    "nfs.compensate.regression.CubicLeastSquares": "nfs.learners.linear.CubicLeastSquares",
+    "nfs.compensate.regression.StepwiseRegression": "nfs.learners.stepwise.StepwiseRegression",
+    "nfs.compensate.neural.BPNetwork": "nfs.learners.neural.BPNetwork",
+    "nfs.compensate.neural.RBFNetwork": "nfs.learners.neural.RBFNetwork",
+    "nfs.compensate.kernels.LSSVMRegressor": "nfs.learners.lssvm.LSSVMRegressor",
+    "nfs.compensate.kernels.IRLSSVMRegressor": "nfs.learners.lssvm.IRLSSVMRegressor",
+    "nfs.compensate.kernels.SVRRegressor": "nfs.learners.svr.SVRRegressor",
+    "nfs.compensate.kernels.RVRRegressor": "nfs.learners.rvr.RVRRegressor",
+    "nfs.compensate.search.MetaheuristicSearchCV": "nfs.learners.search.MetaheuristicSearchCV",
+    "nfs.compensate.regression.StepwiseStep": "nfs.learners.stepwise.StepwiseStep",
+    "nfs.compensate.search.Real": "nfs.learners.search.Real",
+    "nfs.compensate.search.Integer": "nfs.learners.search.Integer",
+    "nfs.compensate.tuners.TuneResult": "nfs.learners.tuners.evaluation.TuneResult",
+}
+
+
+@contextlib.contextmanager
+def former_modules() -> Iterator[None]:
+    """Make the former modules of :data:`FORMER_NAMES` importable while the block runs.
+
+    A trusted pickle of an earlier version (``load_compensator(path, trust_pickle=True)``)
+    names its classes by the modules they lived in (``nfs.compensate.kernels``, ...), which
+    no longer exist, and unpickling imports a class's module by that name.  Each former
+    module is put in ``sys.modules`` as a stand-in holding its former classes (the current
+    ones), for the block only, and only where no module of that name is imported already.
+    """
+    classes = {**ESTIMATORS, **RECORDS}
+    stand_ins: dict[str, types.ModuleType] = {}
+    for former, current in FORMER_NAMES.items():
+        module, _, name = former.rpartition(".")
+        if module in sys.modules and module not in stand_ins:
+            continue
+        stand_in = stand_ins.setdefault(module, types.ModuleType(
+            module, f"Stand-in for {module} while a trusted pickle is read"))
+        setattr(stand_in, name, classes[current])
+    sys.modules.update(stand_ins)
+    try:
+        yield
+    finally:
+        for module, stand_in in stand_ins.items():
+            if sys.modules.get(module) is stand_in:
+                del sys.modules[module]
+
 
 #: Functions an estimator's state may refer to, by name (the tuners' scoring).
 FUNCTIONS: dict[str, Callable] = {
@@ -429,7 +490,7 @@ class _Decoder:
 
 def _listed(table: dict[str, type], name, what: str) -> type:
     try:
-        return table[name]
+        return table[FORMER_NAMES.get(name, name)]
     except (KeyError, TypeError):
         raise ModelFileError(f"{what} class {name!r} is not one a model file may hold "
                              f"({', '.join(table)})") from None

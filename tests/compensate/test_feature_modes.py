@@ -13,8 +13,7 @@ import numpy as np
 import pytest
 from sklearn.linear_model import LinearRegression
 
-from nfs.compensate import (CubicLeastSquares, DriftCompensator, compute_features,
-                           load_compensator)
+from nfs.compensate import DriftCompensator, compute_features, load_compensator
 from nfs.compensate.features import RATE_WINDOW, THERMOMETER_COLUMNS
 from nfs.compensate.kalman_rate import (
     CAUSAL_RATE,
@@ -31,6 +30,7 @@ from nfs.compensate.modes import (
 )
 from nfs.compensate.rates import savgol_rate_k_per_min, windowed_rate_k_per_min
 from nfs.errors import NfsError
+from nfs.learners import CubicLeastSquares
 from nfs.northfind import north_find, synthetic_run
 
 FEATURES = ["T_fog", "dT_fog", "dT_acc_x", "dT_acc_y", "TdT_fog", "G_fog_acc_x"]

@@ -1,5 +1,4 @@
-"""Neural-network drift compensators: the BP network of the FOG start-up paper and the RBF network
-of
+"""Neural-network drift models: the BP network of the FOG start-up paper and the RBF network of
 Cheng et al. (2015).
 
 Both map thermometer features X (n_samples, n_features) -- temperatures [degC], their
@@ -11,7 +10,6 @@ very different units share one set of weights or one kernel width.
 
 from __future__ import annotations
 
-
 import numpy as np
 from scipy.spatial.distance import cdist, pdist
 from sklearn.base import BaseEstimator, RegressorMixin
@@ -20,8 +18,9 @@ from sklearn.neural_network import MLPRegressor
 from sklearn.utils import check_random_state
 from sklearn.utils.validation import check_is_fitted
 
-from nfs.compensate.regression import _check_int, _check_real, _fit_scaling, _ridge_lstsq, \
-    _validate
+from .kernels import gaussian_kernel
+from .linear import ridge_lstsq
+from .validation import check_int, check_real, fit_scaling, validate
 
 __all__ = [
     "BPNetwork",
@@ -125,9 +124,9 @@ class BPNetwork(RegressorMixin, BaseEstimator):
     def fit(self, X, y):
         """Train on features X (n_samples, n_features) and drift y (n_samples,) [deg/h];
         returns self."""
-        X, y = _validate(self, X, y, reset=True)
+        X, y = validate(self, X, y, reset=True)
         rng = check_random_state(self.random_state)
-        self.mean_, self.scale_ = _fit_scaling(X)
+        self.mean_, self.scale_ = fit_scaling(X)
         self.y_mean_ = float(y.mean())
         y_scale = float(y.std())
         self.y_scale_ = y_scale if y_scale > 0.0 else 1.0
@@ -149,7 +148,7 @@ class BPNetwork(RegressorMixin, BaseEstimator):
         """Predicted drift [unit of the training target, e.g. deg/h] for X
         (n_samples, ``n_features_in_``)."""
         check_is_fitted(self, "mlp_")
-        X = _validate(self, X, reset=False)
+        X = validate(self, X, reset=False)
         t = self.mlp_.predict((X - self.mean_) / self.scale_)
         return self.y_mean_ + self.y_scale_ * np.asarray(t, dtype=float).reshape(-1)
 
@@ -231,12 +230,12 @@ class RBFNetwork(RegressorMixin, BaseEstimator):
     def fit(self, X, y):
         """Place the centres and solve the output layer for features X
         (n_samples, n_features) and drift y (n_samples,) [deg/h]; returns self."""
-        _check_int(self.n_centers, "n_centers", 1)
-        _check_real(self.width, "width", 0.0, low_open=True)
-        _check_real(self.alpha, "alpha", 0.0)
-        X, y = _validate(self, X, y, reset=True)
+        check_int(self.n_centers, "n_centers", 1)
+        check_real(self.width, "width", 0.0, low_open=True)
+        check_real(self.alpha, "alpha", 0.0)
+        X, y = validate(self, X, y, reset=True)
         rng = check_random_state(self.random_state)
-        self.mean_, self.scale_ = _fit_scaling(X)
+        self.mean_, self.scale_ = fit_scaling(X)
         Z = (X - self.mean_) / self.scale_
         n_distinct = np.unique(Z, axis=0).shape[0]
         k = min(int(self.n_centers), n_distinct)
@@ -246,17 +245,17 @@ class RBFNetwork(RegressorMixin, BaseEstimator):
         d = pdist(self.centers_) if k > 1 else cdist(Z, self.centers_).ravel()
         d_mean = float(d.mean()) if d.size else 0.0
         self.width_ = float(self.width) * (d_mean if d_mean > 0.0 else 1.0)
-        self.weights_, self.intercept_ = _ridge_lstsq(self._hidden(Z), y, float(self.alpha))
+        self.weights_, self.intercept_ = ridge_lstsq(self._hidden(Z), y, float(self.alpha))
         return self
 
     def _hidden(self, Z: np.ndarray) -> np.ndarray:
-        """Gaussian activations phi_j(z) (n_samples, K), Cheng et al. (2015) eq. (15)."""
-        sq = cdist(Z, self.centers_, "sqeuclidean")
-        return np.exp(-sq / (2.0 * self.width_ ** 2))
+        """Gaussian activations phi_j(z) (n_samples, K), Cheng et al. (2015) eq. (15): the
+        kernel of the kernel regressors (:func:`~nfs.learners.kernels.gaussian_kernel`)."""
+        return gaussian_kernel(Z, self.centers_, self.width_)
 
     def predict(self, X) -> np.ndarray:
         """Predicted drift [unit of the training target, e.g. deg/h] for X
         (n_samples, ``n_features_in_``)."""
         check_is_fitted(self, "weights_")
-        X = _validate(self, X, reset=False)
+        X = validate(self, X, reset=False)
         return self._hidden((X - self.mean_) / self.scale_) @ self.weights_ + self.intercept_

@@ -1,4 +1,4 @@
-"""Tests of nfs.compensate.regression and nfs.compensate.neural: cubic least squares,
+"""Tests of nfs.learners.linear, nfs.learners.stepwise and nfs.learners.neural: cubic least squares,
 stepwise regression, the BP and the RBF network.
 
 Each test names its oracle."""
@@ -12,8 +12,9 @@ from sklearn.base import clone
 from sklearn.preprocessing import PolynomialFeatures
 from sklearn.utils.estimator_checks import parametrize_with_checks
 
-from nfs.compensate.neural import BPNetwork, RBFNetwork
-from nfs.compensate.regression import CubicLeastSquares, StepwiseRegression, StepwiseStep
+from nfs.learners.linear import CubicLeastSquares
+from nfs.learners.neural import BPNetwork, RBFNetwork
+from nfs.learners.stepwise import StepwiseRegression, StepwiseStep
 from nfs.errors import InputError
 
 # Small max_iter / n_centers keep the ~200 estimator checks to a few seconds; the

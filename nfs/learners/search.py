@@ -1,7 +1,7 @@
 """Metaheuristic hyperparameter search with cross-validation by whole runs.
 
 :class:`MetaheuristicSearchCV` is a thin scikit-learn meta-estimator around the plain
-optimisers of :mod:`nfs.compensate.tuners`: it maps a parameter space (:class:`Real`,
+optimisers of :mod:`nfs.learners.tuners`: it maps a parameter space (:class:`Real`,
 :class:`Integer`) to the tuners' box [-1, 1]^d, scores each candidate by cross-validation
 and refits the best one on all the data.  It works with any scikit-learn estimator, e.g.
 the FOG start-up paper's SSA-SVR::
@@ -38,7 +38,7 @@ from sklearn.utils._tags import get_tags
 from sklearn.utils.metaestimators import available_if
 from sklearn.utils.validation import check_is_fitted, indexable
 
-from nfs.compensate.tuners import TuneResult, TuningError, minimize
+from .tuners import TuneResult, TuningError, minimize
 
 __all__ = ["Real", "Integer", "MetaheuristicSearchCV"]
 
@@ -164,7 +164,7 @@ class MetaheuristicSearchCV(MetaEstimatorMixin, BaseEstimator):
         -> :class:`Real` or :class:`Integer`.  Dimension i of the tuner's box is the i-th
         entry.
     method : str
-        Tuner name in :data:`nfs.compensate.tuners.TUNERS` ('ssa', 'pso', 'gwo', 'hho', 'random',
+        Tuner name in :data:`nfs.learners.tuners.TUNERS` ('ssa', 'pso', 'gwo', 'hho', 'random',
         'grid', 'tpe').
     budget : int
         Maximum number of candidates scored (each costs one fit per CV split).

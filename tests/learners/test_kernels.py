@@ -1,4 +1,4 @@
-"""Kernel regressors of nfs.compensate.kernels: SVR, LS-SVM, IR-LS-SVM, RVR.
+"""Kernel regressors of nfs.learners: SVR, LS-SVM, IR-LS-SVM, RVR, their kernel and weights.
 
 Each test names its oracle: scikit-learn's estimator checks (the API contract), closed forms
 (the kernel and weight formulas), LIBSVM itself (SVR), invariants (the LS-SVM KKT system
@@ -18,23 +18,20 @@ from sklearn.metrics.pairwise import rbf_kernel
 from sklearn.svm import SVR
 from sklearn.utils.estimator_checks import parametrize_with_checks
 
-from nfs.compensate.kernels import (
+from nfs.learners.kernels import gaussian_kernel, sigma_to_gamma
+from nfs.learners.lssvm import IRLSSVMRegressor, LSSVMRegressor, lssvm_solve
+from nfs.learners.rvr import RVRRegressor
+from nfs.learners.svr import SVRRegressor
+from nfs.learners.validation import HyperparameterError
+from nfs.learners.weights import (
     HAMPEL_FLOOR,
     WEIGHT_FUNCTIONS,
-    HyperparameterError,
-    IRLSSVMRegressor,
-    LSSVMRegressor,
-    RVRRegressor,
-    SVRRegressor,
-    gaussian_kernel,
     get_weight_function,
     hampel_weight,
     huber_weight,
     logistic_weight,
-    lssvm_solve,
     myriad_weight,
     robust_scale,
-    sigma_to_gamma,
 )
 from nfs.errors import NfsError
 

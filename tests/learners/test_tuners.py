@@ -1,4 +1,4 @@
-"""Tuners (nfs.compensate.tuners) and the search-CV wrapper (nfs.compensate.search).
+"""Tuners (nfs.learners.tuners) and the search-CV wrapper (nfs.learners.search).
 
 Oracles: closed-form minima of test functions placed away from the origin of the box
 (a shifted sphere, and a shifted rippled bowl -- a Rastrigin-type function whose global basin
@@ -16,8 +16,9 @@ from sklearn.linear_model import Ridge
 from sklearn.svm import SVR
 from sklearn.utils.estimator_checks import check_estimator
 
-from nfs.compensate.search import Integer, MetaheuristicSearchCV, Real
-from nfs.compensate.tuners import TUNERS, TuningError, minimize
+from nfs.learners.search import Integer, MetaheuristicSearchCV, Real
+from nfs.learners.svr import SVRRegressor as SVRModel
+from nfs.learners.tuners import TUNERS, TuningError, minimize
 from nfs.errors import NfsError
 
 try:
@@ -210,8 +211,7 @@ def test_space_mapping():
 class SigmaSVR(RegressorMixin, BaseEstimator):
     """sklearn's SVR with the FOG start-up paper's kernel width: gamma = 1 / (2 sigma^2).
 
-    Stands in for nfs.compensate.kernels.SVRRegressor when that module is missing; it also
-    serves the parameter-name error test (its parameters are exactly C, epsilon, sigma).
+    Serves the parameter-name error test (its parameters are exactly C, epsilon, sigma).
     """
 
     def __init__(self, C=1.0, sigma=1.0, epsilon=0.1):
@@ -228,11 +228,6 @@ class SigmaSVR(RegressorMixin, BaseEstimator):
     def predict(self, X):
         return self.svr_.predict(X)
 
-
-try:  # the FOG start-up paper's SVR in the sigma convention; sklearn's SVR stands in until it exists
-    from nfs.compensate.kernels import SVRRegressor as SVRModel
-except ImportError:
-    SVRModel = SigmaSVR
 
 NOISE = 0.05
 

@@ -1,0 +1,143 @@
+"""The Gaussian kernel of the kernel regressors, and the input handling they share.
+
+The kernel regressors (:mod:`~nfs.learners.svr`, :mod:`~nfs.learners.lssvm`,
+:mod:`~nfs.learners.rvr`) map thermometer features X (n_samples, n_features) to the drift y
+[deg/h] with the Gaussian RBF kernel written in the papers' width convention (Tao et al.
+(2019) eq. (11); the FOG start-up paper Table 1 gives sigma)::
+
+    k(x, x') = exp(-||x - x'||^2 / (2 sigma^2))        (gamma_libsvm = 1 / (2 sigma^2))
+
+computed by one function, :func:`gaussian_kernel` (LIBSVM evaluates the same formula inside
+:class:`~nfs.learners.svr.SVRRegressor` with ``gamma = sigma_to_gamma(sigma)``), and summed
+over training points by :func:`kernel_expansion`.
+
+Scaling.  With ``standardize=True`` (the default) every input column is standardised with
+its training mean and standard deviation before the kernel is evaluated
+(:class:`KernelRegressor`), so sigma is a width in units of the inputs' standard deviations
+and means the same for a temperature [degC] and a rate [K/min].  None of the seeds states
+how it scaled its inputs; this is our choice.  What is done to the target differs by model
+and is stated in each class.
+
+Equation numbers "Tao et al. (2019) eq. (n)" count the displayed equations of the stored
+text of Tao, Li, Zheng, Wu & Fu 2019 (Sensors 19, 2986), which carries no numbers of its own.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial.distance import cdist
+from sklearn.base import BaseEstimator, RegressorMixin
+from sklearn.utils import gen_batches
+from sklearn.utils.validation import check_is_fitted
+
+from .validation import HyperparameterError, fit_scaling, validate
+
+__all__ = [
+    "PREDICT_BATCH",
+    "sigma_to_gamma",
+    "gaussian_kernel",
+    "kernel_expansion",
+    "KernelRegressor",
+]
+
+#: Rows of test inputs whose kernel row block is formed at once in ``predict`` (memory
+#: ~ PREDICT_BATCH x n_train x 8 bytes).
+PREDICT_BATCH = 2048
+
+
+def sigma_to_gamma(sigma: float) -> float:
+    """LIBSVM/scikit-learn RBF ``gamma`` [1/unit^2] for the width ``sigma`` [unit]:
+    gamma = 1 / (2 sigma^2), so that exp(-gamma d^2) = exp(-d^2 / (2 sigma^2))."""
+    return 1.0 / (2.0 * float(sigma) ** 2)
+
+
+def gaussian_kernel(XA: np.ndarray, XB: np.ndarray | None = None, sigma: float = 1.0
+                    ) -> np.ndarray:
+    """Gaussian RBF Gram matrix K[i, j] = exp(-||XA[i] - XB[j]||^2 / (2 sigma^2)).
+
+    Parameters
+    ----------
+    XA : array (n_a, n_features)
+    XB : array (n_b, n_features), optional
+        Defaults to ``XA`` (the training Gram matrix).
+    sigma : float
+        Kernel width [unit of the (standardised) inputs], > 0.  Tao et al. (2019) eq. (11) and the
+        FOG
+        start-up paper use this convention; Tao et al. (2019) reports sigma^2.
+
+    Returns
+    -------
+    K : array (n_a, n_b), entries in (0, 1], exactly 1 on the diagonal of K(X, X).
+
+    The squared distances come from ``scipy.spatial.distance.cdist`` (direct differences,
+    no ||a||^2 + ||b||^2 - 2 a.b cancellation), so K(X, X) is exactly symmetric.
+    """
+    sigma = float(sigma)
+    if not (np.isfinite(sigma) and sigma > 0.0):
+        raise HyperparameterError(f"kernel width sigma must be a positive number, got {sigma}")
+    XA = np.asarray(XA, dtype=float)
+    XB = XA if XB is None else np.asarray(XB, dtype=float)
+    d2 = cdist(XA, XB, "sqeuclidean")
+    return np.exp(-d2 / (2.0 * sigma * sigma))
+
+
+def kernel_expansion(Xs: np.ndarray, centers: np.ndarray, coef: np.ndarray,
+                     intercept: float, sigma: float) -> np.ndarray:
+    """f(x) = sum_k coef_k k(x, c_k) + intercept for every row x of ``Xs``, formed in row
+    batches of :data:`PREDICT_BATCH`.
+
+    Parameters
+    ----------
+    Xs : array (n, n_features)
+        Inputs, scaled as the centres.
+    centers : array (n_centers, n_features)
+        Kernel centres c_k (the training inputs of LS-SVM).
+    coef : array (n_centers,)
+        Weights [unit of f].
+    intercept : float
+        [unit of f].
+    sigma : float
+        Kernel width [unit of the scaled inputs].
+    """
+    out = np.empty(Xs.shape[0])
+    for sl in gen_batches(Xs.shape[0], PREDICT_BATCH):
+        out[sl] = gaussian_kernel(Xs[sl], centers, sigma) @ coef + intercept
+    return out
+
+
+class KernelRegressor(RegressorMixin, BaseEstimator):
+    """Base of the kernel regressors: validation and the (optional) standardisation of X
+    and y (the attribute ``standardize`` of the subclass decides).
+
+    Sets, in ``fit``, ``x_mean_`` and ``x_scale_`` (arrays (n_features,): zeros and ones when
+    not standardised) and, when the target is scaled too, ``y_mean_`` and ``y_scale_``
+    [unit of y].
+    """
+
+    def _fit_scaling(self, X: np.ndarray, y: np.ndarray | None, *, scale_y: bool
+                     ) -> tuple[np.ndarray, np.ndarray | None]:
+        if self.standardize:
+            self.x_mean_, self.x_scale_ = fit_scaling(X)
+        else:
+            self.x_mean_ = np.zeros(X.shape[1])
+            self.x_scale_ = np.ones(X.shape[1])
+        if not scale_y:
+            return self._scale_X(X), y
+        if self.standardize:
+            m, s = fit_scaling(y[:, None])
+            self.y_mean_, self.y_scale_ = float(m[0]), float(s[0])
+        else:
+            self.y_mean_, self.y_scale_ = 0.0, 1.0
+        return self._scale_X(X), (y - self.y_mean_) / self.y_scale_
+
+    def _scale_X(self, X: np.ndarray) -> np.ndarray:
+        return (np.asarray(X, dtype=float) - self.x_mean_) / self.x_scale_
+
+    def _validate_fit(self, X, y):
+        X, y = validate(self, X, y, reset=True)
+        return X, np.asarray(y, dtype=float)
+
+    def _validate_predict(self, X):
+        check_is_fitted(self)
+        X = validate(self, X, reset=False)
+        return self._scale_X(X)
