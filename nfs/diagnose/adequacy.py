@@ -40,7 +40,8 @@ from .alternative_score import (BEATS_ALPHA, CV_DROP, AlternativeScore, better_r
 from .start_state import StartModel
 from .structure import StructuralAlternative, structural_alternatives
 from .thermal_residual import DEFAULT_START
-from .thermometer_cv import STAGES, ChordModel, ThermometerProblem, chord_refit, sum_of_squares
+from .thermometer_cv import (ADEQUACY_STAGES, STAGE_WORDS, ChordModel, ThermometerProblem,
+                             chord_refit, sum_of_squares)
 
 __all__ = ["ChannelFit", "ThermalAdequacy", "thermal_adequacy", "beats_structure",
            "structure_rival", "MODEL_RIVAL", "ADEQUACY_FACTOR", "STARTUP_S",
@@ -174,7 +175,8 @@ def _message(channels: Sequence[ChannelFit], structural: Sequence[AlternativeSco
     worst = max(channels, key=lambda c: c.ratio if c.n_knots else -1.0)
     who = "FOG" if worst.thermometer == "fog" else worst.thermometer
     head = (f"the {who} thermometer residual (held out by start temperature) in the "
-            f"{worst.stage} stage is {worst.ratio:.1f}x its floor ({worst.floor_k:.3f} K)")
+            f"{STAGE_WORDS[worst.stage]} stage is {worst.ratio:.1f}x its floor "
+            f"({worst.floor_k:.3f} K)")
     n_alt = len(structural)
     if worst.ratio <= factor and not improves:
         return (f"the thermal structure fits: every thermometer residual is within "
@@ -282,7 +284,7 @@ def thermal_adequacy(inst: Instrument, runs: Sequence[Run],
     channels = tuple(ChannelFit(name, stage, rms_model[0][name][stage],
                                 rms_model[1][name][stage], _floor_k(model.inst, name),
                                 counts[name][stage], factor)
-                     for name in prob.names for stage in STAGES)
+                     for name in prob.names for stage in ADEQUACY_STAGES)
     if alternatives is None:
         alts = structural_alternatives(model.inst)
     elif callable(alternatives):

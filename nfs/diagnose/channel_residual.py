@@ -24,7 +24,7 @@ import numpy as np
 from ..run import Run
 from .heading import json_value
 
-__all__ = ["ChannelSpec", "CHANNELS", "CHANNEL_BY_KEY", "STAGES", "StageBounds",
+__all__ = ["ChannelSpec", "CHANNELS", "CHANNEL_BY_KEY", "COMPARISON_STAGES", "StageBounds",
            "ResidualStats", "PositionTest", "ChannelRun", "worst_window", "residual_stats",
            "position_test", "channel_run"]
 
@@ -56,7 +56,7 @@ CHANNELS: tuple[ChannelSpec, ...] = (
 )
 CHANNEL_BY_KEY = {c.key: c for c in CHANNELS}
 #: The stages of a run the statistics are taken over.
-STAGES = ("startup", "stable", "all")
+COMPARISON_STAGES = ("startup", "stable", "all")
 
 
 @dataclass(frozen=True)

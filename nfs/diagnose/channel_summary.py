@@ -23,10 +23,11 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from .channel_residual import STAGES, ChannelRun, ChannelSpec
+from ..constants import T_REF_C
+from .channel_residual import COMPARISON_STAGES, ChannelRun, ChannelSpec
 from .heading import json_value
 
-__all__ = ["CONSISTENT_RATIO", "POSITION_RATIO", "T0_CORRELATION", "T0_VARIATION", "T_REF_C",
+__all__ = ["CONSISTENT_RATIO", "POSITION_RATIO", "T0_CORRELATION", "T0_VARIATION",
            "EARLY_SPANS_MIN", "ChannelSummary", "summarise", "format_sig"]
 
 #: A residual RMS up to this multiple of the noise floor is "consistent with noise".
@@ -38,8 +39,6 @@ POSITION_RATIO = 3.0
 T0_CORRELATION = 0.8
 #: ... provided the per-run excess RMS varies by at least this coefficient of variation.
 T0_VARIATION = 0.3
-#: Reference temperature of |T0 - 25 C| [degC].
-T_REF_C = 25.0
 #: Spans after power-on tried for "concentrated in the first N min" [min].
 EARLY_SPANS_MIN = (5.0, 10.0, 15.0, 20.0, 30.0, 45.0, 60.0)
 
@@ -124,7 +123,7 @@ def _ratio(rms: float, floor: float) -> float:
 def _pooled_stages(runs: Sequence[ChannelRun]) -> dict[str, tuple[float, float]]:
     """Per stage: (residual RMS, noise floor) pooled over the runs' points [channel unit]."""
     stages = {}
-    for s in STAGES:
+    for s in COMPARISON_STAGES:
         num = sum(cr.stages[s].n * cr.stages[s].rms ** 2 for cr in runs if cr.stages[s].n)
         fl = sum(cr.stages[s].n * cr.stages[s].floor_rms ** 2 for cr in runs if cr.stages[s].n)
         n = sum(cr.stages[s].n for cr in runs)
@@ -207,7 +206,7 @@ def summarise(spec: ChannelSpec, runs: Sequence[ChannelRun]) -> ChannelSummary:
     it fails in words (module docstring)."""
     stages = _pooled_stages(runs)
     rms, floor = stages["all"]
-    ratios = {s: _ratio(*stages[s]) for s in STAGES}
+    ratios = {s: _ratio(*stages[s]) for s in COMPARISON_STAGES}
     ratio = ratios["all"]
     worst = max(("startup", "stable"), key=lambda s: ratios[s] if math.isfinite(ratios[s])
                 else -1.0)

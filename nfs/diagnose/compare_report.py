@@ -22,7 +22,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from ..io.atomic import atomic_write_bytes, atomic_write_text
-from .channel_residual import CHANNEL_BY_KEY, CHANNELS, STAGES
+from .channel_residual import CHANNEL_BY_KEY, CHANNELS, COMPARISON_STAGES
 from .channel_summary import format_sig
 from .comparison import Comparison
 
@@ -158,7 +158,7 @@ def to_markdown(comparison: Comparison, figures: dict[str, list[str]] | None = N
         sm = c.summaries[spec.key]
         _, unit = _scale(spec.unit)
         row = [spec.key, unit]
-        for st in STAGES:
+        for st in COMPARISON_STAGES:
             rms, fl = sm.stages[st]
             row += [_v(rms, spec.unit), _v(fl, spec.unit)]
         row += [f"{sm.ratio:.2f}", "noise" if sm.consistent else "FAILS"]
@@ -181,7 +181,7 @@ def to_markdown(comparison: Comparison, figures: dict[str, list[str]] | None = N
         out += [f"### {spec.key} [{unit}]", ""]
         rows = []
         for cr in c.per_run[spec.key]:
-            for st in STAGES:
+            for st in COMPARISON_STAGES:
                 x = cr.stages[st]
                 rows.append([cr.run_name, f"{cr.start_temperature_c:g}", st, _v(x.rms, spec.unit),
                              _v(x.bias, spec.unit), _v(x.std, spec.unit),

@@ -73,7 +73,7 @@ from .drift_residual import (DriftRun, drift_channels, drift_context, model_drif
                              prepare_drift, window_means)
 from .fit_result import FitResult
 from .fit_warnings import fit_warnings
-from .free_set import STAGES, THERMAL_KINDS, default_free, stage_of
+from .free_set import FIT_STAGES, THERMAL_KINDS, default_free, stage_of
 from .noise_fit import GyroNoiseEstimate, gyro_noise_from_residual, noise_record
 from .params import expand_paths, fit_bounds, get_param, param_paths, set_params
 from .prior import Prior, build_prior
@@ -326,7 +326,7 @@ def fitted_name(model_name: str, runs: Sequence[Run]) -> str:
 
 
 def fit_model(inst: Instrument, runs: Sequence[Run], free: Iterable[str] | None = None, *,
-              stages: Sequence[str] = STAGES, decimate_s: float = DEFAULT_DECIMATE_S,
+              stages: Sequence[str] = FIT_STAGES, decimate_s: float = DEFAULT_DECIMATE_S,
               max_nfev: int | None = 100, drift_signal: str = "raw",
               prior: Mapping[str, float | str] | str | None = "default",
               prior_scale: float = 1.0, soak_anchor: bool = True, n_starts: int = 1,
@@ -396,8 +396,8 @@ def fit_model(inst: Instrument, runs: Sequence[Run], free: Iterable[str] | None 
         raise NfsError("fit_model: no runs to fit")
     stages = tuple(stages)
     for s in stages:
-        if s not in STAGES:
-            raise NfsError(f"fit_model: unknown stage '{s}'; stages: {', '.join(STAGES)}")
+        if s not in FIT_STAGES:
+            raise NfsError(f"fit_model: unknown stage '{s}'; stages: {', '.join(FIT_STAGES)}")
     if not decimate_s > 0:
         raise NfsError(f"fit_model: decimate_s must be > 0, got {decimate_s}")
     paths = default_free(inst, stages) if free is None else expand_paths(inst, list(free))

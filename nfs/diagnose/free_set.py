@@ -13,10 +13,10 @@ from typing import Sequence
 from ..instrument import Instrument
 from .params import get_param, param_paths
 
-__all__ = ["STAGES", "THERMAL_KINDS", "default_free", "stage_of"]
+__all__ = ["FIT_STAGES", "THERMAL_KINDS", "default_free", "stage_of"]
 
 #: The stages of :func:`nfs.diagnose.fit.fit_model`, in order.
-STAGES = ("thermal", "drift")
+FIT_STAGES = ("thermal", "drift")
 
 #: Parameter kinds the thermal stage fits.
 THERMAL_KINDS = ("thermal", "thermometer")
@@ -26,7 +26,7 @@ _NOT_FREE_UNITS = ("s", "K", "degC", "channel unit")
 periods [K], set points [degC] and channel references (collinear with the bias)."""
 
 
-def default_free(inst: Instrument, stages: Sequence[str] = STAGES) -> list[str]:
+def default_free(inst: Instrument, stages: Sequence[str] = FIT_STAGES) -> list[str]:
     """The default free set.
 
     thermal stage: every node capacity, every conductance to the chamber, every non-zero

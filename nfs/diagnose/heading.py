@@ -17,7 +17,7 @@ import numpy as np
 from scipy.stats import t as student_t
 
 from ..docfields import document_fields
-from .stats import holm
+from ..scoring.intervals import holm
 
 __all__ = ["HEADING_ALPHA", "RunHeading", "HeadingComparison", "heading_comparison",
            "json_value"]
@@ -143,7 +143,7 @@ def heading_comparison(headings: Sequence["RunHeading"], alpha: float = 0.05
         raw[st] = (float(2 * student_t.sf(abs(mean) / se, x.size - 1)) if se > 0
                    else (0.0 if mean else 1.0))
     stages = list(raw)
-    _, adj = holm([raw[st] for st in stages], alpha)
+    adj = holm([raw[st] for st in stages])
     p_value = {st: float(a) for st, a in zip(stages, adj)}
     consistent = all(p_value[st] > alpha for st in stages)
     return HeadingComparison(ratio=ratio, interval=interval, p_value=p_value,

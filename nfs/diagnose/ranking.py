@@ -37,7 +37,8 @@ from .candidate_score import ResidualChannel, ScoredCandidate
 from .design import candidate_columns
 from .drift_structure import DriftStructure
 from .result import CandidateScore
-from .stats import group_cv_rms, holm, run_grams
+from ..scoring.intervals import holm
+from .stats import group_cv_rms, run_grams
 from .structure import physical_lower
 
 __all__ = ["CV_DROP", "significance", "beyond_rate_terms", "structure_rivals", "is_physical",
@@ -51,7 +52,8 @@ CV_DROP = 0.05
 def significance(scored: Sequence[ScoredCandidate], alpha: float) -> list[ScoredCandidate]:
     """Every candidate with its Holm-adjusted p-value and ``significant`` = Holm rejects it
     at ``alpha`` and its CV RMS drops."""
-    reject, adj = holm([s.score.wald_p for s in scored], alpha)
+    adj = holm([s.score.wald_p for s in scored])
+    reject = adj <= alpha
     return [replace(s, score=replace(
         s.score, holm_p=float(a), significant=bool(r and s.score.cv_rms_after
                                                    < s.score.cv_rms_before)))
@@ -72,7 +74,7 @@ def beyond_rate_terms(scored: Sequence[ScoredCandidate],
     p-value is above ``alpha`` is tied with the alternative.
     """
     labels = list(beyond)
-    holm_beyond = dict(zip(labels, holm([beyond[b][0] for b in labels], alpha)[1]))
+    holm_beyond = dict(zip(labels, holm([beyond[b][0] for b in labels])))
     rate_drops = {s.candidate.label: s.score.cv_drop for s in scored
                   if s.candidate.effect == "shupe_rate"}
     structure = DriftStructure(

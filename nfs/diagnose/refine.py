@@ -44,6 +44,7 @@ from .free_set import default_free
 from .params import expand_paths
 from .start_state import StartModel
 from .thermal_residual import DEFAULT_START
+from .thermometer_cv import STAGE_WORDS
 
 __all__ = ["REFINE_FACTOR", "MAX_STEPS", "StructureStep", "Refinement", "refine_structure",
            "fit_unit"]
@@ -119,10 +120,10 @@ def refine_structure(inst: Instrument, runs: Sequence[Run], *, factor: float = R
         worst = ad.worst.ratio
         if worst <= factor:
             stopped = (f"every thermometer within {factor:g}x its noise floor held out "
-                       f"(worst {ad.worst.thermometer} {ad.worst.stage}, {worst:.1f}x)")
+                       f"(worst {ad.worst.thermometer} {STAGE_WORDS[ad.worst.stage]}, {worst:.1f}x)")
             break
         if len(steps) >= max_steps:
-            stopped = (f"{max_steps} changes made; {ad.worst.thermometer} {ad.worst.stage} "
+            stopped = (f"{max_steps} changes made; {ad.worst.thermometer} {STAGE_WORDS[ad.worst.stage]} "
                        f"still {worst:.1f}x its floor")
             break
         best = ad.best
@@ -131,7 +132,7 @@ def refine_structure(inst: Instrument, runs: Sequence[Run], *, factor: float = R
                                                  BEATS_ALPHA):
             stopped = (f"no generic alternative pays on held-out runs (best: "
                        f"{'none' if best is None else best.name}); {ad.worst.thermometer} "
-                       f"{ad.worst.stage} stays {worst:.1f}x its floor")
+                       f"{STAGE_WORDS[ad.worst.stage]} stays {worst:.1f}x its floor")
             break
         new = thermal_adequacy(best.instrument, runs, decimate_s=decimate_s,
                                start_state=start_state)
@@ -140,7 +141,7 @@ def refine_structure(inst: Instrument, runs: Sequence[Run], *, factor: float = R
             # not pay (a stiff pair of links, say): keep the structure as it was
             stopped = (f"{best.name} looked better linearised but not when checked in full "
                        f"(held-out {ad.cv_rms_k * 1e3:.1f} -> {new.cv_rms_k * 1e3:.1f} mK); "
-                       f"{ad.worst.thermometer} {ad.worst.stage} stays {worst:.1f}x its floor")
+                       f"{ad.worst.thermometer} {STAGE_WORDS[ad.worst.stage]} stays {worst:.1f}x its floor")
             break
         steps.append(StructureStep(name=best.name, description=best.description,
                                    params=dict(best.params), cv_rms_before_k=ad.cv_rms_k,

@@ -25,7 +25,6 @@ distribution has run-level degrees of freedom:
 - :func:`group_cv_rms`: leave-one-group-out RMS (a group: the runs of one start
   temperature); with several candidate designs (the grid points of a shape parameter) each
   fold chooses the design on its training runs only.
-- :func:`holm`: Holm's step-down family-wise control (Holm 1979, Scand. J. Statist. 6(2) 65).
 - :func:`one_sided`: the one-sided test and constrained estimate of a coefficient that
   physics keeps above a bound (a heat power >= 0 W, a lag >= 0 s).
 """
@@ -42,7 +41,7 @@ from scipy.stats import f as f_dist, norm, t as t_dist
 from ..errors import NfsError
 
 __all__ = ["RunGrams", "run_grams", "augmented_grams", "solve", "ClusteredFit", "clustered_fit",
-           "group_cv_rms", "holm", "OneSided", "one_sided"]
+           "group_cv_rms", "OneSided", "one_sided"]
 
 #: Largest per-run leverage eigenvalue kept in the CR2 correction (a run that alone
 #: determines a direction has leverage 1 there, and its (1 - leverage)^-1/2 is unbounded).
@@ -255,24 +254,6 @@ def group_cv_rms(designs: Sequence[RunGrams], groups: np.ndarray,
     chosen = best
     rms = math.sqrt(max(tot, 0.0) / cnt) if cnt else math.nan
     return rms, np.array(chosen, dtype=int)
-
-
-def holm(p_values: Sequence[float], alpha: float) -> tuple[np.ndarray, np.ndarray]:
-    """Holm's step-down procedure (Holm 1979, Scand. J. Statist. 6(2) 65, sec. 3).
-
-    Sort the m p-values, p_(1) <= ... <= p_(m); reject H_(1), ..., H_(j-1) where j is the
-    first index with p_(j) > alpha / (m - j + 1).  The family-wise error rate is at most
-    alpha for any dependence between the tests.  Returns (rejected, adjusted p-values
-    max_{i<=j} min(1, (m - i + 1) p_(i))).  Written here (a few lines) rather than adding
-    statsmodels for its ``multipletests``.
-    """
-    p = np.asarray(p_values, dtype=float)
-    m = p.size
-    order = np.argsort(p, kind="stable")
-    adj_sorted = np.minimum(1.0, np.maximum.accumulate((m - np.arange(m)) * p[order]))
-    adj = np.empty(m)
-    adj[order] = adj_sorted
-    return adj <= alpha, adj
 
 
 # ---------------------------------------------------------------------------------------------

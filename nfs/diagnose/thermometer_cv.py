@@ -48,11 +48,15 @@ from .params import fit_bounds, get_param, set_params
 from .start_state import StartModel
 from .thermal_residual import DEFAULT_START, prepare_thermal, thermal_residual_parts
 
-__all__ = ["STAGES", "ThermometerProblem", "bounded_solve", "residual_jacobian",
+__all__ = ["ADEQUACY_STAGES", "STAGE_WORDS",
+           "ThermometerProblem", "bounded_solve", "residual_jacobian",
            "sum_of_squares", "ChordModel", "chord_refit"]
 
 #: The two stages of a run.
-STAGES = ("start-up", "stable")
+ADEQUACY_STAGES = ("startup", "stable")
+
+#: The stages in words.
+STAGE_WORDS = {"startup": "start-up", "stable": "stable"}
 
 _EIG_TOL = 1e-6
 
@@ -100,7 +104,7 @@ class ThermometerProblem:
         out: dict[str, dict[str, float]] = {}
         for i, name in enumerate(self.names):
             out[name] = {}
-            for s, stage in enumerate(STAGES):
+            for s, stage in enumerate(ADEQUACY_STAGES):
                 x = np.concatenate([ri[(w == i) & (st == bool(s))]
                                     for ri, (w, st) in zip(r, self.labels)])
                 out[name][stage] = float(np.sqrt(np.mean(x * x))) if x.size else math.nan
@@ -110,7 +114,7 @@ class ThermometerProblem:
         """Residuals per thermometer and stage."""
         return {name: {stage: int(sum(np.sum((w == i) & (st == bool(s)))
                                       for w, st in self.labels))
-                       for s, stage in enumerate(STAGES)} for i, name in enumerate(self.names)}
+                       for s, stage in enumerate(ADEQUACY_STAGES)} for i, name in enumerate(self.names)}
 
     def linear_fit(self, r: list[np.ndarray], Z: list[np.ndarray], lo: np.ndarray,
                    hi: np.ndarray, folds: bool = True

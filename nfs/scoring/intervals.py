@@ -152,10 +152,13 @@ def _z0(b: np.ndarray, estimate: float) -> float:
 
 
 def holm(pvalues: Sequence[float]) -> np.ndarray:
-    """Holm's step-down adjusted p-values (family-wise error rate; NaN stays NaN).
+    """Holm's step-down adjusted p-values (Holm 1979, Scand. J. Statist. 6(2) 65, sec. 3;
+    NaN stays NaN).
 
     p_adj(i) = max_{k <= i} min(1, (m - k + 1) p_(k)) over the m finite p-values sorted
-    ascending.
+    ascending; rejecting every hypothesis with p_adj <= alpha keeps the family-wise error
+    rate at most alpha for any dependence between the tests.  Written here (a few lines)
+    rather than adding statsmodels for its ``multipletests``.
     """
     p = np.asarray(pvalues, dtype=float)
     out = np.full(p.shape, np.nan)

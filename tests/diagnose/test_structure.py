@@ -212,7 +212,7 @@ def test_thermometer_elsewhere_is_found(default):
     assert ad.worst.thermometer == "fog" and ad.worst.ratio > 3.0
     assert ad.best.kind == "thermometer", [a.name for a in ad.alternatives]
     assert ad.best.beats_model
-    for stage in ("start-up", "stable"):
+    for stage in ("startup", "stable"):
         assert ad.best.cv_channels_after_k["fog"][stage] < ADEQUACY_FACTOR * FLOOR_K
     assert "FOG thermometer" in ad.message
 
