@@ -2,7 +2,7 @@
 
 The regressors of the seed papers, each mapping a feature matrix X (n_samples,
 n_features) to a target y (the FOG drift [deg/h] in this package), and the metaheuristics
-that tune them.  Every estimator follows scikit-learn's contract (style practice 7: no logic
+that tune them.  Every estimator follows scikit-learn's contract (no logic
 in ``__init__``, ``fit`` returns ``self``, learned attributes end in ``_``, random_state
 resolved in ``fit``) and passes ``sklearn.utils.estimator_checks``.  Nothing here knows of
 runs, features or north finding: this package imports only :mod:`nfs.errors` and

@@ -3,7 +3,7 @@ Cheng et al. (2015).
 
 Both map thermometer features X (n_samples, n_features) -- temperatures [degC], their
 rates [degC/s], gradients [degC], T * dT/dt, ... -- to the FOG thermal drift y [deg/h] and
-follow scikit-learn's estimator contract (style practice 7).  Inputs are standardised
+follow scikit-learn's estimator contract.  Inputs are standardised
 inside, ``z_j = (x_j - mean_j) / scale_j`` (``mean_``, ``scale_``), so that features of
 very different units share one set of weights or one kernel width.
 """

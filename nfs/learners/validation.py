@@ -1,10 +1,10 @@
 """What every learner checks and computes before it learns: hyperparameters, inputs, scaling.
 
-One piece of code for every estimator of :mod:`nfs.learners` (style practice 14):
+One piece of code for every estimator of :mod:`nfs.learners`:
 
 - :class:`HyperparameterError` and the hyperparameter checks :func:`check_positive`,
   :func:`check_count`, :func:`check_int` and :func:`check_real`, called in ``fit``, never in
-  ``__init__`` (scikit-learn's estimator contract, style practice 7);
+  ``__init__`` (scikit-learn's estimator contract);
 - :func:`validate`: scikit-learn's ``validate_data`` (dense float arrays, finite values,
   ``n_features_in_`` and ``feature_names_in_``) on every scikit-learn version we support;
 - :func:`fit_scaling`: the offsets and scales of the standardisation

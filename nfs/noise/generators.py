@@ -389,7 +389,7 @@ def gyro_noise_dph(n_samples: int, sample_rate_hz: float, *, arw_deg_per_rth_h: 
     (the middle term over the band of :func:`bias_instability_band_s`).  Each term draws from
     its own child generator, seeded in a fixed order from ``rng`` (three integers), whether or
     not its coefficient is zero: switching one term off leaves the others' realisations
-    unchanged (ablation, style.md practice 6).
+    unchanged (ablation).
 
     Parameters
     ----------

@@ -1,6 +1,6 @@
 """Population metaheuristics: particle swarm, grey wolf, Harris hawks and sparrow search.
 
-One plain function per published algorithm, side by side (style practice 1), each with its
+One plain function per published algorithm, side by side, each with its
 update equations and the paper's equation numbers, and what the budget does to its
 schedule.  The tuned rows of the seed papers: PSO-, GWO- and SSA-SVR (the FOG start-up
 paper), HHO-RVR (Liang et al. (2021)).  See :mod:`nfs.learners.tuners` for the bias toward
