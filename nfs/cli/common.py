@@ -1,0 +1,121 @@
+"""What every command shares: progress lines, output files and folders, overrides from the
+command line, number formatting, loading a model."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import sys
+import time
+
+from ..errors import NfsError
+
+__all__ = ['EXIT_USAGE', 'FEATURES_MODE_HELP', 'Progress', 'output_folder', 'output_file', 'finish', 'with_overrides', 'circular_mean_deg', 'fmt', 'json_number', 'load_model', 'start_model']
+
+
+EXIT_USAGE = 2
+
+
+FEATURES_MODE_HELP = (
+    "what the thermometer features at time t may use: cycle (data up to the end of t's "
+    "north-finding cycle, when its heading is output), causal (data up to t) or offline "
+    "(the whole run, centred rate window: not computable by an instrument)")
+
+
+class Progress:
+    """A progress line on stderr (rewritten in place on a terminal)."""
+
+    def __init__(self, what: str, quiet: bool = False) -> None:
+        self.what = what  # prefix of each line; may be empty
+        self.quiet = quiet
+        self.tty = sys.stderr.isatty()
+        self.t0 = time.perf_counter()
+
+    def __call__(self, i: int, n: int, name: str) -> None:
+        if self.quiet:
+            return
+        msg = (f"{self.what} " if self.what else "") + \
+            f"{min(i + 1, n)}/{n}: {name} ({time.perf_counter() - self.t0:.1f} s)"
+        if self.tty:
+            sys.stderr.write("\r\033[K" + msg)
+            if i >= n:
+                sys.stderr.write("\n")
+        else:
+            sys.stderr.write(msg + "\n")
+        sys.stderr.flush()
+
+
+def output_folder(args, command: str):
+    """The checked output folder of a folder-writing command (before any work)."""
+    from ..io.outdir import OutputFolder
+    return OutputFolder(args.output, command, overwrite=args.overwrite)
+
+
+def output_file(path, option: str, overwrite: bool = False):
+    """Check an output file's place before any work (None passes): its folder exists and
+    takes files, and no file is there unless ``overwrite`` (the command's --overwrite)."""
+    from ..io.outdir import check_output_file
+    if path is None:
+        return
+    p = check_output_file(path, option)
+    if not overwrite and (p.exists() or p.is_symlink()):
+        raise NfsError(f"{option} {p}: the file exists; give --overwrite to replace it")
+
+
+def finish(folder, args, inputs: dict) -> None:
+    """Write the folder's manifest and say what happened to an earlier output's files."""
+    # The command line without the folder itself: the same command into two folders writes
+    # the same manifest.
+    argv, skip = [], False
+    for tok in getattr(args, "argv", []):
+        if skip:
+            skip = False
+        elif tok in ("-o", "--output"):
+            skip = True
+        elif not tok.startswith("--output=") and not (tok.startswith("-o") and
+                                                      not tok.startswith("--")):
+            argv.append(tok)
+    folder.finish(arguments=argv, inputs=inputs)
+    note = folder.summary()
+    if note:
+        print(f"nfs: {note}", file=sys.stderr)
+
+
+def with_overrides(scenario, args):
+    changes = {}
+    if getattr(args, "seed", None) is not None:
+        changes["seed"] = args.seed
+    if getattr(args, "repeats", None) is not None:
+        if args.repeats < 1:
+            raise NfsError(f"--repeats must be >= 1, got {args.repeats}")
+        changes["repeats"] = args.repeats
+    return dataclasses.replace(scenario, **changes) if changes else scenario
+
+
+def circular_mean_deg(angles_deg) -> float:
+    import numpy as np
+    a = np.radians(np.asarray(angles_deg, dtype=float))
+    a = a[np.isfinite(a)]
+    if a.size == 0:
+        return math.nan
+    return float(np.degrees(np.arctan2(np.sin(a).mean(), np.cos(a).mean())) % 360.0)
+
+
+def fmt(v: float) -> str:
+    return "n/a" if not math.isfinite(v) else f"{v:.4f}"
+
+
+def json_number(v):
+    v = float(v)
+    return v if math.isfinite(v) else None
+
+
+def load_model(name_or_path):
+    from ..instrument import load_instrument
+    return load_instrument(name_or_path)
+
+
+def start_model(args):
+    """The start model of ``--start`` (nfs.diagnose.start_state)."""
+    from ..diagnose.thermal_residual import DEFAULT_START
+    return DEFAULT_START if args.start == "estimated" else None
