@@ -10,7 +10,9 @@ import time
 
 from ..errors import NfsError
 
-__all__ = ['EXIT_USAGE', 'FEATURES_MODE_HELP', 'Progress', 'output_folder', 'output_file', 'finish', 'with_overrides', 'circular_mean_deg', 'fmt', 'json_number', 'load_model', 'start_model']
+__all__ = ["EXIT_USAGE", "FEATURES_MODE_HELP", "Progress", "output_folder", "output_file",
+           "finish", "with_overrides", "circular_mean_deg", "fmt", "json_number", "load_model",
+           "start_model"]
 
 
 EXIT_USAGE = 2
@@ -111,7 +113,7 @@ def json_number(v):
 
 
 def load_model(name_or_path):
-    from ..instrument import load_instrument
+    from .. import load_instrument
     return load_instrument(name_or_path)
 
 

@@ -14,14 +14,12 @@ import sys
 from ..errors import NfsError
 from .common import (Progress, finish, output_file, output_folder, with_overrides)
 
-__all__ = ['cmd_table', 'cmd_train', 'cmd_compensate']
+__all__ = ["cmd_table", "cmd_train", "cmd_compensate"]
 
 
 def cmd_table(args) -> int:
-    from ..chain import ModelChain
+    from .. import CompensationSettings, ModelChain, load_scenario
     from ..compensate.modes import check_features_mode
-    from ..compensate.settings import CompensationSettings
-    from ..config.scenario import load_scenario
     if args.features_mode is not None:
         check_features_mode(args.features_mode, "--features-mode")
     scenario = with_overrides(load_scenario(args.scenario), args)
@@ -99,9 +97,9 @@ def _baseline(args, scenario, settings):
 
 
 def cmd_train(args) -> int:
-    from ..compensate import get_method, resolve_features, train_compensator
+    from .. import read_runs, train_compensator
+    from ..compensate import get_method, resolve_features
     from ..compensate.modes import check_features_mode
-    from ..io.measurement import read_runs
     get_method(args.method)                  # a bad name fails before any work
     resolve_features(args.features, ["aux_*"])
     check_features_mode(args.features_mode, "--features-mode")
@@ -129,10 +127,9 @@ def cmd_train(args) -> int:
 
 def cmd_compensate(args) -> int:
     import warnings
-    from ..compensate import load_compensator
+    from .. import load_compensator, read_runs, write_run
     from ..compensate.model_file import model_file_kind
     from ..compensate.modes import check_features_mode
-    from ..io.measurement import read_runs, write_run
     if args.trust_pickle and model_file_kind(args.model) not in ("nfs-model", "missing"):
         print(f"nfs: warning: --trust-pickle: unpickling {args.model} runs any code it holds; "
               "load_compensator(path, trust_pickle=True).save('model.npz') converts a trusted "

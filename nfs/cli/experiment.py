@@ -16,13 +16,11 @@ from ..errors import NfsError
 from .common import (Progress, circular_mean_deg, finish, fmt, json_number, output_file,
                      output_folder, with_overrides)
 
-__all__ = ['cmd_simulate', 'cmd_northfind', 'cmd_preset', 'cmd_init', 'cmd_effects', 'cmd_sweep']
+__all__ = ["cmd_simulate", "cmd_northfind", "cmd_preset", "cmd_init", "cmd_effects", "cmd_sweep"]
 
 
 def cmd_simulate(args) -> int:
-    from ..experiment import simulate_run
-    from ..io.measurement import write_run
-    from ..config.scenario import load_scenario
+    from .. import load_scenario, simulate_run, write_run
     from ..io.provenance import scenario_provenance
     scenario = with_overrides(load_scenario(args.scenario), args)
     folder = output_folder(args, "simulate")
@@ -42,8 +40,8 @@ def cmd_simulate(args) -> int:
 
 def cmd_northfind(args) -> int:
     from ..io.atomic import atomic_write_text
-    from ..io.measurement import read_runs
-    from ..northfind import heading_rmse, north_find
+    from .. import north_find, read_runs
+    from ..northfind import heading_rmse
     if args.heading_hint is not None and not math.isfinite(args.heading_hint):
         raise NfsError(f"--heading-hint: {args.heading_hint} is not a finite angle in degrees")
     output_file(args.json, "--json", args.overwrite)
@@ -70,12 +68,14 @@ def cmd_northfind(args) -> int:
             "ambiguous": bool(res.ambiguous),
             "startup_rmse_deg": json_number(st.startup_deg) if st else None,
             "stable_rmse_deg": json_number(st.stable_deg) if st else None,
-            "cycles": [{"t_start_s": json_number(a), "t_end_s": json_number(b), "heading_deg": json_number(h),
-                        "error_deg": json_number(e), "bias_dph": json_number(bb)}
+            "cycles": [{"t_start_s": json_number(a), "t_end_s": json_number(b),
+                        "heading_deg": json_number(h), "error_deg": json_number(e),
+                        "bias_dph": json_number(bb)}
                        for a, b, h, e, bb in zip(res.t_start_s, res.t_end_s, res.heading_deg,
                                                  res.error_deg, res.bias_dph)],
         })
-    print("| run | T0 [C] | cycles | mean heading [deg] | start-up RMSE [deg] | stable RMSE [deg] |")
+    print("| run | T0 [C] | cycles | mean heading [deg] | start-up RMSE [deg] "
+          "| stable RMSE [deg] |")
     print("|---|---:|---:|---:|---:|---:|")
     for name, t0, n, amb, h, su, sb in rows:
         if amb:
@@ -97,7 +97,8 @@ def cmd_northfind(args) -> int:
 
 def cmd_preset(args) -> int:
     from ..instrument import preset_names, preset_path
-    from ..config.presets import (scenario_preset_names, scenario_preset_path, sweep_preset_names, sweep_preset_path)
+    from ..config.presets import (scenario_preset_names, scenario_preset_path,
+                                  sweep_preset_names, sweep_preset_path)
     if args.name is None:
         print("instruments (nfs preset NAME > my_instrument.toml):")
         print("\n".join(f"  {n}" for n in preset_names()))
@@ -138,9 +139,9 @@ def cmd_init(args) -> int:
     import re
     from ..instrument import preset_path
     from ..io.atomic import atomic_write_files
-    from ..config.scenario import load_scenario
-    from ..config.presets import (scenario_preset_names, scenario_preset_path, sweep_preset_names, sweep_preset_path)
-    from ..sweep import load_sweep
+    from .. import load_scenario, load_sweep
+    from ..config.presets import (scenario_preset_names, scenario_preset_path,
+                                  sweep_preset_names, sweep_preset_path)
     name = args.source
     out = Path(args.output)
     label = out.resolve().name or "my_unit"
@@ -199,7 +200,8 @@ def cmd_effects(args) -> int:
 
 
 def cmd_sweep(args) -> int:
-    from ..sweep import CellStore, DaskExecutor, LocalExecutor, load_sweep, run_sweep
+    from .. import load_sweep, run_sweep
+    from ..sweep import CellStore, DaskExecutor, LocalExecutor
     spec = load_sweep(args.sweep)                   # the whole sweep checked before any work
     CellStore(args.output).prepare()
     if args.dask_local is not None and args.scheduler is not None:

@@ -15,12 +15,12 @@ from ..errors import NfsError
 from .common import (finish, json_number, load_model, output_file, output_folder,
                      start_model)
 
-__all__ = ['cmd_fit', 'cmd_compare', 'cmd_diagnose']
+__all__ = ["cmd_fit", "cmd_compare", "cmd_diagnose"]
 
 
 def cmd_fit(args) -> int:
-    from ..diagnose import fit_unit, write_fitted_model
-    from ..io.measurement import read_runs
+    from .. import fit_unit, read_runs
+    from ..diagnose import write_fitted_model
     inst = load_model(args.model)
     output_file(args.output, "-o", args.overwrite)
     runs = read_runs(args.data)
@@ -38,9 +38,9 @@ def cmd_fit(args) -> int:
 
 
 def cmd_compare(args) -> int:
-    from ..diagnose import compare, write_report
+    from .. import compare, read_runs
+    from ..diagnose import write_report
     from ..io.atomic import atomic_write_text
-    from ..io.measurement import read_runs
     from ..io.provenance import output_provenance
     inst = load_model(args.model)
     output_file(args.json, "--json", args.overwrite)
@@ -69,7 +69,7 @@ def cmd_diagnose(args) -> int:
     from ..diagnose import apply_candidate, candidate_finding, diagnose
     from ..effects import get_effect
     from ..io.atomic import atomic_write_text
-    from ..io.measurement import read_runs
+    from .. import read_runs
     inst = load_model(args.model)
     if args.apply and args.output is None:
         raise NfsError("--apply needs -o FILE for the new model")

@@ -12,7 +12,7 @@ from .experiment import (cmd_effects, cmd_init, cmd_northfind, cmd_preset, cmd_s
                          cmd_sweep)
 from .measured import cmd_compare, cmd_diagnose, cmd_fit
 
-__all__ = ['build_parser', 'check_options']
+__all__ = ["build_parser", "check_options"]
 
 
 def _runs_argument(p: argparse.ArgumentParser) -> None:
