@@ -26,6 +26,9 @@ loader checks (samples per run, the steady-state rise of the network).  A patter
 matches any name; the first matching entry wins, so specific entries come before generic
 ones.  Every range is finite: a value of 1e300 is refused wherever it is written.
 
+The module is long on purpose: the table is one list of about 140 entries, kept in one place
+so that every loader, the presets' comments and the documentation read the same ranges.
+
 This module imports nothing of the package but its errors: the loaders (:mod:`nfs.instrument`,
 :mod:`nfs.config.scenario`, :mod:`nfs.chamber`, :mod:`nfs.sweep.definition`,
 :mod:`nfs.io.measurement`) call :func:`check_tree` on what they parsed and :func:`check`
