@@ -20,21 +20,9 @@ fixed second-order IIR filter from the readings to the rate (``scipy.signal.ss2t
 ``scipy.signal.lfilter``).  It starts from the soak: T = the first reading, r = 0 (the unit
 sat unpowered at the chamber temperature until power-on), and uses no sample after k.
 
-Why this filter and this q (measured with the default scenario, 7 training start-ups per
-training seed (seeds 1-5), 5 test start-ups per temperature, mean start-up heading RMSE over six
-methods
-(LS, stepwise, RBF, BP, PSO-SVR, SSA-SVR) and five training seeds; the offline centred
-Savitzky-Golay rate scores 0.0093 deg there, no compensation 0.0226 deg):
-
-| causal rate | mean [deg] | cells worse than uncompensated (of 210) |
-|---|---:|---:|
-| trailing linear fit, 61 s | 0.0116 | 29 |
-| trailing linear fit, 121 s | 0.0106 | 24 |
-| trailing quadratic fit read at its end, 121 s | 0.020 (LS, BP, SSA-SVR; 3 seeds) | |
-| trailing fit whose window grows with the time since power-on | 0.011-0.025 (same) | |
-| Kalman, q = 1e-9 K^2/s^3 | 0.0115 | 18 |
-| Kalman, q = 3e-9 K^2/s^3 | 0.0102 | 10 |
-| Kalman, q = 1e-8 K^2/s^3 | 0.0112 | 22 |
+Why this filter and this q: the causal rates compared on the default scenario (trailing
+linear and quadratic fits, growing windows, this filter at three q) are in the user guide
+(docs/compensation.md, "Design measurements"); q = 3e-9 K^2/s^3 scored best there.
 
 The first north-finding cycle after power-on carries most of the start-up error, so the
 first minutes decide: a trailing window has only the samples since power-on there (a

@@ -32,10 +32,7 @@ table's notes): LS-SVM and IR-LS-SVM above 4000 samples (an O(n^3) solve per fit
 5 s at the default scenario's 3934, which they see whole), the tuned SVR rows (LIBSVM's SMO costs
 ~n^2 per fit and a search makes 210
 fits per seed) and HHO-RVR (each evidence sweep factorises an n x n matrix).  What the caps
-cost on the default scenario (leave-one-start-temperature-out residual STD, each held-out
-run scored on all its samples): SVR (C = 30, sigma = 6) 0.0039 deg/h trained on every
-sample, 0.0041 on every 4th (the cap), 0.0045 on every 6th; RVR (sigma = 7) 0.0045 on every
-6th, 0.0048 on every 10th (the cap).
+cost is measured in the user guide (docs/compensation.md, "Design measurements").
 """
 
 from __future__ import annotations
