@@ -8,14 +8,36 @@ the :class:`ThermalResult` labels every node and carries the energy bookkeeping.
 through the network (Kalman filter and smoother, thermal/estimate.py).
 """
 
-from thermal.errors import ThermalError
-from thermal.network import CHAMBER, Link, Network, Node
-from thermal.solve import ThermalResult, simulate
-from thermal.batch import simulate_many
-from thermal.estimate import (LinearSensor, NodeEstimate, ProcessNoiseFit, StateEstimate,
-                              StatePower, ThermalRecord, estimate_states,
-                              fit_process_noise, kalman_smooth)
+from importlib import import_module
 
-__all__ = ["ThermalError", "CHAMBER", "Node", "Link", "Network", "simulate", "simulate_many", "ThermalResult",
-           "LinearSensor", "ThermalRecord", "StatePower", "NodeEstimate", "ProcessNoiseFit",
-           "StateEstimate", "kalman_smooth", "fit_process_noise", "estimate_states"]
+from thermal.errors import ThermalError
+
+#: Public name -> the module that defines it, loaded on first use (SPEC 1 lazy loading): the
+#: error class alone (what nfs.errors needs) does not import SciPy.
+_PUBLIC = {
+    "CHAMBER": "thermal.network", "Node": "thermal.network", "Link": "thermal.network",
+    "Network": "thermal.network", "simulate": "thermal.solve", "ThermalResult": "thermal.solve",
+    "simulate_many": "thermal.batch",
+    **{name: "thermal.estimate" for name in (
+        "LinearSensor", "ThermalRecord", "StatePower", "NodeEstimate", "ProcessNoiseFit",
+        "StateEstimate", "kalman_smooth", "fit_process_noise", "estimate_states")},
+}
+
+__all__ = ["ThermalError", "CHAMBER", "Node", "Link", "Network", "simulate", "simulate_many",
+           "ThermalResult", "LinearSensor", "ThermalRecord", "StatePower", "NodeEstimate",
+           "ProcessNoiseFit", "StateEstimate", "kalman_smooth", "fit_process_noise",
+           "estimate_states"]
+
+
+def __getattr__(name: str):
+    """Load a public name from its module on first use (PEP 562)."""
+    module = _PUBLIC.get(name)
+    if module is None:
+        raise AttributeError(f"module 'thermal' has no attribute {name!r}")
+    value = getattr(import_module(module), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_PUBLIC))
