@@ -1,4 +1,4 @@
-"""The chain that runs a start-up experiment end to end (after pvlib's ModelChain).
+"""Simulate start-up runs: from the thermal network to the measurement of one run.
 
     thermal network -> node temperatures -> thermometers, aux channels
                     -> turntable motion -> Earth-rate projection
@@ -6,6 +6,7 @@
 
 Every intermediate lands in a :class:`SimulationResult`: node temperatures, each effect's
 contribution separately, the noise, and the measurement as it would be written to file.
+The whole experiment (simulate -> north-find -> compensate -> table) is :class:`nfs.ModelChain`.
 """
 
 from __future__ import annotations
