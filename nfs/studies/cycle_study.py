@@ -42,8 +42,7 @@ from dataclasses import dataclass, field
 from typing import Callable
 
 import numpy as np
-from joblib import Parallel, delayed
-from threadpoolctl import threadpool_limits
+from joblib import delayed
 
 from ..denoise import earth_rate_projection_dph, separate_drift
 from ..errors import NfsError
@@ -56,7 +55,8 @@ from ..compensate.compensator import DriftCompensator, prediction_plan
 from ..compensate.dataset import drift_dataset
 from ..compensate.methods import get_method
 from ..compensate.modes import check_features_mode
-from .startup_study import test_scenario, ticker, train_and_predict, train_scenario
+from .startup_study import (test_scenario, ticker, train_and_predict, train_scenario,
+                            training_pool)
 from ..compensate.settings import CompensationSettings
 
 __all__ = ["CycleRow", "CycleStudy", "PartTrace", "run_cycle_study", "run_runs_study",
@@ -334,10 +334,7 @@ def _drift_study(scenario, s, specs, train, test, n_boot, tick, spans,
     comps: dict[str, DriftCompensator] = {}
     preds = {UNCOMPENSATED: [np.full(r.n_samples, constant) for r in test]}
     order = sorted(specs, key=lambda sp: -sp.cost)
-    # One BLAS thread: the trainings' matrices are small, and a thread pool beside joblib's
-    # workers (or in the one process of n_jobs=1) spins more than it computes.
-    with threadpool_limits(limits=1), \
-            Parallel(n_jobs=s.n_jobs, return_as="generator_unordered") as parallel:
+    with training_pool(s.n_jobs) as parallel:
         for j, comp, pred in parallel(delayed(train_and_predict)(
                 j, spec.key, data, s, s.random_state, plans) for j, spec in enumerate(order)):
             comps[order[j].name], preds[order[j].name] = comp, pred

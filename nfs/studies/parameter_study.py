@@ -49,8 +49,7 @@ from dataclasses import dataclass, field
 from typing import Callable
 
 import numpy as np
-from joblib import Parallel, delayed
-from threadpoolctl import threadpool_limits
+from joblib import delayed
 from sklearn.exceptions import ConvergenceWarning
 from sklearn.model_selection import KFold
 
@@ -66,7 +65,8 @@ from ..compensate.compensator import prediction_plan
 from ..compensate.dataset import drift_dataset
 from ..compensate.methods import get_method
 from ..compensate.modes import check_features_mode
-from .startup_study import test_scenario, ticker, train_and_predict, train_scenario
+from .startup_study import (test_scenario, ticker, train_and_predict, train_scenario,
+                            training_pool)
 from ..compensate.settings import CompensationSettings
 
 __all__ = ["PARAMETERS", "PARAMETER_METRICS", "BLOCK_CYCLES", "CONSTANT", "BIAS_FITTED",
@@ -293,10 +293,7 @@ def run_parameter_study(scenario, settings=None, *, n_boot: int = 2000,
 
     models: dict = {}
     jobs = [(spec.key, p) for spec in sorted(specs, key=lambda sp: -sp.cost) for p in PARAMETERS]
-    # One BLAS thread: the trainings' matrices are small, and a thread pool beside joblib's
-    # workers (or in the one process of n_jobs=1) spins more than it computes.
-    with threadpool_limits(limits=1), \
-            Parallel(n_jobs=s.n_jobs, return_as="generator_unordered") as parallel:
+    with training_pool(s.n_jobs) as parallel:
         for key, p, est in parallel(delayed(_fit)(key, p, *_stack(train, p), s.budget,
                                                   s.random_state) for key, p in jobs):
             models[(get_method(key).name, p)] = est
@@ -336,10 +333,7 @@ def run_parameter_study(scenario, settings=None, *, n_boot: int = 2000,
                              stride_s=min(10.0, s.decimate_s)) for r in test_runs]
     sample_nf: dict = {}
     order = sorted(specs, key=lambda sp: -sp.cost)
-    # One BLAS thread: the trainings' matrices are small, and a thread pool beside joblib's
-    # workers (or in the one process of n_jobs=1) spins more than it computes.
-    with threadpool_limits(limits=1), \
-            Parallel(n_jobs=s.n_jobs, return_as="generator_unordered") as parallel:
+    with training_pool(s.n_jobs) as parallel:
         for j, comp, preds in parallel(delayed(train_and_predict)(
                 j, spec.key, data, s, s.random_state, plans) for j, spec in enumerate(order)):
             runs = [comp.compensate(r, drift_dph=p) for r, p in zip(test_runs, preds)]

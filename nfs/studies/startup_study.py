@@ -26,6 +26,7 @@ each seeded on its own, so the table does not depend on ``n_jobs``.
 from __future__ import annotations
 
 import warnings
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from typing import Any, Callable
 
@@ -34,28 +35,31 @@ from joblib import Parallel, delayed
 from threadpoolctl import threadpool_limits
 from sklearn.exceptions import ConvergenceWarning
 
-from ..docfields import document_fields
-from ..denoise import separate_drift
-from ..errors import NfsError
-from ..io.provenance import output_provenance
-from ..experiment import simulate_runs
-from .scenario_runs import (northfind_runs, run_scenario, run_stage_errors, stage_names, uncompensated_table)
-from ..scoring.heading_table import TableRow, pooled_rmse
-from ..compensate.compensator import DriftCompensator, PredictionPlan, prediction_plan, train_compensator
+from ..compensate.compensator import (DriftCompensator, PredictionPlan, prediction_plan,
+                                      train_compensator)
 from ..compensate.dataset import DriftDataset, drift_dataset
 from ..compensate.methods import MethodSpec, get_method
 from ..compensate.modes import FEATURE_MODE_NOTES, check_features_mode
 from ..compensate.settings import CompensationSettings
+from ..denoise import separate_drift
+from ..docfields import document_fields
+from ..errors import NfsError
+from ..experiment import simulate_runs
+from ..io.provenance import output_provenance
+from ..scoring.heading_table import TableRow, pooled_rmse
+from .scenario_runs import (northfind_runs, run_scenario, run_stage_errors, stage_names,
+                            uncompensated_table)
 
-__all__ = ["train_scenario", "train_and_predict", "ticker", "MethodResult", "SeedResult",
-           "CompensationStudy", "run_study", "test_scenario", "DriftRow", "errors_by_temperature",
-           "table_provenance"]
+__all__ = ["train_scenario", "train_and_predict", "ticker", "training_pool", "MethodResult",
+           "SeedResult", "CompensationStudy", "run_study", "test_scenario", "DriftRow",
+           "errors_by_temperature", "table_provenance"]
 
 
 @document_fields
 @dataclass(frozen=True)
 class DriftRow:
-    """Drift residual over the start-up stage of the test runs (the FOG start-up paper, Table 2)."""
+    """Drift residual over the start-up stage of the test runs (the FOG start-up paper,
+    Table 2)."""
 
     method: str
     mae_dph: float
@@ -325,7 +329,8 @@ def run_study(scenario, settings: CompensationSettings | None = None, *,
               ) -> CompensationStudy:
     """Train every method of ``settings`` on training start-ups, apply to the test start-ups.
 
-    ``test`` is the scenario's :class:`~nfs.studies.scenario_runs.ScenarioResult` if already computed.
+    ``test`` is the scenario's :class:`~nfs.studies.scenario_runs.ScenarioResult` if already
+    computed.
     """
     s = settings or scenario.compensation or CompensationSettings()
     specs = [get_method(m) for m in s.methods]
@@ -359,10 +364,7 @@ def run_study(scenario, settings: CompensationSettings | None = None, *,
     order = sorted(range(len(jobs)), key=lambda j: -jobs[j][0].cost)
     done: dict[int, SeedResult] = {}
     fitted: dict[int, tuple] = {}
-    # One BLAS thread: the trainings' matrices are small, and a thread pool beside joblib's
-    # workers (or in the one process of n_jobs=1) spins more than it computes.
-    with threadpool_limits(limits=1), \
-            Parallel(n_jobs=s.n_jobs, return_as="generator_unordered") as parallel:
+    with training_pool(s.n_jobs) as parallel:
         out = parallel(delayed(train_and_predict)(j, jobs[j][0].key, data, s, jobs[j][1],
                                                    plans) for j in order)
         for j, comp, preds in out:
@@ -391,6 +393,17 @@ def run_study(scenario, settings: CompensationSettings | None = None, *,
             seeds=tuple(done[j] for j in idx))
     tick("done")
     return study
+
+
+@contextmanager
+def training_pool(n_jobs: int | None):
+    """The joblib pool the trainings of a study run in (results as they finish), with one
+    BLAS thread: the trainings' matrices are small, and a BLAS thread pool beside joblib's
+    workers (or in the one process of ``n_jobs=1``) spins more than it computes (``nfs table
+    seed003_ramp_calibration --n-jobs 1``: 155 s with it, 54 s without, the same table)."""
+    with threadpool_limits(limits=1), \
+            Parallel(n_jobs=n_jobs, return_as="generator_unordered") as parallel:
+        yield parallel
 
 
 def ticker(progress: Callable[[int, int, str], None] | None, n_steps: int):
