@@ -45,7 +45,7 @@ from .studies.startup_study import run_study, table_provenance, test_scenario
 __all__ = ["ModelChain", "ModelChainResult"]
 
 #: A progress callback ``progress(i, n, what)``: step ``i`` of ``n``, what is being done.
-Progress = Callable[[int, int, str], None]
+ProgressCallback = Callable[[int, int, str], None]
 
 
 @document_fields
@@ -115,7 +115,7 @@ class ModelChain:
     scenario: Scenario
     settings: CompensationSettings | None = None
     compensate: bool = True
-    progress: Progress | None = None
+    progress: ProgressCallback | None = None
     results: ModelChainResult | None = field(default=None, init=False)
     """The result of the last :meth:`run_model` (None before)."""
 

@@ -23,10 +23,7 @@ _PUBLIC = {
         "StateEstimate", "kalman_smooth", "fit_process_noise", "estimate_states")},
 }
 
-__all__ = ["ThermalError", "CHAMBER", "Node", "Link", "Network", "simulate", "simulate_many",
-           "ThermalResult", "LinearSensor", "ThermalRecord", "StatePower", "NodeEstimate",
-           "ProcessNoiseFit", "StateEstimate", "kalman_smooth", "fit_process_noise",
-           "estimate_states"]
+__all__ = ["ThermalError", *_PUBLIC]
 
 
 def __getattr__(name: str):

@@ -11,8 +11,7 @@ import time
 from ..errors import NfsError
 
 __all__ = ["EXIT_USAGE", "FEATURES_MODE_HELP", "Progress", "output_folder", "output_file",
-           "finish", "with_overrides", "circular_mean_deg", "fmt", "json_number", "load_model",
-           "start_model"]
+           "finish", "with_overrides", "circular_mean_deg", "fmt", "start_model"]
 
 
 EXIT_USAGE = 2
@@ -105,16 +104,6 @@ def circular_mean_deg(angles_deg) -> float:
 
 def fmt(v: float) -> str:
     return "n/a" if not math.isfinite(v) else f"{v:.4f}"
-
-
-def json_number(v):
-    v = float(v)
-    return v if math.isfinite(v) else None
-
-
-def load_model(name_or_path):
-    from .. import load_instrument
-    return load_instrument(name_or_path)
 
 
 def start_model(args):

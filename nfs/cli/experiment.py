@@ -13,8 +13,8 @@ import sys
 from pathlib import Path
 
 from ..errors import NfsError
-from .common import (Progress, circular_mean_deg, finish, fmt, json_number, output_file,
-                     output_folder, with_overrides)
+from .common import (Progress, circular_mean_deg, finish, fmt, output_file, output_folder,
+                     with_overrides)
 
 __all__ = ["cmd_simulate", "cmd_northfind", "cmd_preset", "cmd_init", "cmd_effects", "cmd_sweep"]
 
@@ -42,6 +42,7 @@ def cmd_northfind(args) -> int:
     from ..io.atomic import atomic_write_text
     from .. import north_find, read_runs
     from ..northfind import heading_rmse
+    from ..scoring.intervals import json_number
     if args.heading_hint is not None and not math.isfinite(args.heading_hint):
         raise NfsError(f"--heading-hint: {args.heading_hint} is not a finite angle in degrees")
     output_file(args.json, "--json", args.overwrite)

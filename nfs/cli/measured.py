@@ -12,16 +12,15 @@ import sys
 from pathlib import Path
 
 from ..errors import NfsError
-from .common import (finish, json_number, load_model, output_file, output_folder,
-                     start_model)
+from .common import finish, output_file, output_folder, start_model
 
 __all__ = ["cmd_fit", "cmd_compare", "cmd_diagnose"]
 
 
 def cmd_fit(args) -> int:
-    from .. import fit_unit, read_runs
+    from .. import fit_unit, load_instrument, read_runs
     from ..diagnose import write_fitted_model
-    inst = load_model(args.model)
+    inst = load_instrument(args.model)
     output_file(args.output, "-o", args.overwrite)
     runs = read_runs(args.data)
     if not args.quiet:
@@ -38,11 +37,11 @@ def cmd_fit(args) -> int:
 
 
 def cmd_compare(args) -> int:
-    from .. import compare, read_runs
+    from .. import compare, load_instrument, read_runs
     from ..diagnose import write_report
     from ..io.atomic import atomic_write_text
     from ..io.provenance import output_provenance
-    inst = load_model(args.model)
+    inst = load_instrument(args.model)
     output_file(args.json, "--json", args.overwrite)
     runs = read_runs(args.data)
     folder = output_folder(args, "compare")
@@ -69,8 +68,9 @@ def cmd_diagnose(args) -> int:
     from ..diagnose import apply_candidate, candidate_finding, diagnose
     from ..effects import get_effect
     from ..io.atomic import atomic_write_text
-    from .. import read_runs
-    inst = load_model(args.model)
+    from ..scoring.intervals import json_number
+    from .. import load_instrument, read_runs
+    inst = load_instrument(args.model)
     if args.apply and args.output is None:
         raise NfsError("--apply needs -o FILE for the new model")
     output_file(args.output, "-o", args.overwrite)
