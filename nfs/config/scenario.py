@@ -59,13 +59,14 @@ from ..effects import check_geometry, load_effects_file
 from ..errors import EffectError, NfsError, ScenarioError
 from ..instrument import (Instrument, _aux, _check_effect_targets, _check_heating,
                           load_instrument, parse_effects)
-from ..io.tomlio import check_keys, load_toml, number, number_list, string, table
+from ..io.tomlio import (boolean, check_keys, integer, load_toml, number, number_list, string,
+                         table)
 from ..ranges import check_tree, deferred_warnings, find, warn_unusual
 from ..scenario import ChamberProfile, NorthFindSettings, Scenario
 from ..sensors import ORDERS, Schedule
 from .presets import default_scenario_path, scenario_file
-from .sections import (COMPENSATION_KEYS, VARIABILITY_TABLE_KEYS, boolean,
-                       compensation_table, integer, variability_table)
+from .sections import (COMPENSATION_KEYS, VARIABILITY_TABLE_KEYS, compensation_table,
+                       variability_table)
 
 __all__ = ["load_scenario", "OVERRIDE_KEYS", "TRUST_EFFECTS_ENV"]
 

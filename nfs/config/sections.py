@@ -12,13 +12,13 @@ from ..compensate.modes import FeatureModeError, check_features_mode
 from ..compensate.settings import PROTOCOLS, CompensationSettings
 from ..errors import NfsError, ScenarioError
 from ..instrument import Instrument
-from ..io.tomlio import check_keys, number, number_list, string, table
+from ..io.tomlio import boolean, check_keys, integer, number, number_list, string, table
 from ..parameters import ParameterError, expand_paths
 from ..variability import (CYCLING_SHAPES, NO_VARIABILITY, VARIABILITY_KEYS,
                            VARIABILITY_PRESETS, Variability)
 
-__all__ = ["COMPENSATION_KEYS", "VARIABILITY_TABLE_KEYS", "boolean", "integer", "unit_list",
-           "variability_table", "variability_parameters", "compensation_table"]
+__all__ = ["COMPENSATION_KEYS", "VARIABILITY_TABLE_KEYS", "unit_list", "variability_table",
+           "variability_parameters", "compensation_table"]
 
 #: Keys of ``[compensation]``.
 COMPENSATION_KEYS = ("methods", "features", "features_mode", "budget", "decimate_s",
@@ -28,27 +28,6 @@ COMPENSATION_KEYS = ("methods", "features", "features_mode", "budget", "decimate
                      "protocol")
 #: Keys of ``[variability]``.
 VARIABILITY_TABLE_KEYS = ("preset", *VARIABILITY_KEYS, "parameters")
-
-def boolean(tbl, key, prefix, file, default):
-    if key not in tbl:
-        return default
-    v = tbl[key]
-    if not isinstance(v, bool):
-        raise ScenarioError(f"must be true or false, got {v!r}", file=file,
-                            key=f"{prefix}.{key}" if prefix else key)
-    return v
-
-
-def integer(tbl, key, prefix, file, default, minimum=None, allow_none=False):
-    name = f"{prefix}.{key}" if prefix else key
-    if key not in tbl:
-        return default
-    v = tbl[key]
-    if isinstance(v, bool) or not isinstance(v, int) or (minimum is not None and v < minimum):
-        raise ScenarioError(f"must be an integer{'' if minimum is None else f' >= {minimum}'}"
-                            f", got {v!r}", file=file, key=name)
-    return v
-
 
 def unit_list(tbl, key, prefix, file, units):
     """A list of distinct unit indices in 0 .. units-1, or None when absent."""

@@ -13,7 +13,8 @@ import numpy as np
 
 from ..errors import ScenarioError
 
-__all__ = ["load_toml", "check_keys", "number", "string", "number_list", "table", "dumps_toml",
+__all__ = ["load_toml", "check_keys", "number", "integer", "boolean", "string", "number_list",
+           "table", "dumps_toml",
            "toml_value", "toml_key", "toml_string"]
 
 
@@ -93,6 +94,30 @@ def number(tbl: dict[str, Any], key: str, prefix: str, file: Any, default: Any =
         raise ScenarioError(f"must be >= {minimum}, got {value!r}", file=file, key=name)
     if maximum is not None and value > maximum:
         raise ScenarioError(f"must be <= {maximum}, got {value!r}", file=file, key=name)
+    return value
+
+
+def integer(tbl: dict[str, Any], key: str, prefix: str, file: Any, default: Any = ...,
+            minimum: int | None = None) -> int:
+    """An integer (not a bool), optionally ``>= minimum``."""
+    name, value = _lookup(tbl, key, prefix, file, default)
+    if value is _MISSING:
+        return default
+    if (isinstance(value, bool) or not isinstance(value, int)
+            or (minimum is not None and value < minimum)):
+        raise ScenarioError(f"must be an integer{'' if minimum is None else f' >= {minimum}'}"
+                            f", got {value!r}", file=file, key=name)
+    return value
+
+
+def boolean(tbl: dict[str, Any], key: str, prefix: str, file: Any,
+            default: Any = ...) -> bool:
+    """``true`` or ``false``."""
+    name, value = _lookup(tbl, key, prefix, file, default)
+    if value is _MISSING:
+        return default
+    if not isinstance(value, bool):
+        raise ScenarioError(f"must be true or false, got {value!r}", file=file, key=name)
     return value
 
 
