@@ -139,8 +139,9 @@ class ModelChain:
         title = f"{sc.name}: heading RMSE by start temperature"
         if not self.compensate:
             runs = run_scenario(test_scenario(sc, s), progress=self.progress)
-            table = uncompensated_table(runs).with_intervals(
-                stage_errors_by_temperature(runs), random_state=sc.seed)
+            errors = stage_errors_by_temperature(runs)
+            table = uncompensated_table(runs, errors).with_intervals(errors,
+                                                                    random_state=sc.seed)
             table = dataclasses.replace(table, provenance=provenance)
             res = ModelChainResult(sc, s, False, provenance, runs=runs, table=table,
                                    markdown=table.to_markdown(), title=title)

@@ -185,10 +185,12 @@ def floor_deg(scenario) -> float:
                                  len(sched.cycle_positions_deg), scenario.latitude_deg)
 
 
-def uncompensated_table(res: ScenarioResult):
-    """Rows ``before`` (start-up, uncompensated), ``stable`` and ``floor`` by T0."""
+def uncompensated_table(res: ScenarioResult, errors: dict | None = None):
+    """Rows ``before`` (start-up, uncompensated), ``stable`` and ``floor`` by T0; ``errors``:
+    :func:`stage_errors_by_temperature` of ``res`` when the caller holds it already."""
     sc = res.scenario
-    errors = stage_errors_by_temperature(res)
+    if errors is None:
+        errors = stage_errors_by_temperature(res)
     rmse = {name: tuple(pooled_rmse(runs) for runs in cols) for name, cols in errors.items()}
     n_t = len(sc.start_temperatures_c)
     fl = floor_deg(sc)
