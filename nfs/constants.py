@@ -13,6 +13,7 @@ __all__ = [
     "STANDARD_GRAVITY_M_S2",
     "T_REF_C",
     "ABSOLUTE_ZERO_C",
+    "POSITION_TOL_DEG",
     "earth_rate_components_dph",
 ]
 
@@ -27,6 +28,12 @@ T_REF_C: float = 25.0
 
 #: Absolute zero [degC]; a temperature below it is physically impossible.
 ABSOLUTE_ZERO_C: float = -273.15
+
+
+#: Turntable positions closer than this (modulo 360 deg) are one position [deg]: the
+#: tolerance of the recorded ``position_deg`` when dwells are grouped and segmented, and of
+#: the positions a scenario writes.
+POSITION_TOL_DEG: float = 0.5
 
 
 def earth_rate_components_dph(latitude_deg: float) -> tuple[float, float]:

@@ -55,6 +55,7 @@ import numpy as np
 from ..chamber import check_temperature, parse_program
 from ..compensate.methods import get_method
 from ..denoise.wavelet import wavelet_denoise
+from ..constants import POSITION_TOL_DEG
 from ..effects import check_geometry, load_effects_file
 from ..errors import EffectError, NfsError, ScenarioError
 from ..instrument import (Instrument, _aux, _check_effect_targets, _check_heating,
@@ -161,10 +162,6 @@ def _check_geometry(inst: Instrument, schedule: Schedule, file, own_effects: boo
             where = f"effects[{i}]" if own_effects else f"instrument (effects[{i}])"
             raise ScenarioError(str(exc), file=file, key=where) from None
 
-
-#: Positions closer than this (modulo 360 deg) are one position [deg] (the north-finding
-#: solver's tolerance, nfs.northfind.solve).
-POSITION_TOL_DEG = 0.5
 
 
 def _check_schedule(schedule: Schedule, settings: NorthFindSettings, fs: float, file) -> None:

@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..constants import ABSOLUTE_ZERO_C, OMEGA_IE_DPH
+from ..constants import ABSOLUTE_ZERO_C, OMEGA_IE_DPH, POSITION_TOL_DEG
 from ..errors import MeasurementError
 from ..ranges import G_N_M_PER_S2, KELVIN_OFFSET, find, warn_unusual
 from ..run import NO_MISSING_COLUMNS, REQUIRED_COLUMNS, RunMeta
@@ -130,11 +130,6 @@ def check_columns(columns: Mapping[str, np.ndarray], *, file: str | os.PathLike 
 # ---------------------------------------------------------------------------------------------
 # NAME.csv against NAME.toml: the units the samples must be in
 
-
-#: Positions closer than this (modulo 360 deg) are one position when the dwell means are
-#: grouped [deg] (the north-finding solver's tolerance).
-_POSITION_TOL_DEG = 0.5
-
 #: Thermometer samples from the first this many seconds are compared with
 #: ``start_temperature_c`` [s].
 _POWER_ON_WINDOW_S = 60.0
@@ -227,13 +222,13 @@ def _check_gyro_units(meta: RunMeta, columns: Mapping[str, np.ndarray], file,
     still = (np.asarray(columns["moving"]) == 0.0) & np.isfinite(gyro)
     if np.count_nonzero(still) < 2:
         return
-    key = np.round(np.mod(columns["position_deg"][still], 360.0) / _POSITION_TOL_DEG)
-    key = np.mod(key, round(360.0 / _POSITION_TOL_DEG))
+    key = np.round(np.mod(columns["position_deg"][still], 360.0) / POSITION_TOL_DEG)
+    key = np.mod(key, round(360.0 / POSITION_TOL_DEG))
     groups, inverse = np.unique(key, return_inverse=True)
     if len(groups) < 2:
         return
     means = np.bincount(inverse, weights=gyro[still]) / np.bincount(inverse)
-    g = _least_spread(groups * _POSITION_TOL_DEG)
+    g = _least_spread(groups * POSITION_TOL_DEG)
     if g < 0.5:
         return
     spread = float(means.max() - means.min())

@@ -12,12 +12,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from nfs.constants import POSITION_TOL_DEG
 from nfs.docfields import document_fields
 from nfs.errors import MeasurementError, NfsError
 from nfs.run import Run
 from nfs.northfind.segment import Cycle, dwell_samples, find_dwells, segment_cycles
 from nfs.northfind.level import LEVEL_UP, gravity_and_biases, level_heading, level_two_position
-from nfs.northfind.solve import (_distinct_angles, _solve_stack, _vertical_rate_removed,
+from nfs.northfind.solve import (distinct_angles, _solve_stack, _vertical_rate_removed,
                                  solve_heading, wrap_deg_180, wrap_deg_360)
 
 __all__ = ["NorthFindResult", "north_find", "StageRMSE", "heading_rmse"]
@@ -110,7 +111,7 @@ def _dwell_means(values: np.ndarray, idx: np.ndarray, owner: np.ndarray, n: int)
 
 def north_find(run: Run, *, tilt_correction: bool = True, settle_s: float = 0.0,
                gyro_column: str = "gyro_dph", heading_hint_deg: float | None = None,
-               position_tol_deg: float = 0.5) -> NorthFindResult:
+               position_tol_deg: float = POSITION_TOL_DEG) -> NorthFindResult:
     """North-find every complete cycle of a run (docs/physics.md section 5).
 
     Per dwell: the mean gyro rate w_k and the mean readings of both accelerometers. Per
@@ -201,7 +202,7 @@ def north_find(run: Run, *, tilt_correction: bool = True, settle_s: float = 0.0,
     x_dph, y_dph, b_dph, omh, rms, psi = (np.full(n_cyc, np.nan) for _ in range(6))
     ok = np.all(np.isfinite(y), axis=1) & np.all(np.isfinite(up), axis=1)
     ambiguous = False
-    distinct = _distinct_angles(theta_rad[0], math.radians(position_tol_deg))
+    distinct = distinct_angles(theta_rad[0], math.radians(position_tol_deg))
     if len(distinct) >= 3:
         if np.any(ok):
             x_dph[ok], y_dph[ok], b_dph[ok], rms[ok] = _solve_stack(theta_rad[ok], y[ok])

@@ -34,7 +34,7 @@ from nfs.constants import earth_rate_components_dph
 from nfs.errors import NfsError
 from nfs.northfind.heading import NorthFindResult
 from nfs.northfind.level import branch_heading, gravity_and_biases, level_heading
-from nfs.northfind.solve import _distinct_angles, _omega_h, wrap_deg_180, wrap_deg_360
+from nfs.northfind.solve import distinct_angles, _omega_h, wrap_deg_180, wrap_deg_360
 
 __all__ = ["KnownBiasHeading", "level_known_bias", "north_find_known_bias"]
 
@@ -84,7 +84,7 @@ def level_known_bias(theta_rad, rate_dph, acc_x_g, acc_y_g, latitude_deg: float,
     up = gravity_and_biases(th, fx, fy, biases_known=True)[0]
     omega_v = earth_rate_components_dph(latitude_deg)[1]
     y = (np.asarray(rate_dph, dtype=float) - bg) / (1.0 + k) - omega_v * fx
-    distinct = _distinct_angles(th[0], math.radians(angle_tol_deg))
+    distinct = distinct_angles(th[0], math.radians(angle_tol_deg))
     opposite = len(distinct) == 2 and abs(abs(math.remainder(
         distinct[1] - distinct[0], 2 * math.pi)) - math.pi) <= math.radians(angle_tol_deg)
     if len(distinct) >= 2 and not opposite:

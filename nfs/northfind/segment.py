@@ -38,6 +38,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from nfs.constants import POSITION_TOL_DEG
 from nfs.errors import NfsError
 from nfs.northfind.solve import wrap_deg_180, wrap_deg_360
 
@@ -115,7 +116,7 @@ def _blocks(time_s, position_deg, moving, position_tol_deg):
 
 
 def find_dwells(time_s, position_deg, moving, *, dwell_s: float | None = None,
-                settle_s: float = 0.0, position_tol_deg: float = 0.5) -> list[Dwell]:
+                settle_s: float = 0.0, position_tol_deg: float = POSITION_TOL_DEG) -> list[Dwell]:
     """All dwells of a run in time order (steps 1 and 2 of the module docstring).
 
     Parameters are those of :func:`segment_cycles`.
@@ -180,7 +181,7 @@ def _period(theta, tol):
 
 def segment_cycles(time_s, position_deg, moving, positions_deg=None, *,
                    dwell_s: float | None = None, settle_s: float = 0.0,
-                   position_tol_deg: float = 0.5) -> list[Cycle]:
+                   position_tol_deg: float = POSITION_TOL_DEG) -> list[Cycle]:
     """Find the dwells of a run and group them into north-finding cycles.
 
     See the module docstring for the rules (blocks, splitting of same-angle blocks,

@@ -35,6 +35,7 @@ __all__ = [
     "tilt_correct",
     "wrap_deg_360",
     "wrap_deg_180",
+    "distinct_angles",
 ]
 
 #: Two turntable angles closer than this [deg] (modulo 360) count as the same position.
@@ -130,7 +131,7 @@ class HeadingSolution:
     heading hint; psi is then the branch with sin(psi + theta_a) >= 0."""
 
 
-def _distinct_angles(theta_rad: np.ndarray, tol_rad: float) -> np.ndarray:
+def distinct_angles(theta_rad: np.ndarray, tol_rad: float) -> np.ndarray:
     """Distinct angles (modulo 2 pi) of a 1-D array, as a sorted array in [0, 2 pi)."""
     t = np.sort(np.mod(theta_rad, 2.0 * np.pi))
     keep = np.concatenate(([True], np.diff(t) > tol_rad))
@@ -266,7 +267,7 @@ def solve_heading(theta_deg, rate_dph, *, weights=None, cos_elevation=None,
     if not (np.all(np.isfinite(theta)) and np.all(np.isfinite(rate))):
         raise NfsError("theta_deg and rate_dph must be finite")
     used = theta if w is None else theta[w > 0]
-    distinct = _distinct_angles(used, math.radians(angle_tol_deg))
+    distinct = distinct_angles(used, math.radians(angle_tol_deg))
     n = theta.size
     if len(distinct) >= 3:
         x, y, b, rms = (float(v[0]) for v in _solve_stack(theta[None], rate[None],

@@ -53,13 +53,13 @@ from joblib import delayed
 from sklearn.exceptions import ConvergenceWarning
 from sklearn.model_selection import KFold
 
-from ..constants import earth_rate_components_dph
+from ..constants import POSITION_TOL_DEG, earth_rate_components_dph
 from ..errors import NfsError
 from ..experiment import simulate_runs
 from .scenario_runs import chamber_moves, northfind_runs
 from ..run import Run
 from ..northfind.known_bias import north_find_known_bias
-from ..northfind.solve import _distinct_angles
+from ..northfind.solve import distinct_angles
 from ..scoring.intervals import MIN_REPLICATES, bc_interval, block_counts
 from ..compensate.compensator import prediction_plan
 from ..compensate.dataset import drift_dataset
@@ -184,7 +184,7 @@ def calibrate_cycles(run: Run, result) -> CycleParameters:
     """The parameters of every cycle of ``result`` (a :func:`~nfs.northfind.north_find` of
     ``run`` on a schedule of three distinct positions or more; module docstring, step 1)."""
     theta = np.radians(np.asarray(result.theta_deg, dtype=float))
-    if len(_distinct_angles(theta[0], np.radians(0.5))) < 3:
+    if len(distinct_angles(theta[0], np.radians(POSITION_TOL_DEG))) < 3:
         raise NfsError(f"run '{run.name}': a cycle calibrates the biases and the scale factor "
                        "only on a rotating schedule of three distinct positions or more "
                        f"(this one: {', '.join(f'{v:g}' for v in _schedule_angles(result))} "
