@@ -25,6 +25,13 @@ absolute [degC].  Steps, in order:
     power-on), its north-finding cycles and its recorded ``start_temperature_c`` (the
     chamber's temperature at power-on, where the unit was soaked) start here.  Without the
     marker the unit is powered at the program's start.
+``{ power_off_s = S }``
+    a power cycle (a warm restart): the unit is switched off for S > 0 seconds while the
+    chamber holds, then on again.  Off, no heat is released inside the unit (its node
+    powers and thermal effects are zero), the sensors record nothing (NaN) and the run's
+    ``powered`` column is 0; at the restart every turn-on effect starts again from its
+    power-on value (``turn_on_transient`` is a function of the time since the latest
+    power-on).  Allowed after power-on, also inside a repeat (repeated power cycles).
 
 The chamber temperature is piecewise linear between the program's corners; the thermal
 network is solved under it with a first-order hold (:func:`thermal.simulate`), exact when
@@ -64,9 +71,14 @@ _KEYS = {
     "step": ("step_to_c",),
     "repeat": ("repeat", "steps"),
     "power_on": ("power_on",),
+    "power_off": ("power_off_s",),
 }
 _KIND_OF = {"hold_s": "hold", "ramp_to_c": "ramp", "step_to_c": "step", "repeat": "repeat",
-            "power_on": "power_on"}
+            "power_on": "power_on", "power_off_s": "power_off"}
+
+
+#: Steps during which the chamber holds its temperature.
+_HOLDS = ("hold", "power_off")
 
 
 @dataclass(frozen=True)
@@ -74,11 +86,11 @@ class ChamberStep:
     """One hold, ramp or step of a program (repeats expanded)."""
 
     kind: str
-    """"hold", "ramp" or "step"."""
+    """"hold", "ramp", "step" or "power_off" (a hold with the unit switched off)."""
     target_c: float | None = None
     """Temperature the ramp or step ends at [degC]; None for a hold."""
     duration_s: float | None = None
-    """Length of a hold or of a ramp given ``over_s`` [s]; None otherwise."""
+    """Length of a hold, a power-off or a ramp given ``over_s`` [s]; None otherwise."""
     rate_c_per_s: float | None = None
     """Ramp rate magnitude [K/s] (``rate_c_per_min`` / 60); None otherwise."""
 
@@ -109,7 +121,7 @@ class ChamberProgram:
         t, now = [0.0], float(start_c)
         for s in self.steps:
             t.append(t[-1] + s.length_s(now, sample_s))
-            now = now if s.kind == "hold" else float(s.target_c)
+            now = now if s.kind in _HOLDS else float(s.target_c)
         t = np.array(t)
         return t - t[self.power_on_index]
 
@@ -128,8 +140,15 @@ class ChamberProgram:
             if dt == 0.0:
                 continue
             times.append(times[-1] + dt)
-            temps.append(now if s.kind == "hold" else float(s.target_c))
+            temps.append(now if s.kind in _HOLDS else float(s.target_c))
         return np.array(times), np.array(temps)
+
+    def power_off_spans_s(self, start_c: float, sample_s: float
+                          ) -> tuple[tuple[float, float], ...]:
+        """(switched off, switched on again) of every power cycle, from power-on [s]."""
+        t = self.step_times_s(start_c, sample_s)
+        return tuple((float(t[i]), float(t[i + 1])) for i, s in enumerate(self.steps)
+                     if s.kind == "power_off")
 
     def power_on_s(self, start_c: float, sample_s: float) -> float:
         """Time of power-on from the program's start [s]."""
@@ -181,14 +200,15 @@ def _one(step: Any, where: str, file: Any, top: bool) -> list[ChamberStep] | str
         raise ScenarioError("must be a table such as { hold_s = 600.0 }, "
                             "{ ramp_to_c = 10.0, rate_c_per_min = 1.0 }, "
                             "{ ramp_to_c = 10.0, over_s = 900.0 }, { step_to_c = 10.0 }, "
-                            "{ repeat = 2, steps = [...] } or { power_on = true }; "
+                            "{ repeat = 2, steps = [...] }, { power_on = true } or "
+                            "{ power_off_s = 600.0 }; "
                             f"got {step!r}", file=file, key=where)
     kinds = {_KIND_OF[k] for k in step if k in _KIND_OF}
     if len(kinds) != 1:
         what = ("names no step kind" if not kinds
                 else f"mixes {' and '.join(sorted(kinds))}")
         raise ScenarioError(f"{what}: a step has exactly one of hold_s, ramp_to_c, "
-                            "step_to_c, repeat, power_on", file=file, key=where)
+                            "step_to_c, repeat, power_on, power_off_s", file=file, key=where)
     kind = kinds.pop()
     for k in step:
         if k not in _KEYS[kind]:
@@ -197,6 +217,9 @@ def _one(step: Any, where: str, file: Any, top: bool) -> list[ChamberStep] | str
     if kind == "hold":
         return [ChamberStep("hold", duration_s=_positive(step, "hold_s", where, file,
                                                          "a hold lasts some time"))]
+    if kind == "power_off":
+        return [ChamberStep("power_off", duration_s=_positive(
+            step, "power_off_s", where, file, "a power cycle is off for some time"))]
     if kind == "step":
         target = _finite(step, "step_to_c", where, file)
         check_temperature(target, file, f"{where}.step_to_c")
@@ -254,6 +277,7 @@ def _steps(value: Any, where: str, file: Any, top: bool
         raise ScenarioError(f"must be a non-empty list of steps, got {value!r}", file=file,
                             key=where)
     out: list[ChamberStep] = []
+    origin: list[int] = []     # the entry of ``value`` each expanded step came from
     power_on = None
     cycles: list[tuple[int, int]] = []
     for i, entry in enumerate(value):
@@ -269,7 +293,13 @@ def _steps(value: Any, where: str, file: Any, top: bool
             power_on = len(out)
             continue
         out.extend(got)
+        origin.extend([i] * len(got))
         _check_length(len(out), f"{where}[{i}]", file)
+    off = [k for k, s in enumerate(out) if s.kind == "power_off"]
+    if top and off and off[0] < (power_on or 0):
+        raise ScenarioError("a power_off_s step before power_on: the unit is not on yet "
+                            "(the steps before power_on are the unpowered soak)", file=file,
+                            key=f"{where}[{origin[off[0]]}]")
     if power_on is not None and power_on == len(out):
         raise ScenarioError("power_on is the last step: nothing would be recorded",
                             file=file, key=where)

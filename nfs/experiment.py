@@ -23,6 +23,7 @@ from .effects import EffectContext, EffectInstance, Geometry, apply_geometry, ch
 from .effects.thermometer import THERMOMETERS
 from .errors import EffectError
 from .instrument import Instrument
+from .power import POWERED_COLUMN, off_spans_s, powered_mask, since_power_on_s
 from .run import Run, RunMeta
 from .noise import gyro_noise_dph, white_noise
 from .sensors import (Schedule, earth_rate_along_axis_dph, thermometer_reading,
@@ -77,6 +78,9 @@ class RunConditions:
     """Node temperatures at the start of the record [degC] (n_nodes,), when known (a
     measured run's start estimated from its thermometers, :mod:`nfs.diagnose.start_state`);
     None: soaked at T0 (and ``variability``'s soak)."""
+    power_off_s: tuple[tuple[float, float], ...] = ()
+    """Power cycles: (switched off, switched on again) from power-on [s] (a chamber
+    program's ``power_off_s`` steps, :mod:`nfs.power`); empty: on throughout."""
 
     @property
     def time_s(self) -> np.ndarray:
@@ -92,6 +96,10 @@ class RunConditions:
             return (np.asarray(self.motion[1], dtype=float),
                     np.asarray(self.motion[2], dtype=float) > 0.5)
         return turntable_motion(self.schedule, time_s)
+
+    def powered(self, time_s: np.ndarray) -> np.ndarray | None:
+        """The power state s(t_k) (True: on), or None without power cycles."""
+        return powered_mask(time_s, self.power_off_s) if self.power_off_s else None
 
 
 def chamber_assumption(runs) -> str:
@@ -113,8 +121,9 @@ def conditions_from_run(run: Run, *, seed=0, schedule: Schedule | None = None,
 
     The model replays the run's own time base and turntable motion (``position_deg``,
     ``moving``), start temperature, latitude and heading (0 when unknown), and its chamber
-    temperature when the run recorded ``temp_chamber_c``; its nodes start at ``initial_c``
-    [degC] when given (the run's estimated start), else at T0.
+    temperature when the run recorded ``temp_chamber_c``, and its power cycles when it
+    recorded ``powered``; its nodes start at ``initial_c`` [degC] when given (the run's
+    estimated start), else at T0.
     """
     m = run.meta
     t = np.asarray(run.columns["time_s"], dtype=float)
@@ -133,6 +142,7 @@ def conditions_from_run(run: Run, *, seed=0, schedule: Schedule | None = None,
         schedule=schedule, duration_s=float(t[-1] - t[0]) if t.size else 0.0,
         sample_rate_hz=fs, seed=seed, chamber_c=chamber,
         initial_c=None if initial_c is None else np.asarray(initial_c, dtype=float),
+        power_off_s=off_spans_s(t, cols.get(POWERED_COLUMN)),
         motion=(t, np.asarray(cols["position_deg"], dtype=float),
                 np.asarray(cols["moving"], dtype=float)))
 
@@ -199,8 +209,13 @@ def thermal_effects(inst: Instrument) -> list[tuple[EffectInstance, int, dict[st
     return out
 
 
-def thermal_power(inst: Instrument, time_s: np.ndarray, moving: np.ndarray):
+def thermal_power(inst: Instrument, time_s: np.ndarray, moving: np.ndarray,
+                  powered: np.ndarray | None = None):
     """The heat input of the thermal effects: (power, terms, stateful).
+
+    ``powered``: the power state s(t_k) of a run with power cycles (:mod:`nfs.power`), or
+    None (on throughout).  Off, the network's constant node powers are cancelled (an extra
+    -P_j) and every thermal effect releases nothing.
 
     ``power`` is an array (n_samples, n_nodes) when no effect depends on the state, else a
     per-sample law ``power(t_s, temperature_c)`` for :func:`thermal.simulate` (or, with
@@ -213,24 +228,33 @@ def thermal_power(inst: Instrument, time_s: np.ndarray, moving: np.ndarray):
     fixed = np.zeros((len(time_s), n))
     stateful: list[tuple[EffectInstance, int, dict[str, Any]]] = []
     terms: dict[str, np.ndarray] = {}
+    off = None if powered is None else ~np.asarray(powered, dtype=bool)
     for e, j, params in thermal_effects(inst):
         if e.spec.state_dependent:
             stateful.append((e, j, params))
         else:
-            p = np.broadcast_to(np.asarray(e.spec.function(time_s, None, moving, **params),
-                                           dtype=float), time_s.shape)
+            p = np.array(np.broadcast_to(np.asarray(
+                e.spec.function(time_s, None, moving, **params), dtype=float), time_s.shape))
+            if off is not None:
+                p[off] = 0.0
             fixed[:, j] += p
-            terms[e.label] = np.array(p)
+            terms[e.label] = p
+    if off is not None:
+        fixed[off] -= inst.network.node_power_w
     if not stateful:
         return fixed, terms, stateful
     # The per-sample law: the state-dependent sources from the current node temperature,
     # held over the sample interval by the exact solver.
     index = {float(t): k for k, t in enumerate(time_s)}
     moving_list = moving.tolist()
+    on_list = [True] * len(time_s) if off is None else (~off).tolist()
     calls = [(e.spec.function, j, params) for e, j, params in stateful]
 
     def law(t_s: float, temperature_c: np.ndarray) -> np.ndarray:
         k = index[t_s]
+        if not on_list[k]:
+            return (fixed[k].copy() if temperature_c.ndim == 1 else
+                    np.repeat(fixed[k][None, :], temperature_c.shape[0], axis=0))
         if temperature_c.ndim == 1:
             p = fixed[k].copy()
             for f, j, params in calls:
@@ -255,14 +279,17 @@ def thermal_power(inst: Instrument, time_s: np.ndarray, moving: np.ndarray):
 
 def effect_context(inst: Instrument, th: thermal.ThermalResult, azimuth_deg: np.ndarray,
                    earth_rate_dph: np.ndarray, moving: np.ndarray,
-                   aux: dict[str, np.ndarray]) -> EffectContext:
-    """The :class:`EffectContext` of a run from its thermal solution and turntable motion."""
+                   aux: dict[str, np.ndarray], powered: np.ndarray | None = None
+                   ) -> EffectContext:
+    """The :class:`EffectContext` of a run from its thermal solution and turntable motion
+    (``powered``: its power state, :mod:`nfs.power`; None: on throughout)."""
     return EffectContext(
         time_s=th.time_s, node_names=tuple(th.node_names), temperature_c=th.temperature_c,
         rate_c_per_s=th.rate_c_per_s, coil_outer=inst.gyro.coil_outer,
         coil_inner=inst.gyro.coil_inner, source=inst.gyro.source,
         axis_azimuth_deg=azimuth_deg, earth_rate_dph=earth_rate_dph, moving=moving,
-        acc_nodes=inst.accelerometers.nodes, aux=aux, t_ref_c=inst.t_ref_c)
+        acc_nodes=inst.accelerometers.nodes, aux=aux, t_ref_c=inst.t_ref_c,
+        since_power_on_s=None if powered is None else since_power_on_s(th.time_s, powered))
 
 
 def _aux_channels(inst: Instrument, th: thermal.ThermalResult, fs: float,
@@ -313,6 +340,7 @@ class _Prepared:
     initial: Any            # node temperatures at power-on
     ambient: np.ndarray     # chamber at the run's samples
     soak: tuple[float, float] | None = None   # (soak_from_c, soak_h) of an unfinished soak
+    powered: np.ndarray | None = None         # power state at the samples (None: always on)
 
 
 def _prepare(inst: Instrument, cond: RunConditions) -> _Prepared:
@@ -336,7 +364,8 @@ def _prepare(inst: Instrument, cond: RunConditions) -> _Prepared:
     axes = geom.azimuth_elevation()
 
     # 1. thermal network: the unpowered soak of a chamber program, then the run
-    power, thermal_terms, stateful = thermal_power(inst, t, moving)
+    powered = cond.powered(t)
+    power, thermal_terms, stateful = thermal_power(inst, t, moving, powered)
     n_pre = int(np.ceil(cond.soak_s * fs - 1e-9)) if cond.soak_s > 0.0 else 0
     t_all = np.concatenate([-cond.soak_s + np.arange(n_pre) / fs, t]) if n_pre else t
     ambient = (np.full(t_all.shape, cond.start_temperature_c) if cond.chamber_c is None
@@ -354,7 +383,7 @@ def _prepare(inst: Instrument, cond: RunConditions) -> _Prepared:
     soak = (drawn_soak(var, cond.seed) if var is not None and cond.initial_c is None
             and not n_pre else None)
     return _Prepared(inst, cond, rngs, theta, moving, geom, axes, power, thermal_terms,
-                     stateful, initial, np.asarray(ambient, dtype=float), soak)
+                     stateful, initial, np.asarray(ambient, dtype=float), soak, powered)
 
 
 def simulate_run(inst: Instrument, cond: RunConditions) -> SimulationResult:
@@ -384,7 +413,8 @@ def _stack_key(prep: _Prepared):
     c = prep.cond
     unit = c.unit if c.variability is not None and c.variability.per_unit else None
     t = c.time_s
-    return (unit, t.size, float(t[0]), float(t[-1]), prep.moving.tobytes())
+    return (unit, t.size, float(t[0]), float(t[-1]), prep.moving.tobytes(),
+            None if prep.powered is None else prep.powered.tobytes())
 
 
 def simulate_runs(inst: Instrument, conds, *,
@@ -431,13 +461,16 @@ def _finish(prep: _Prepared, th) -> SimulationResult:
     (_, elev_x), (_, elev_y), (azimuth, elev_gyro) = (prep.axes["x"], prep.axes["y"],
                                                       prep.axes["gyro"])
     for e, j, params in prep.stateful:
-        thermal_terms[e.label] = np.asarray(
-            e.spec.function(t, th.temperature_c[:, j], moving, **params), dtype=float)
+        p = np.array(e.spec.function(t, th.temperature_c[:, j], moving, **params),
+                     dtype=float)
+        if prep.powered is not None:
+            p[~prep.powered] = 0.0
+        thermal_terms[e.label] = p
 
     # 2. aux channels and the effect context
     aux = _aux_channels(inst, th, fs, rngs["aux"])
     earth = earth_rate_along_axis_dph(azimuth, elev_gyro, cond.latitude_deg)
-    ctx = effect_context(inst, th, azimuth, earth, moving, aux)
+    ctx = effect_context(inst, th, azimuth, earth, moving, aux, prep.powered)
 
     # 3. gyro: K0 * Earth rate + bias + effects + noise
     gyro_terms: dict[str, np.ndarray] = {}
@@ -486,6 +519,13 @@ def _finish(prep: _Prepared, th) -> SimulationResult:
         "temp_chamber_c": np.broadcast_to(np.asarray(ambient, dtype=float), t.shape).copy(),
         **aux,
     }
+    if prep.powered is not None:
+        # switched off, the unit records nothing but its power state (the chamber's own
+        # thermometer and the table's encoder keep recording)
+        off = ~prep.powered
+        for name in ("gyro_dph", "acc_x_g", "acc_y_g", *temps, *aux):
+            columns[name] = np.where(off, np.nan, columns[name])
+        columns[POWERED_COLUMN] = prep.powered.astype(float)
     sched = cond.schedule
     soaked_c = (cond.start_temperature_c if cond.soak_s == 0.0 or cond.chamber_c is None
                 else float(cond.chamber_c(0.0)))

@@ -74,6 +74,13 @@ class ChamberProfile:
             return 0.0
         return self.program.power_on_s(start_temperature_c, sample_s)
 
+    def power_off_s(self, start_temperature_c: float, sample_s: float = 1.0
+                    ) -> tuple[tuple[float, float], ...]:
+        """The program's power cycles: (switched off, on again) from power-on [s]."""
+        if self.program is None:
+            return ()
+        return self.program.power_off_spans_s(start_temperature_c, sample_s)
+
     def powered_s(self, start_temperature_c: float, sample_s: float = 1.0) -> float | None:
         """Length of the program from power-on [s]; None without a program."""
         if self.program is None:
@@ -164,7 +171,8 @@ class Scenario:
                     sample_rate_hz=self.sample_rate_hz,
                     seed=(self.seed, i, k) if u == 0 else (self.seed, i, k, u),
                     chamber_c=self.chamber.ambient(t0, sample_s), unit=u, variability=var,
-                    soak_s=self.chamber.soak_s(t0, sample_s)))
+                    soak_s=self.chamber.soak_s(t0, sample_s),
+                    power_off_s=self.chamber.power_off_s(t0, sample_s)))
         return out
 
     def nominal(self) -> "Scenario":

@@ -26,7 +26,7 @@
   figures;
 - :mod:`~nfs.diagnose.missing_effect`: which registered effect the model is missing
   (:func:`diagnose`); its candidates (:mod:`~nfs.diagnose.candidates`), design matrices
-  (:mod:`~nfs.diagnose.design`, :mod:`~nfs.diagnose.acc_design`), scores
+  (:mod:`~nfs.diagnose.columns`, :mod:`~nfs.diagnose.acc_columns`), scores
   (:mod:`~nfs.diagnose.candidate_score`, run-level statistics in
   :mod:`~nfs.diagnose.stats`: clustered tests, grouped CV, Holm), ranking
   (:mod:`~nfs.diagnose.ranking`), heading RMSE (:mod:`~nfs.diagnose.candidate_heading`),

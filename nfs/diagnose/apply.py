@@ -12,7 +12,7 @@ from ..instrument import Instrument
 from ..run import Run
 from .candidates import (FAST_KINDS, SHAPE_GRID, Candidate, effect_of, split_parameters,
                          targets)
-from .design import (PreparedRun, bare_instrument, fit_shapes, model_drift_paths,
+from .columns import (PreparedRun, bare_instrument, fit_shapes, model_drift_paths,
                      prepare_runs, startup_heading_rmse)
 from .start_state import StartModel
 from .thermal_residual import DEFAULT_START, start_states

@@ -2,7 +2,7 @@
 rate minus the fitted model drift, without and with the candidate.
 
 Computed for the top :data:`HEADING_TOP` candidates of the ranking and every significant one
-(:func:`with_heading`), pooled over the runs (:func:`nfs.diagnose.design.startup_heading_rmse`):
+(:func:`with_heading`), pooled over the runs (:func:`nfs.diagnose.columns.startup_heading_rmse`):
 
 - a gyro candidate: the model drift with the model's and the candidate's coefficients
   fitted together;
@@ -27,7 +27,7 @@ from ..errors import ThermalError
 from ..instrument import Instrument
 from ..run import Run
 from .candidate_score import ScoredCandidate
-from .design import (PreparedRun, ThermalDesign, candidate_columns, prepare_runs,
+from .columns import (PreparedRun, ThermalDesign, candidate_columns, prepare_runs,
                      refit_heading_rmse, startup_heading_rmse, thermal_step_instrument)
 from .result import CandidateScore
 

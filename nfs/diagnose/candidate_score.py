@@ -27,7 +27,7 @@ import numpy as np
 
 from ..instrument import Instrument
 from .candidates import Candidate
-from .design import PreparedRun, candidate_columns, fit_shapes
+from .columns import PreparedRun, candidate_columns, fit_shapes
 from .result import CandidateScore
 from .stats import RunGrams, augmented_grams, clustered_fit, group_cv_rms, run_grams, solve
 
@@ -166,7 +166,7 @@ def best_grid_point(ch: ResidualChannel, grid: list[tuple[dict[str, float], list
 def score_with_shapes(c: Candidate, ch: ResidualChannel, preps: list[PreparedRun], bare: Instrument,
                       grid, alpha: float) -> ScoredCandidate:
     """Score a gyro candidate on the drift window means, its shapes refined by variable
-    projection (:func:`~nfs.diagnose.design.fit_shapes`) and their intervals from the
+    projection (:func:`~nfs.diagnose.columns.fit_shapes`) and their intervals from the
     linearised problem."""
     if not c.shapes:
         return score_candidate(c, ch, grid, alpha)

@@ -5,7 +5,7 @@ measured ``aux_*`` column).  Its float parameters split into *coefficients* (ent
 model linearly, started at 0) and *shape* parameters (time constants, angles, periods, and
 parameters registered with ``shape=True`` such as shupe_stress's c_m: chosen on
 :data:`SHAPE_GRID`).  Thermal and thermometer candidates are linearised at zero,
-so their time constants become coefficients (:mod:`nfs.diagnose.design`).
+so their time constants become coefficients (:mod:`nfs.diagnose.columns`).
 """
 
 from __future__ import annotations

@@ -154,13 +154,14 @@ def drift_context(inst: Instrument, rd: DriftRun, start_c: np.ndarray | None = N
     cond = rd.cond
     t = cond.time_s
     _, moving = cond.turntable(t)
-    power, _, _ = thermal_power(inst, t, moving)
+    powered = cond.powered(t)
+    power, _, _ = thermal_power(inst, t, moving, powered)
     ambient = cond.start_temperature_c if cond.chamber_c is None else cond.chamber_c(t)
     th = thermal.simulate(inst.network, t, ambient_c=ambient,
                           initial_c=cond.start_temperature_c if start_c is None else start_c,
                           power_w=power,
                           ambient_hold="first-order")   # the recorded chamber, interpolated
-    return effect_context(inst, th, rd.azimuth, rd.projection, moving, rd.aux)
+    return effect_context(inst, th, rd.azimuth, rd.projection, moving, rd.aux, powered)
 
 
 def drift_context_on(inst: Instrument, rd: DriftRun, temperatures: Any):
@@ -172,7 +173,8 @@ def drift_context_on(inst: Instrument, rd: DriftRun, temperatures: Any):
         raise NfsError(f"run '{rd.run.name}': node temperatures on "
                        f"{np.size(temperatures.time_s)} samples for a run of {t.size}")
     _, moving = rd.cond.turntable(t)
-    return effect_context(inst, temperatures, rd.azimuth, rd.projection, moving, rd.aux)
+    return effect_context(inst, temperatures, rd.azimuth, rd.projection, moving, rd.aux,
+                          rd.cond.powered(t))
 
 
 def window_means(rd: DriftRun, x: np.ndarray) -> np.ndarray:

@@ -34,7 +34,7 @@ from typing import Any, Sequence
 import numpy as np
 
 from ..docfields import document_fields
-from .design import PreparedRun
+from .columns import PreparedRun
 from .drift_residual import window_means
 from .stats import RunGrams, augmented_grams, clustered_fit, group_cv_rms
 

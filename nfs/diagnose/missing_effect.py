@@ -14,8 +14,8 @@ model's fixed part, X_r the model's own drift columns and C_r the candidate's at
 parameters; an accelerometer candidate is scored on its own axis's window means at rest,
 where it shows against a floor of a few ug instead of through the north finder's vertical
 rate (X_r: the turntable tilts, the axis bias and the model's effects on the axis;
-:mod:`nfs.diagnose.acc_design`); on the thermometer channel y_r are the three thermometers,
-X_r and C_r their Jacobians (:mod:`nfs.diagnose.design`).  Window means within a run are
+:mod:`nfs.diagnose.acc_columns`); on the thermometer channel y_r are the three thermometers,
+X_r and C_r their Jacobians (:mod:`nfs.diagnose.columns`).  Window means within a run are
 strongly autocorrelated, runs are independent, so every statistic is run-level
 (:mod:`nfs.diagnose.stats`), from the per-run Gram matrices:
 
@@ -41,7 +41,7 @@ strongly autocorrelated, runs are independent, so every statistic is run-level
 - **Significant** = Holm rejects the candidate AND its cross-validated RMS drops.
 
 Reported beside the test: ``coefficient`` / ``interval``, fitted at shapes refined from the
-best grid point by variable projection (:func:`~nfs.diagnose.design.fit_shapes`), with 95 %
+best grid point by variable projection (:func:`~nfs.diagnose.columns.fit_shapes`), with 95 %
 t intervals from the CR2 covariance of the linearised problem (coefficients and shapes
 together); ``correlation``, of the baseline residual with the candidate's fitted signature
 after the model's columns are projected out of it; ``inclusion_frequency``, over
@@ -109,14 +109,14 @@ import numpy as np
 from ..errors import USER_ERRORS, NfsError
 from ..instrument import Instrument
 from ..run import Run
-from .acc_design import acc_grid_columns, model_acc_paths, prepare_acc
+from .acc_columns import acc_grid_columns, model_acc_paths, prepare_acc
 from .adequacy import ThermalAdequacy, thermal_adequacy
 from .candidate_heading import ThermalDrift, with_heading
 from .candidate_score import (ResidualChannel, ScoredCandidate, best_grid_point,
                               one_sided_sign, residual_channel, score_candidate,
                               score_with_shapes)
 from .candidates import Candidate, candidates
-from .design import (PreparedRun, bare_instrument, grid_columns, model_drift_paths, prepare_runs,
+from .columns import (PreparedRun, bare_instrument, grid_columns, model_drift_paths, prepare_runs,
                      same_signature, thermal_candidate_columns, thermal_design)
 from .drift_structure import DriftStructure, beyond_alternative, rate_columns
 from .fit import DEFAULT_DECIMATE_S, fit_model
@@ -243,7 +243,7 @@ def _accelerometer_axes(inst: Instrument, runs: Sequence[Run], cands: Sequence[C
                         preps: list[PreparedRun], decimate_s: float, groups: np.ndarray,
                         boot: list[np.ndarray]) -> dict[str, Any]:
     """Per accelerometer axis with a candidate: (its runs,
-    :func:`~nfs.diagnose.acc_design.prepare_acc`; its residual channel), or None when a run
+    :func:`~nfs.diagnose.acc_columns.prepare_acc`; its residual channel), or None when a run
     lacks the axis's column."""
     out: dict[str, Any] = {}
     for c in cands:
@@ -329,7 +329,7 @@ def _score_thermal_candidates(inst: Instrument, runs: Sequence[Run],
                               groups: np.ndarray, boot: list[np.ndarray], alpha: float
                               ) -> tuple[_Scores, ThermalDrift | None]:
     """Every thermal candidate on the three thermometers, one Gauss-Newton step of the
-    thermal refit (:func:`nfs.diagnose.design.thermal_design`); and the thermal step whose
+    thermal refit (:func:`nfs.diagnose.columns.thermal_design`); and the thermal step whose
     drift the heading and ``explained_by`` use (None without thermal candidates)."""
     if not thermal_cands:
         return _Scores([], [], {}), None

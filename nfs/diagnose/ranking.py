@@ -34,7 +34,7 @@ from .adequacy import MODEL_RIVAL, ThermalAdequacy, structure_rival
 from .alternative_score import AlternativeScore
 from .candidate_heading import ThermalDrift
 from .candidate_score import ResidualChannel, ScoredCandidate
-from .design import candidate_columns
+from .columns import candidate_columns
 from .drift_structure import DriftStructure
 from .result import CandidateScore
 from ..scoring.intervals import holm

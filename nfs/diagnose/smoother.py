@@ -203,6 +203,9 @@ def _prepare(inst: Instrument, run: Run, decimate_s: float,
     names = inst.network.node_names
     n = len(names)
     t_knot, moving_knot = t[knots], _window_mean(moving, knots)
+    # the heat of the thermal effects; while the unit is off (power cycles, nfs.power)
+    # none, and the network's constant node powers cancelled
+    powered = cond.powered(t)
     fixed = np.zeros((t.size, n))
     stateful = []
     for e, j, params in thermal_effects(inst):
@@ -211,13 +214,19 @@ def _prepare(inst: Instrument, run: Run, decimate_s: float,
         else:
             fixed[:, j] += np.broadcast_to(np.asarray(
                 e.spec.function(t, None, moving, **params), dtype=float), t.shape)
+    if powered is not None:
+        fixed[~powered] = -inst.network.node_power_w
     law = None
     if stateful:
         times, moves = t_knot.tolist(), moving_knot.tolist()
+        on_knot = ([True] * len(times) if powered is None
+                   else (_window_mean(powered.astype(float), knots) > 0.5).tolist())
 
         def law(k: int, temperature_c: np.ndarray) -> np.ndarray:
-            """Held power of the state-dependent effects at knot k [W]."""
+            """Held power of the state-dependent effects at knot k [W] (none while off)."""
             p = np.zeros(n)
+            if not on_knot[k]:
+                return p
             for f, j, params in stateful:
                 p[j] += f(times[k], float(temperature_c[j]), moves[k], **params)
             return p

@@ -75,7 +75,8 @@ def _model_readings(inst: Instrument, run: Run, n: int) -> dict[str, np.ndarray]
     cond = conditions_from_run(run)
     t = cond.time_s[:n]
     moving = np.asarray(run["moving"], dtype=float)[:n] > 0.5
-    power, _, _ = thermal_power(inst, t, moving)
+    powered = cond.powered(t)
+    power, _, _ = thermal_power(inst, t, moving, powered)
     ambient = cond.start_temperature_c if cond.chamber_c is None else cond.chamber_c(t)
     th = thermal.simulate(inst.network, t, ambient_c=ambient,
                           initial_c=cond.start_temperature_c, power_w=power,

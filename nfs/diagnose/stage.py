@@ -10,6 +10,8 @@ the parameters the data rows cannot determine.
 
 from __future__ import annotations
 
+import dataclasses
+
 import math
 import time
 from dataclasses import dataclass
@@ -70,6 +72,10 @@ class StageReport:
     """The data rows were divided by this beside the prior rows in the final solve: the RMS
     of the weighted data residual when it stayed above 1 (the model's error counted as
     noise); 1: the stated noise levels held."""
+    correlation: np.ndarray | None = None
+    """Correlation matrix of the fitted parameters (order :attr:`free`) of the linearised
+    problem, whose standard errors are :attr:`nfs.diagnose.fit_result.FitResult.stderr`
+    (zero rows for a parameter the data do not determine); None when not computed."""
 
 
 def forward_jacobian(batch, x: np.ndarray, lb: np.ndarray, ub: np.ndarray,
@@ -187,8 +193,9 @@ def solve_stage(name: str, fun, x0: np.ndarray, lb: np.ndarray, ub: np.ndarray,
                          n_prior=int(res.fun.size - m), cost_prior=cost_prior,
                          n_starts=tried, noise_scale=noise_scale)
     jac = np.asarray(res.jac, dtype=float)
-    stderr, unident = _errors(jac[:m], res.fun[:m], paths,
-                              prior.jacobian() if use_prior else None)
+    stderr, unident, corr = _errors(jac[:m], res.fun[:m], paths,
+                                    prior.jacobian() if use_prior else None)
+    report = dataclasses.replace(report, correlation=corr)
     span = ub - lb
     at = [p for i, p in enumerate(paths)
           if res.active_mask[i] != 0
@@ -211,8 +218,10 @@ def _settled(res, m: int, lb: np.ndarray, ub: np.ndarray) -> bool:
 
 
 def _errors(jac: np.ndarray, r: np.ndarray, paths: Sequence[str],
-            jac_prior: np.ndarray | None) -> tuple[dict[str, float], dict[str, str]]:
-    """Standard errors and the parameters the data rows cannot determine.
+            jac_prior: np.ndarray | None
+            ) -> tuple[dict[str, float], dict[str, str], np.ndarray]:
+    """Standard errors, the parameters the data rows cannot determine and the correlation
+    matrix.
 
     Data only: cov = s^2 (J^T J)^-1, s^2 = |r|^2 / (m - n), through the SVD of J (a
     pseudo-inverse).  With a prior, the posterior of the linearised problem: the data rows
@@ -236,7 +245,13 @@ def _errors(jac: np.ndarray, r: np.ndarray, paths: Sequence[str],
     else:
         h = jac.T @ jac / max(s2, np.finfo(float).tiny) + jac_prior.T @ jac_prior
         d = np.sqrt(np.maximum(np.diag(h), np.finfo(float).tiny))
-        stderr = np.sqrt(np.maximum(np.diag(np.linalg.pinv(h / np.outer(d, d))), 0.0)) / d
+        inv = np.linalg.pinv(h / np.outer(d, d))
+        stderr = np.sqrt(np.maximum(np.diag(inv), 0.0)) / d
+    sd = np.sqrt(np.maximum(np.diag(inv), 0.0))
+    sd_safe = np.where(sd > 0, sd, 1.0)
+    corr = np.clip(inv / np.outer(sd_safe, sd_safe), -1.0, 1.0)
+    corr[sd == 0] = 0.0
+    corr[:, sd == 0] = 0.0
     unident = {}
     for i, p in enumerate(paths):
         weak = col[i] == 0 or (np.abs(vt[~good, i]) > 0.1).any()
@@ -244,4 +259,6 @@ def _errors(jac: np.ndarray, r: np.ndarray, paths: Sequence[str],
             stderr[i] = math.inf
             unident[p] = ("the residual does not depend on it" if col[i] == 0 else
                           "collinear with other free parameters on these runs")
-    return dict(zip(paths, stderr)), unident
+            corr[i, :] = 0.0
+            corr[:, i] = 0.0
+    return dict(zip(paths, stderr)), unident, corr

@@ -38,6 +38,7 @@ from ..effects.thermometer import THERMOMETERS
 from ..errors import InputError, NfsError
 from ..experiment import conditions_from_run, thermal_effects, thermal_power
 from ..instrument import Instrument
+from ..power import POWERED_COLUMN
 from ..run import Run
 from ..sensors import thermometer_reading
 from ..signal import uniform_steps
@@ -98,6 +99,10 @@ class ThermalRun:
     history: tuple[float, float] | None = None
     """The soak history of the sidecar (soak_from_c [degC], soak_h [h]), if given
     (:func:`nfs.diagnose.start_state.soak_history`)."""
+    powered_knot: np.ndarray | None = None
+    """Fraction of each decimated step the unit was on (a run with power cycles,
+    :mod:`nfs.power`): the heat released inside the unit is scaled by it; None: on
+    throughout."""
 
 
 def prepare_thermal(run: Run, decimate_s: float) -> ThermalRun:
@@ -128,11 +133,15 @@ def prepare_thermal(run: Run, decimate_s: float) -> ThermalRun:
         mask[col] = np.isfinite(y)
     dt = np.diff(t)
     uniform = knots.size > 2 and uniform_steps(dt)
+    powered = run.columns.get(POWERED_COLUMN)
+    powered_knot = (None if powered is None or np.all(np.asarray(powered) > 0.5) else
+                    window_mean((np.asarray(powered, dtype=float) > 0.5).astype(float)[: t.size],
+                                k))
     return ThermalRun(run=run, t0_c=cond.start_temperature_c, time_s=t, knots=knots,
                        t_knot=t_knot, moving_knot=window_mean(moving, k),
                        ambient_knot=window_mean(amb, k), measured=measured, mask=mask,
                        interval=interval, basis=basis, per_knot=k if uniform else 0,
-                       history=soak_history(run))
+                       history=soak_history(run), powered_knot=powered_knot)
 
 
 @dataclass
@@ -235,7 +244,9 @@ def simulate_knots(insts: Sequence[Instrument], data: Sequence[ThermalRun],
             groups.setdefault(round(h, 9), []).append(i)
             continue
         for s, inst in enumerate(insts):
-            power, _, _ = thermal_power(inst, rd.t_knot, rd.moving_knot)
+            power, _, _ = thermal_power(
+                inst, rd.t_knot, rd.moving_knot,
+                None if rd.powered_knot is None else rd.powered_knot > 0.5)
             start = rd.t0_c if initial_offset_c is None else rd.t0_c + initial_offset_c[s, i]
             th = thermal.simulate(inst.network, rd.t_knot, ambient_c=rd.ambient_knot,
                                   initial_c=start, power_w=power)
@@ -263,6 +274,7 @@ def simulate_knots(insts: Sequence[Instrument], data: Sequence[ThermalRun],
         t_knot = np.zeros(n_k)
         amb = np.empty((n_k, r))
         moving = np.zeros((n_k, r))
+        on = np.ones((n_k, r))     # fraction of each step the unit is on (power cycles)
         t0 = np.empty(r)
         for q, i in enumerate(members):
             rd = data[i]
@@ -271,6 +283,8 @@ def simulate_knots(insts: Sequence[Instrument], data: Sequence[ThermalRun],
                 t_knot = rd.t_knot
             amb[:m, q], amb[m:, q] = rd.ambient_knot, rd.ambient_knot[-1]
             moving[:m, q], moving[m:, q] = rd.moving_knot, rd.moving_knot[-1]
+            if rd.powered_knot is not None:
+                on[:m, q], on[m:, q] = rd.powered_knot, rd.powered_knot[-1]
             t0[q] = rd.t0_c
         # powers: the nodes' constant ones, the time-varying ones of the state-independent
         # effects (``varying``, e.g. a motor's heat pulses) and those of the state-dependent
@@ -298,9 +312,13 @@ def simulate_knots(insts: Sequence[Instrument], data: Sequence[ThermalRun],
                         c[:m, q] = np.broadcast_to(np.asarray(e.spec.function(
                             rd.t_knot, None, rd.moving_knot, **params), dtype=float), (m,))
                         c[m:, q] = c[m - 1, q]
-                    contrib[key] = c
+                    contrib[key] = c * on
                 varying[:, s, :, j] += contrib[key]
+        gated = not np.all(on == 1.0)
         drive = (amb[:, None, :, None] * g_amb[None, :, None, :]
+                 + on[:, None, :, None] * (p_const[:, None, :] @ g_pow)[None, :, :, :]
+                 if gated else
+                 amb[:, None, :, None] * g_amb[None, :, None, :]
                  + (p_const[:, None, :] @ g_pow)[None, :, :, :])
         if varying is not None:
             drive += _each(varying, g_pow)
@@ -318,13 +336,15 @@ def simulate_knots(insts: Sequence[Instrument], data: Sequence[ThermalRun],
                 pk = law_p[k]
                 for law, j, c in stateful:
                     pk[:, :, c] += law(times[k], tk[:, :, j], moving[k], moving_rows[k])
+                if gated:
+                    pk *= on[k][None, :, None]
             if k + 1 < n_k:
                 nxt = tk + tk @ step + drive[k]
                 if stateful:
                     nxt += pk @ g_law
                 temp[k + 1] = nxt
         rate = (_each(temp, a_t) + amb[:, None, :, None] * b_amb[None, :, None, :]
-                + (p_const[:, None, :] @ b_pow_t)[None, :, :, :])
+                + on[:, None, :, None] * (p_const[:, None, :] @ b_pow_t)[None, :, :, :])
         if varying is not None:
             rate += _each(varying, b_pow_t)
         if cols:

@@ -22,7 +22,7 @@ import numpy as np
 from ..effects.thermometer import THERMOMETERS
 from ..instrument import Instrument
 from ..noise import rest_window_segments, whiteness_test, window_mean_covariance
-from .design import PreparedRun
+from .columns import PreparedRun
 from .drift_residual import window_means
 
 __all__ = ["unexplained"]

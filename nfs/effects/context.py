@@ -47,6 +47,15 @@ class EffectContext:
     """Auxiliary channels ``aux_*`` by column name."""
     t_ref_c: float = T_REF_C
     """T_ref, the reference temperature of the effect library [degC]."""
+    since_power_on_s: np.ndarray | None = None
+    """t_on, time since the latest power-on [s] (:mod:`nfs.power`); None: ``time_s`` (no
+    power cycle)."""
+
+    @property
+    def on_time_s(self) -> np.ndarray:
+        """t_on [s]: time since the latest power-on, what turn-on effects are functions of
+        (equal to ``time_s`` in a run without power cycles)."""
+        return self.time_s if self.since_power_on_s is None else self.since_power_on_s
 
     def _index(self, node: str) -> int:
         try:

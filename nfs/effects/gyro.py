@@ -145,14 +145,17 @@ def shupe_stress(ctx: EffectContext, *, k_m: float, c_m: float) -> np.ndarray:
     Parameter("a", "deg/h", "amplitude at power-on"),
     Parameter("tau", "s", "time constant")])
 def turn_on_transient(ctx: EffectContext, *, a: float, tau: float) -> np.ndarray:
-    """Electronics turn-on transient: a exp(-t / tau) [deg/h] from power-on.
+    """Electronics turn-on transient: a exp(-t_on / tau) [deg/h] from power-on.
+
+    t_on is the time since the latest power-on (:attr:`EffectContext.on_time_s`): a warm
+    restart (a power cycle, :mod:`nfs.power`) starts the transient again at full amplitude.
 
     a [deg/h] 0.005-0.05, tau [s] 60-300 (docs/physics.md section 3, est.); IEEE Std 952-2020
     defines turn-on behaviour as warm-up time (clause 9 in its test procedure list).
     """
     if tau <= 0:
         raise EffectError(f"turn_on_transient: tau must be > 0 s, got {tau}")
-    return a * np.exp(-ctx.time_s / tau)
+    return a * np.exp(-ctx.on_time_s / tau)
 
 
 @register_effect("aux_linear", kind="gyro", target="channel", parameters=[

@@ -16,8 +16,8 @@ import dataclasses
 import numpy as np
 import pytest
 
-from nfs.diagnose.acc_design import model_acc_paths, prepare_acc
-from nfs.diagnose.design import prepare_runs
+from nfs.diagnose.acc_columns import model_acc_paths, prepare_acc
+from nfs.diagnose.columns import prepare_runs
 from nfs.diagnose.candidates import candidates
 from nfs.diagnose.missing_effect import diagnose
 from nfs.diagnose.stats import clustered_fit, run_grams

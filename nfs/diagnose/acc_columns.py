@@ -92,7 +92,7 @@ def prepare_acc(inst: Instrument, runs: Sequence[Run], contexts: Sequence[Any],
                 decimate_s: float, axis: str) -> list[AccRun] | None:
     """Every run on the ``axis`` accelerometer channel (module docstring); None when a run
     lacks the column.  ``contexts``: the effect context of each run (the drift preparation's,
-    :func:`nfs.diagnose.design.prepare_runs`)."""
+    :func:`nfs.diagnose.columns.prepare_runs`)."""
     col = acc_channel(axis)
     if not all(col in r.columns for r in runs):
         return None
