@@ -129,7 +129,14 @@ def cmd_diagnose(args) -> int:
             sig += f" (explained by {row['explained_by']})"
         print(f"| {i} | {row['effect']} | {row['target'] or ''} | {row['channel']} | {sig} | "
               f"{row['cv_rms_before']:.4g} | {row['cv_rms_after']:.4g} | {coef} |")
-    print(d.verdict)
+    settled = None
+    if d.answer.kind == "tie" and not args.no_decide:
+        from ..design.decide import settle_tie
+        if not args.quiet:
+            print("a tie: fitting each explanation and putting them to the runs...",
+                  file=sys.stderr)
+        settled = settle_tie(d.to_dict(), inst, runs, start_state=start_model(args))
+    print(d.verdict if settled is None else settled.answer.text)
     w = d.unexplained["ljung_box"]
     what = "against the gyro noise model" if w["whitened"] else "(plain: the model has no noise)"
     print(f"residual {what}: Ljung-Box p = {w['p_value']:.2g}, variance ratio "
@@ -147,5 +154,12 @@ def cmd_diagnose(args) -> int:
         from ..io.provenance import output_provenance
         doc = {**d.to_dict(), "provenance": output_provenance(
             instrument=inst, runs=runs, seeds={"bootstrap": args.seed})}
+        if settled is not None:
+            # the one answer: the tie put to the runs (the diagnosis's own tie stays in
+            # "settlement" for nfs design --diagnosis)
+            doc["settlement"] = settled.to_dict()
+            doc["tie"] = doc["answer"]
+            doc["answer"] = settled.answer.to_dict()
+            doc["verdict"] = settled.answer.text
         atomic_write_text(args.json, json.dumps(doc, indent=1, default=json_number) + "\n")
     return 0

@@ -10,6 +10,7 @@ from .common import FEATURES_MODE_HELP
 from .compensation import cmd_compensate, cmd_table, cmd_train
 from .experiment import (cmd_effects, cmd_init, cmd_northfind, cmd_preset, cmd_simulate,
                          cmd_sweep)
+from .design import cmd_design
 from .measured import cmd_compare, cmd_diagnose, cmd_fit
 
 __all__ = ["build_parser", "check_options"]
@@ -250,12 +251,50 @@ def build_parser() -> argparse.ArgumentParser:
                     help="node temperatures the drift candidates are evaluated on: estimated "
                          "from the measured thermometers through the model's network "
                          "(smoothed, default) or the model's open-loop solution (model)")
+    dg.add_argument("--no-decide", action="store_true",
+                    help="on a tie, do not fit the tied explanations and put them to the "
+                         "runs by their likelihood ratio (nfs.design.decide)")
     dg.add_argument("--no-structure", action="store_true",
                     help="skip setting the model's thermal structure against generic "
                          "alternatives (one more node, a free link, a moved thermometer)")
     dg.add_argument("-q", "--quiet", action="store_true",
                     help="no progress line on standard error")
     dg.set_defaults(func=cmd_diagnose)
+
+    ds = sub.add_parser("design", help="the run that would tell rival explanations apart",
+                        description="Fit each rival explanation (a diagnosis's tie, or named "
+                                    "with --rivals) to the runs, then search start "
+                                    "temperatures, power cycles, chamber ramps and run "
+                                    "lengths for the cheapest run (chamber hours) whose "
+                                    "predictions under the rivals stand --margin noise "
+                                    "standard deviations apart. Writes DIR/scenario.toml "
+                                    "(the run, for nfs simulate and nfs table), "
+                                    "DIR/report.md, DIR/design.png and DIR/design.json.")
+    _runs_and_model_arguments(ds)
+    ds.add_argument("-o", "--output", required=True, metavar="DIR", help="output folder")
+    ds.add_argument("--diagnosis", default=None, metavar="JSON",
+                    help="what nfs diagnose --json found on these runs: its tie gives the "
+                         "rivals")
+    ds.add_argument("--rivals", nargs="+", default=None, metavar="RIVAL",
+                    help="the rivals instead: 'model', EFFECT or EFFECT:TARGET, 'a rate term "
+                         "on every node', or a structural alternative's name")
+    ds.add_argument("--margin", type=float, default=3.0,
+                    help="separation every pair must reach, in noise standard deviations "
+                         "(default 3)")
+    ds.add_argument("--draws", type=int, default=8,
+                    help="parameter draws per rival (its fit's uncertainty; default 8)")
+    ds.add_argument("--start-temperatures", type=float, nargs="+", default=None,
+                    metavar="C", help="start temperatures to try (default: the coldest, "
+                                      "middle and hottest of the runs)")
+    ds.add_argument("--soak-h", type=float, default=3.0,
+                    help="chamber hours of the soak before the run (default 3)")
+    ds.add_argument("--max-hours", type=float, default=None,
+                    help="longest chamber time to consider, soak included (default: soak + 4 h)")
+    ds.add_argument("--seed", type=int, default=0, help="seed of the parameter draws")
+    ds.add_argument("--overwrite", action="store_true",
+                    help="write into a folder that holds another command's output")
+    ds.add_argument("-q", "--quiet", action="store_true", help="no progress on standard error")
+    ds.set_defaults(func=cmd_design)
 
     pr = sub.add_parser("preset", help="print a built-in instrument or scenario preset (TOML)",
                         description="Print a built-in instrument or scenario preset, with its "
@@ -319,7 +358,9 @@ def build_parser() -> argparse.ArgumentParser:
 #: the same values are when a file gives them: option attribute -> the file's key.
 _OPTION_RANGES = {"repeats": "repeats", "seed": "seed", "settle_s": "northfind.settle_s",
                   "startup_end_s": "northfind.startup_end_s",
-                  "stable_start_s": "northfind.stable_start_s"}
+                  "stable_start_s": "northfind.stable_start_s", "margin": "design.margin",
+                  "draws": "design.draws", "soak_h": "design.soak_h",
+                  "max_hours": "design.max_hours"}
 
 
 def check_options(args) -> None:
@@ -328,3 +369,5 @@ def check_options(args) -> None:
         value = getattr(args, attr, None)
         if value is not None:
             check(key, value, key=f"--{attr.replace('_', '-')}")
+    for t in getattr(args, "start_temperatures", None) or ():
+        check("design.start_temperatures", t, key="--start-temperatures")

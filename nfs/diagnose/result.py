@@ -189,12 +189,17 @@ class Diagnosis:
             top = own[0]
             lab = label_of(top.effect, top.target)
             if ds is not None and lab in ds.tied:
-                return Answer("tie", (lab, RATE_ALTERNATIVE),
+                heat = (f"heat_source:{self.coil_nodes[-1]}"
+                        if top.effect == "turn_on_transient" and self.coil_nodes else None)
+                also = ("" if heat is None else
+                        f", nor from heat released inside the coil ({heat}), where no "
+                        "thermometer sits")
+                return Answer("tie", (lab, RATE_ALTERNATIVE) + ((heat,) if heat else ()),
                               f"these runs cannot tell apart: {lab} ({_coef(top)}; Holm p "
                               f"{top.holm_p:.2g} against the model) and {RATE_ALTERNATIVE} "
-                              f"(p beyond it {top.beyond_structure_p:.2g}): right after "
-                              "power-on every node's rate decays like a transient; a run "
-                              "that would tell them apart: nfs design")
+                              f"(p beyond it {top.beyond_structure_p:.2g}){also}: right "
+                              "after power-on every node's rate decays like a transient; a "
+                              "run that would tell them apart: nfs design")
             if top.effect == "turn_on_transient" and self.coil_nodes:
                 heat = f"heat_source:{self.coil_nodes[-1]}"
                 return Answer("tie", (lab, heat),

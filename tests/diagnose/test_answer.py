@@ -54,6 +54,11 @@ def test_a_tied_top_is_a_tie_not_an_addition():
     assert d.answer.kind == "tie"
     assert d.answer.labels == ("turn_on_transient", "a rate term on every node")
     assert "add " not in d.verdict and "nfs design" in d.verdict
+    # with coil nodes, heat released inside the coil is the third explanation
+    d = Diagnosis(**{**d.__dict__, "coil_nodes": ("coil_outer", "coil_inner")})
+    assert d.answer.labels == ("turn_on_transient", "a rate term on every node",
+                               "heat_source:coil_inner")
+    assert "heat released inside the coil" in d.verdict
 
 
 def test_an_untied_transient_is_tied_with_heat_inside_the_coil():

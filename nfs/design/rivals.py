@@ -1,0 +1,218 @@
+"""Rival models: the explanations a diagnosis could not tell apart, each fitted to the runs.
+
+A rival is the model with one explanation added and refitted to the runs already taken,
+with its parameter uncertainty (:class:`Rival`).  Explanations, by label:
+
+``model``
+    the model as given (fitted already: ``nfs fit``), its parameters' uncertainty from a
+    refit of its drift stage;
+``EFFECT`` or ``EFFECT:TARGET``
+    a registered effect added and refitted (:func:`nfs.diagnose.apply_candidate`: the drift
+    stage for a gyro or accelerometer effect, both stages for a thermal or thermometer one);
+``a rate term on every node``
+    the discretised Shupe integral, ``shupe_rate`` on every node of the network with its
+    own coefficient, the drift stage refitted (:mod:`nfs.diagnose.drift_structure`);
+a structural alternative's name (``fog thermometer share of electronics``, ``split
+coil_inner``, ``link electronics-coil_inner``, ...)
+    the change of the thermal structure of :func:`nfs.diagnose.structural_alternatives`,
+    its new numbers fitted on the thermometers (:func:`nfs.diagnose.thermal_adequacy`), then
+    both stages of the model refitted on the new structure.
+
+Parameter uncertainty.  Each stage of the refit gives the standard errors and the
+correlation matrix of its free parameters (the linearised posterior,
+:mod:`nfs.diagnose.stage`); :meth:`Rival.draws` samples the parameters from that Gaussian,
+stage by stage, clipped to the fit's box.  A parameter the runs do not determine (infinite
+standard error) is drawn from its prior when it has one, else held.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any, Sequence
+
+import numpy as np
+
+from ..effects import get_effect, make_effect
+from ..errors import EffectError, NfsError
+from ..instrument import Instrument
+from ..run import Run
+from ..diagnose import (apply_candidate, default_free, fit_model, set_params,
+                        structural_alternatives, thermal_adequacy)
+from ..diagnose.columns import model_drift_paths
+from ..diagnose.fit_result import FitResult
+from ..diagnose.result import RATE_ALTERNATIVE
+from ..diagnose.thermal_residual import DEFAULT_START
+
+__all__ = ["Rival", "MODEL", "RATE_ALTERNATIVE", "rival_model", "rival_models",
+           "rivals_from_diagnosis"]
+
+#: The label of the model as given.
+MODEL = "model"
+
+
+@dataclass(frozen=True)
+class Rival:
+    """One explanation of the runs, fitted, with its parameter uncertainty."""
+
+    label: str
+    """The explanation (module docstring)."""
+    description: str
+    """One sentence: what it adds or changes."""
+    instrument: Instrument
+    """The fitted instrument."""
+    fit: FitResult | None
+    """The fit that made it (standard errors, correlations, priors); None: no uncertainty."""
+
+    def draws(self, n: int, rng: np.random.Generator) -> list[Instrument]:
+        """``n`` instruments with parameters drawn from the fit's linearised posterior
+        (module docstring); the fitted instrument itself when there is no fit."""
+        if self.fit is None or n <= 0:
+            return [self.instrument] * max(n, 0)
+        fr = self.fit
+        blocks = []
+        for stage in fr.stages.values():
+            paths = [p for p in stage.free if p in fr.params]
+            if not paths:
+                continue
+            sd = np.array([_width(fr, p) for p in paths])
+            corr = (np.asarray(stage.correlation, dtype=float)
+                    if stage.correlation is not None else np.eye(len(paths)))
+            idx = [list(stage.free).index(p) for p in paths]
+            corr = corr[np.ix_(idx, idx)]
+            # the determined parameters keep their correlations; a prior-only one is drawn
+            # alone (its correlation rows are zero)
+            corr = corr + np.diag(np.where(np.diag(corr) == 0.0, 1.0, 0.0))
+            cov = corr * np.outer(sd, sd)
+            blocks.append((paths, _factor(cov)))
+        out = []
+        for _ in range(n):
+            values: dict[str, float] = {}
+            for paths, chol in blocks:
+                x = chol @ rng.standard_normal(len(paths))
+                for p, dx in zip(paths, x):
+                    lo, hi = fr.bounds.get(p, (-math.inf, math.inf))
+                    values[p] = float(np.clip(fr.params[p] + dx, lo, hi))
+            out.append(set_params(self.instrument, values))
+        return out
+
+    def to_dict(self) -> dict[str, Any]:
+        """A JSON-ready summary: label, description, fitted parameters and errors."""
+        fr = self.fit
+        return {"label": self.label, "description": self.description,
+                "instrument": self.instrument.name,
+                "params": {} if fr is None else {p: float(v) for p, v in fr.params.items()},
+                "stderr": {} if fr is None else {p: (float(v) if math.isfinite(v) else None)
+                                                 for p, v in fr.stderr.items()}}
+
+
+def _width(fr: FitResult, path: str) -> float:
+    """The standard deviation a draw takes for ``path``: its standard error, else its
+    prior width, else 0 (held)."""
+    se = fr.stderr.get(path, math.inf)
+    if math.isfinite(se):
+        return float(se)
+    prior = fr.prior_sigma.get(path, math.inf)
+    return float(prior) if math.isfinite(prior) else 0.0
+
+
+def _factor(cov: np.ndarray) -> np.ndarray:
+    """A square root L of a covariance (L L^T = cov), through its eigendecomposition so that a
+    semi-definite one (rounding) is accepted."""
+    w, v = np.linalg.eigh(0.5 * (cov + cov.T))
+    return v * np.sqrt(np.clip(w, 0.0, None))
+
+
+def _rate_rival(inst: Instrument, runs: Sequence[Run], **fit_kw) -> Rival:
+    """``shupe_rate`` on every node with its own coefficient, the drift stage refitted."""
+    added = []
+    have = {e.label for e in inst.effects}
+    for node in inst.network.node_names:
+        e = make_effect("shupe_rate", {"k_s": 0.0, "node": node})
+        if e.label not in have:
+            added.append(e)
+    new = inst.with_effects(list(inst.effects) + added)
+    free = model_drift_paths(inst) + [f"effects.{e.label}.k_s" for e in added]
+    fr = fit_model(new, runs, free=free, stages=("drift",), **fit_kw)
+    return Rival(RATE_ALTERNATIVE, "a Shupe rate term on every node of the network (the "
+                 "discretised Shupe integral), coefficients fitted", fr.instrument, fr)
+
+
+def _structure_rival(inst: Instrument, runs: Sequence[Run], label: str, alt,
+                     **fit_kw) -> Rival:
+    """A structural alternative: its numbers fitted on the thermometers, then both stages."""
+    start_state = fit_kw.get("start_state", DEFAULT_START)
+    ad = thermal_adequacy(inst, runs, alternatives=[alt], start_state=start_state)
+    scored = next((a for a in ad.alternatives if a.name == label), None)
+    changed = scored.instrument if scored is not None else alt.build(alt.start)
+    fr = fit_model(changed, runs, free=default_free(changed), **fit_kw)
+    return Rival(label, alt.description, fr.instrument, fr)
+
+
+def rival_model(inst: Instrument, runs: Sequence[Run], label: str, **fit_kw) -> Rival:
+    """The rival of one explanation ``label`` (module docstring), fitted to ``runs``.
+
+    ``fit_kw`` go to :func:`nfs.diagnose.fit_model` (``start_state``, ``decimate_s``).
+
+    Raises
+    ------
+    NfsError
+        ``label`` names no effect, target or structural alternative of ``inst``; the
+        message lists what it can be.
+    """
+    runs = list(runs)
+    if label == MODEL:
+        fr = fit_model(inst, runs, free=model_drift_paths(inst), stages=("drift",),
+                       **fit_kw)
+        return Rival(MODEL, "the model as given", inst, fr)
+    if label == RATE_ALTERNATIVE:
+        return _rate_rival(inst, runs, **fit_kw)
+    alts = {a.name: a for a in structural_alternatives(inst)}
+    if label in alts:
+        return _structure_rival(inst, runs, label, alts[label], **fit_kw)
+    name, _, target = label.partition(":")
+    try:
+        get_effect(name)
+    except EffectError:
+        raise NfsError(
+            f"rival '{label}' is no explanation nfs design knows: give '{MODEL}', an effect "
+            f"as EFFECT or EFFECT:TARGET, '{RATE_ALTERNATIVE}', or a structural alternative "
+            f"of this model ({', '.join(sorted(alts))})") from None
+    new, fr, _ = apply_candidate(inst, runs, name, target or None, **_apply_kw(fit_kw))
+    return Rival(label, f"adds the effect {label}, refitted", new, fr)
+
+
+def _apply_kw(fit_kw: dict) -> dict:
+    return {k: v for k, v in fit_kw.items() if k in ("decimate_s", "start_state")}
+
+
+def rival_models(inst: Instrument, runs: Sequence[Run], labels: Sequence[str],
+                 **fit_kw) -> list[Rival]:
+    """:func:`rival_model` of each label (at least two, all different)."""
+    labels = list(labels)
+    if len(labels) < 2:
+        raise NfsError(f"a design needs at least two rivals, got {len(labels)}: "
+                       + (", ".join(labels) or "(none)"))
+    if len(set(labels)) != len(labels):
+        raise NfsError("the rivals must differ; got " + ", ".join(labels))
+    return [rival_model(inst, runs, lab, **fit_kw) for lab in labels]
+
+
+def rivals_from_diagnosis(diagnosis: dict[str, Any]) -> list[str]:
+    """The labels a diagnosis (``diagnosis.json`` of ``nfs diagnose``, or
+    :meth:`nfs.diagnose.Diagnosis.to_dict`) could not tell apart.
+
+    A tie gives its two explanations (the diagnosis's own tie, ``tie``, when ``nfs
+    diagnose`` went on to decide it); an answer that names one effect gives that effect
+    against the model as given (is the effect there at all?).  Anything else has nothing to
+    decide: :class:`~nfs.errors.NfsError` saying so.
+    """
+    answer = (diagnosis or {}).get("tie") or (diagnosis or {}).get("answer") or {}
+    kind, labels = answer.get("kind"), list(answer.get("labels") or ())
+    if kind == "tie" and len(labels) >= 2:
+        return labels
+    if kind == "add" and labels:
+        return [MODEL, labels[0]]
+    raise NfsError(f"the diagnosis ({kind or 'no answer'}) leaves no tie to decide: "
+                   f"{answer.get('text', '')}".rstrip(": ")
+                   + "; name the rivals with --rivals A B")
