@@ -71,6 +71,11 @@ def cmd_diagnose(args) -> int:
     from ..scoring.intervals import json_number
     from .. import load_instrument, read_runs
     inst = load_instrument(args.model)
+    if args.rivals is not None and len(args.rivals) < 2:
+        raise NfsError(f"--rivals: a decision needs at least two explanations, got "
+                       f"{len(args.rivals)}")
+    if args.rivals is not None and args.no_decide:
+        raise NfsError("--rivals asks for a decision, --no-decide refuses one: give one")
     if args.apply and args.output is None:
         raise NfsError("--apply needs -o FILE for the new model")
     output_file(args.output, "-o", args.overwrite)
@@ -130,12 +135,13 @@ def cmd_diagnose(args) -> int:
         print(f"| {i} | {row['effect']} | {row['target'] or ''} | {row['channel']} | {sig} | "
               f"{row['cv_rms_before']:.4g} | {row['cv_rms_after']:.4g} | {coef} |")
     settled = None
-    if d.answer.kind == "tie" and not args.no_decide:
+    if (d.answer.kind == "tie" or args.rivals) and not args.no_decide:
         from ..design.decide import settle_tie
         if not args.quiet:
-            print("a tie: fitting each explanation and putting them to the runs...",
-                  file=sys.stderr)
-        settled = settle_tie(d.to_dict(), inst, runs, start_state=start_model(args))
+            print(f"{'a tie: ' if not args.rivals else ''}fitting each explanation and "
+                  "putting them to the runs...", file=sys.stderr)
+        settled = settle_tie(d.to_dict(), inst, runs, labels=args.rivals,
+                             start_state=start_model(args))
     print(d.verdict if settled is None else settled.answer.text)
     w = d.unexplained["ljung_box"]
     what = "against the gyro noise model" if w["whitened"] else "(plain: the model has no noise)"

@@ -251,6 +251,10 @@ def build_parser() -> argparse.ArgumentParser:
                     help="node temperatures the drift candidates are evaluated on: estimated "
                          "from the measured thermometers through the model's network "
                          "(smoothed, default) or the model's open-loop solution (model)")
+    dg.add_argument("--rivals", nargs="+", default=None, metavar="RIVAL",
+                    help="put these explanations to the runs (the rivals an nfs design was "
+                         "made for, after its run was added): 'model', EFFECT[:TARGET], 'a "
+                         "rate term on every node' or a structural alternative's name")
     dg.add_argument("--no-decide", action="store_true",
                     help="on a tie, do not fit the tied explanations and put them to the "
                          "runs by their likelihood ratio (nfs.design.decide)")

@@ -211,17 +211,25 @@ class Settlement:
                 "rivals": [r.to_dict() for r in self.rivals]}
 
 
-def settle_tie(diagnosis: dict, inst: Instrument, runs: Sequence[Run], **fit_kw
-               ) -> Settlement | None:
+def settle_tie(diagnosis: dict, inst: Instrument, runs: Sequence[Run], *,
+               labels: Sequence[str] | None = None, **fit_kw) -> Settlement | None:
     """Put a diagnosis's tie (``diagnosis``: :meth:`nfs.diagnose.Diagnosis.to_dict`) to the
     runs: fit each tied explanation (:func:`nfs.design.rivals.rival_models`) and decide
     (:func:`decide`).  A rival that wins every pair it is in gives the answer ``add`` it,
     with its coefficients' 95 % intervals; otherwise the tie stands, with the weakest
-    pair's likelihood ratio.  None when the diagnosis is no tie."""
+    pair's likelihood ratio.  None when the diagnosis is no tie.
+
+    ``labels``: the explanations to put to the runs instead of the tie's (the rivals a run
+    was designed for, :func:`nfs.design.design_experiment`: after that run, the diagnosis
+    may tie other candidates, but the question the run was made to answer is theirs); the
+    diagnosis then need not be a tie.
+    """
     answer = (diagnosis or {}).get("answer") or {}
-    if answer.get("kind") != "tie":
-        return None
-    labels = rivals_from_diagnosis(diagnosis)
+    if labels is None:
+        if answer.get("kind") != "tie":
+            return None
+        labels = rivals_from_diagnosis(diagnosis)
+    labels = list(labels)
     rivals = rival_models(inst, runs, labels, **fit_kw)
     decisions = decide(rivals, runs)
     # the rival that wins every pair it is in (with two rivals: the pair's winner)
@@ -244,6 +252,8 @@ def settle_tie(diagnosis: dict, inst: Instrument, runs: Sequence[Run], **fit_kw
         return Settlement(Answer("add" if win != MODEL else "nothing", (win,), text),
                           tuple(decisions), tuple(rivals), interval)
     d = min(decisions, key=lambda x: abs(x.llr))
-    text = (answer.get("text", "").split("; a run that would")[0]
-            + f"; put to the runs, {d.text}")
+    head = (answer.get("text", "").split("; a run that would")[0]
+            if answer.get("kind") == "tie" else
+            f"these runs cannot tell apart: {', '.join(labels)}")
+    text = head + f"; put to the runs, {d.text}"
     return Settlement(Answer("tie", tuple(labels), text), tuple(decisions), tuple(rivals))

@@ -32,7 +32,7 @@ from .predict import CHANNELS
 from .search import Design
 from .separation import separation
 
-__all__ = ["plot_design", "scenario_toml", "to_markdown", "write_design"]
+__all__ = ["plot_design", "scenario_toml", "to_markdown", "write_design", "decide_command"]
 
 _UNITS = {"drift_dph": "deg/h", "acc_x_g": "g", "acc_y_g": "g", "temp_fog_c": "K",
           "temp_acc_x_c": "K", "temp_acc_y_c": "K"}
@@ -144,9 +144,10 @@ def scenario_toml(design: Design, runs: list[Run], model_path: str | os.PathLike
         f"# Separation (noise standard deviations, the runs taken -> this run): {pairs}.",
         f"# Why: {design.verdict}",
         "#",
-        "# Run it in the chamber with the unit that made the runs taken, add the run to them and",
-        "# fit and diagnose again (nfs fit, nfs diagnose); `nfs simulate` shows what the model",
-        "# predicts it records.",
+        "# Run it in the chamber with the unit that made the runs taken, add the run to them,",
+        "# fit again (nfs fit) and put the rivals to the runs:",
+        f"#   {decide_command(design)}",
+        "# `nfs simulate` shows what the model predicts the run records.",
         f"name = {_q('designed')}",
         f"description = {_q('run designed to separate ' + ' / '.join(r.label for r in design.rivals))}",
         f"instrument = {_q(model)}    # the model the design was made with",
@@ -183,6 +184,12 @@ def scenario_toml(design: Design, runs: list[Run], model_path: str | os.PathLike
     return "\n".join(lines)
 
 
+def decide_command(design: Design) -> str:
+    """The command that puts the design's rivals to the runs once its run is taken."""
+    rivals = " ".join(_q(r.label) if " " in r.label else r.label for r in design.rivals)
+    return f"nfs diagnose DATA... --model FITTED.toml --rivals {rivals}"
+
+
 def _fmt(x: float) -> str:
     return "-" if x is None or not math.isfinite(x) else f"{x:.2f}"
 
@@ -211,7 +218,8 @@ def to_markdown(design: Design) -> str:
     worst = min(design.proposed[k].sigma for k in design.open_pairs)
     right, wrong = decision_rates(worst)
     out += ["", f"After the run, the rivals are put to the runs by their likelihood ratio "
-            f"(`nfs diagnose`, a decision at e^{LAMBDA_NAME:g}): at {worst:.1f} sigma the "
+            f"(`{decide_command(design)}`, a decision at e^{LAMBDA_NAME:g}): at "
+            f"{worst:.1f} sigma the "
             f"run names the right one with probability {right:.2f} and the wrong one with "
             f"{wrong:.2g} (the rest: still a tie).", "",
             "Noise factors (the runs' residual over the sensor noise, per channel): "
