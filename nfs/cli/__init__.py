@@ -9,12 +9,13 @@
     nfs fit DATA... [--model M] -o FITTED.toml       calibrate a model to measured runs
     nfs compare DATA... --model M -o DIR             the model beside the runs
     nfs diagnose DATA... --model M [--apply NAME]    the missing effect, ranked
+    nfs design DATA... --model M --diagnosis D -o DIR   the run that would decide a tie
     nfs preset [NAME]                                print a built-in instrument or scenario
     nfs init DIR                                     a starter scenario and instrument
     nfs effects                                      list the registered physical effects
 
-The commands live in :mod:`nfs.cli.compensation`, :mod:`nfs.cli.experiment` and
-:mod:`nfs.cli.measured`, their arguments in :mod:`nfs.cli.parser`.
+The commands live in :mod:`nfs.cli.compensation`, :mod:`nfs.cli.experiment`,
+:mod:`nfs.cli.measured` and :mod:`nfs.cli.design`, their arguments in :mod:`nfs.cli.parser`.
 """
 
 from __future__ import annotations

@@ -51,11 +51,15 @@ def excess_factors(measured: Sequence[Prediction], preds: Sequence[RivalPredicti
             for m, q, sg in zip(measured, p.mean, sigma):
                 if c not in m.values or c not in q.values:
                     continue
-                r = (m.values[c] - q.values[c]) / np.maximum(sg[c], 1e-300)
-                r = r[np.isfinite(r)]
+                w = 1.0 / np.maximum(sg[c], 1e-300)
+                r = (m.values[c] - q.values[c]) * w
+                ok = np.isfinite(r)
+                r, w = r[ok], w[ok]
                 if r.size < 3:
                     continue
-                r = r - r.mean()
+                # the run's constant projected out in the 1/sigma^2 metric, as the
+                # separation's nuisance is
+                r = r - w * (w @ r) / (w @ w)
                 ss += float(r @ r)
                 lag += float(r[:-1] @ r[1:])
                 n += r.size

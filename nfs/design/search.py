@@ -26,6 +26,7 @@ from typing import Callable, Sequence
 import numpy as np
 
 from ..experiment import RunConditions, conditions_from_run
+from ..ranges import TEMPERATURE_RANGE_C
 from ..run import Run
 from .noise_level import excess_factors, measured_numbers, scaled, sensor_sigma
 from .predict import noise_sigma, predict
@@ -208,7 +209,9 @@ def _neighbours(e: Experiment, space: Space, t_range: tuple[float, float]) -> li
         if dt and t_range[0] <= t0 <= t_range[1]:
             kw = {}
             if e.event == "ramp":
-                kw["ramp_to_c"] = e.ramp_to_c + dt
+                kw["ramp_to_c"] = float(np.clip(e.ramp_to_c + dt, *TEMPERATURE_RANGE_C))
+                if kw["ramp_to_c"] == t0:
+                    continue
             out.append(replace(e, start_temperature_c=t0, **kw))
     for f in (0.5, 1.5):
         ev = e.event_s * f
@@ -219,10 +222,12 @@ def _neighbours(e: Experiment, space: Space, t_range: tuple[float, float]) -> li
                 out.append(replace(e, power_off_s=e.power_off_s * f))
     if e.event == "ramp":
         for f in (0.5, 1.5):
-            out.append(replace(e, ramp_to_c=e.start_temperature_c
-                               + (e.ramp_to_c - e.start_temperature_c) * f))
+            to = float(np.clip(e.start_temperature_c + (e.ramp_to_c - e.start_temperature_c)
+                               * f, *TEMPERATURE_RANGE_C))
+            if to != e.start_temperature_c:
+                out.append(replace(e, ramp_to_c=to))
     return [x.with_duration(space.max_duration_s) for x in out
-            if x.event_end_s < space.max_duration_s]
+            if x.event_end_s < space.max_duration_s and space.durations_s(x).size]
 
 
 def design_experiment(rivals: Sequence[Rival], runs: Sequence[Run], base: RunConditions,

@@ -9,8 +9,10 @@ With C the nuisance directions every rival re-fits freely on a new run (a consta
 channel and run: a turn-on bias, a thermometer offset, an accelerometer bias), the
 separation is the Mahalanobis distance of the difference d = mu_a - mu_b,
 
-    D = d^T P^T (S + V_a + V_b)^-1 P d,         P: the projection out of span(C) in the
-                                                 metric S^-1,
+    D = d^T P^T (S + P V P^T)^-1 P d,     V = V_a + V_b, P: the projection out of span(C)
+                                           in the metric S^-1,
+
+(the nuisance constants integrated out under a flat prior),
 
 computed whitened (z = d / sigma, M = [U_a U_b] / sigma, both projected) with the
 Woodbury identity: D = |z|^2 - (M^T z)^T (I + M^T M)^-1 (M^T z).  It is the

@@ -80,6 +80,13 @@ class Experiment:
             raise NfsError("experiment: power cycles must start every_s > power_off_s apart")
         if self.event == "ramp" and (self.ramp_to_c is None or not self.rate_c_per_min > 0):
             raise NfsError("experiment: a ramp needs ramp_to_c and rate_c_per_min > 0")
+        if self.event == "ramp" and not lo <= self.ramp_to_c <= hi:
+            raise NfsError(f"experiment: a ramp to {self.ramp_to_c:g} C leaves the chamber's "
+                           f"{lo:g} to {hi:g} C")
+        if not self.duration_s > 0:
+            raise NfsError(f"experiment: duration_s must be > 0, got {self.duration_s:g}")
+        if self.event == "power_off" and (isinstance(self.cycles, bool) or self.cycles < 1):
+            raise NfsError(f"experiment: cycles must be >= 1, got {self.cycles!r}")
 
     @property
     def event_end_s(self) -> float:
@@ -214,17 +221,18 @@ class Space:
                 for n in self.cycles:
                     if n > 1 and off >= self.every_s:
                         continue
-                    e = Experiment(t0, longest, "power_off", self.event_s, off, cycles=n,
-                                   every_s=self.every_s, soak_h=self.soak_h)
-                    if e.event_end_s < longest:
-                        out.append(e)
+                    out.append(Experiment(t0, longest, "power_off", self.event_s, off,
+                                          cycles=n, every_s=self.every_s,
+                                          soak_h=self.soak_h))
             for dk in self.ramps_k:
                 to = float(np.clip(t0 + dk, lo, hi))
                 if to != t0:
                     out.append(Experiment(t0, longest, "ramp", self.event_s, ramp_to_c=to,
                                           rate_c_per_min=self.rate_c_per_min,
                                           soak_h=self.soak_h))
-        return out
+        # an event that ends after the longest run, or leaves no run length to try, is
+        # no experiment of this space
+        return [e for e in out if e.event_end_s < longest and self.durations_s(e).size]
 
 
 def default_space(runs: Sequence[Run], *, soak_h: float = SOAK_H) -> Space:
