@@ -38,6 +38,7 @@ def cmd_design(args) -> int:
     from .. import load_instrument, read_runs
     from ..design import design_experiment, rival_models
     from ..design.report import write_design
+    from ..design.rivals import check_label
     from ..design.space import Space, base_conditions, default_space
     from ..io.provenance import output_provenance
     if args.rivals is not None and args.diagnosis is not None:
@@ -48,6 +49,8 @@ def cmd_design(args) -> int:
     labels = _rival_labels(args)
     inst = load_instrument(args.model)
     runs = read_runs(args.data)
+    for label in labels:                # what each rival is, before any work
+        check_label(inst, runs, label)
     folder = output_folder(args, "design")
     space = default_space(runs, soak_h=args.soak_h)
     if args.start_temperatures is not None:

@@ -76,11 +76,17 @@ def cmd_diagnose(args) -> int:
                        f"{len(args.rivals)}")
     if args.rivals is not None and args.no_decide:
         raise NfsError("--rivals asks for a decision, --no-decide refuses one: give one")
+    if args.rivals is not None and args.apply:
+        raise NfsError("--rivals puts explanations to the runs, --apply adds one: give one")
     if args.apply and args.output is None:
         raise NfsError("--apply needs -o FILE for the new model")
     output_file(args.output, "-o", args.overwrite)
     output_file(args.json, "--json", args.overwrite)
     runs = read_runs(args.data)
+    if args.rivals:
+        from ..design.rivals import check_label
+        for label in args.rivals:          # before the diagnosis's work
+            check_label(inst, runs, label)
     if args.apply:
         name, _, target = args.apply.partition(":")
         get_effect(name)  # an unknown name fails before any work

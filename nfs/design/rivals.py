@@ -39,12 +39,13 @@ from ..instrument import Instrument
 from ..run import Run
 from ..diagnose import (apply_candidate, default_free, fit_model, set_params,
                         structural_alternatives, thermal_adequacy)
+from ..diagnose.candidates import targets
 from ..diagnose.columns import model_drift_paths
 from ..diagnose.fit_result import FitResult
 from ..diagnose.result import RATE_ALTERNATIVE
 from ..diagnose.thermal_residual import DEFAULT_START
 
-__all__ = ["Rival", "MODEL", "RATE_ALTERNATIVE", "rival_model", "rival_models",
+__all__ = ["Rival", "MODEL", "RATE_ALTERNATIVE", "check_label", "rival_model", "rival_models",
            "rivals_from_diagnosis"]
 
 #: The label of the model as given.
@@ -149,6 +150,32 @@ def _structure_rival(inst: Instrument, runs: Sequence[Run], label: str, alt,
     return Rival(label, alt.description, fr.instrument, fr)
 
 
+def check_label(inst: Instrument, runs: Sequence[Run], label: str) -> None:
+    """Raise :class:`~nfs.errors.NfsError` naming what ``label`` can be, before any fit,
+    when it is no explanation of ``inst`` on ``runs`` (module docstring)."""
+    if label in (MODEL, RATE_ALTERNATIVE):
+        return
+    alts = [a.name for a in structural_alternatives(inst)]
+    if label in alts:
+        return
+    name, _, target = label.partition(":")
+    try:
+        spec = get_effect(name)
+    except EffectError:
+        raise NfsError(
+            f"rival '{label}' is no explanation nfs design knows: give '{MODEL}', an effect "
+            f"as EFFECT or EFFECT:TARGET (nfs effects), '{RATE_ALTERNATIVE}', or a "
+            f"structural alternative of this model ({', '.join(sorted(alts))})") from None
+    valid = targets(spec, inst, runs)
+    if (target or None) not in valid:
+        shown = ", ".join("(none)" if v is None else v for v in valid) or "(none)"
+        raise NfsError(f"rival '{label}': effect '{name}' has no target "
+                       f"'{target or '(none)'}' on this model; valid targets: {shown}")
+    if any(e.name == name and e.target_value == (target or None) for e in inst.effects):
+        raise NfsError(f"rival '{label}': the model has it already (a rival adds an "
+                       f"explanation the model lacks; '{MODEL}' is the model as it is)")
+
+
 def rival_model(inst: Instrument, runs: Sequence[Run], label: str, **fit_kw) -> Rival:
     """The rival of one explanation ``label`` (module docstring), fitted to ``runs``.
 
@@ -195,6 +222,8 @@ def rival_models(inst: Instrument, runs: Sequence[Run], labels: Sequence[str],
                        + (", ".join(labels) or "(none)"))
     if len(set(labels)) != len(labels):
         raise NfsError("the rivals must differ; got " + ", ".join(labels))
+    for lab in labels:            # every label checked before the first fit
+        check_label(inst, runs, lab)
     return [rival_model(inst, runs, lab, **fit_kw) for lab in labels]
 
 
