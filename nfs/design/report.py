@@ -133,7 +133,8 @@ def scenario_toml(design: Design, runs: list[Run], model_path: str | os.PathLike
     steps = ",\n    ".join("{ " + ", ".join(f"{k} = {float(v)!r}" for k, v in s.items()) + " }"
                            for s in e.program())
     fs = m.sample_rate_hz or 1.0
-    cycle = len(pos) * (float(m.dwell_s or 1.0) + float(m.move_s or 0.0))
+    dwell = float(e.dwell_s if e.dwell_s is not None else (m.dwell_s or 1.0))
+    cycle = len(pos) * (dwell + float(m.move_s or 0.0))
     # the start-up stage: the first half of the whole cycles (at least one)
     half = cycle * max(1, int(e.duration_s // cycle) // 2)
     lines = [
@@ -159,10 +160,10 @@ def scenario_toml(design: Design, runs: list[Run], model_path: str | os.PathLike
         f"latitude_deg = {float(m.latitude_deg)!r}",
         f"true_heading_deg = {float(m.true_heading_deg or 0.0)!r}",
         "",
-        "[schedule]                          # the schedule of the runs taken",
+        "[schedule]                          # the positions of the runs taken",
         f"positions_deg = {[float(p) for p in pos]!r}",
         'order = "sequential"',
-        f"dwell_s = {float(m.dwell_s or 1.0)!r}",
+        f"dwell_s = {dwell!r}",
         f"move_s = {float(m.move_s or 0.0)!r}",
         "",
         "[northfind]",

@@ -7,8 +7,8 @@ is computed on every prefix of the record (a run of length T is the first T of a
 one): the experiment's cost is the chamber hours of the shortest prefix on which the
 *worst* pair reaches the margin.  The cheapest experiment of the grid is then refined
 locally: its continuous knobs (T0 within the runs' range, the off time of a power cycle,
-the time of the event, the size of a ramp) are moved half a grid step each way, for two
-rounds, and a neighbour replaces it when it is cheaper (or as cheap and more separating).
+the time of the event, the size of a ramp) are moved half a grid step each way, the
+turntable's dwell and a ramp's rate halved and doubled, for two rounds, and a neighbour replaces it when it is cheaper (or as cheap and more separating).
 When no experiment reaches the margin, the design says so and proposes the one that
 separates the worst pair best at the longest record.
 
@@ -29,7 +29,7 @@ from ..experiment import RunConditions, conditions_from_run
 from ..ranges import TEMPERATURE_RANGE_C
 from ..run import Run
 from .noise_level import excess_factors, measured_numbers, scaled, sensor_sigma
-from .predict import noise_sigma, predict
+from .predict import PREDICT_STEP_S, noise_sigma, predict
 from .rivals import Rival
 from .separation import MARGIN_SIGMA, RivalPrediction, Separation, separation
 from .space import Experiment, Space
@@ -199,8 +199,15 @@ def _better(a: Trial, b: Trial | None) -> bool:
     return a.worst_sigma > b.worst_sigma
 
 
-def _neighbours(e: Experiment, space: Space, t_range: tuple[float, float]) -> list[Experiment]:
-    """Half a grid step each way along every continuous knob of ``e`` (module docstring)."""
+#: Dwells the refinement tries [s]: long enough for a dwell mean, short enough for a
+#: north-finding cycle within minutes (docs/physics.md section 5: 60-180 s).
+MIN_DWELL_S, MAX_DWELL_S = 30.0, 600.0
+
+
+def _neighbours(e: Experiment, space: Space, t_range: tuple[float, float],
+                base_dwell_s: float) -> list[Experiment]:
+    """Half a grid step each way along every continuous knob of ``e`` (module docstring),
+    and the turntable's dwell halved and doubled, a ramp's rate too."""
     out = []
     temps = sorted(space.start_temperatures_c)
     step_t = (max(temps) - min(temps)) / max(len(temps) - 1, 1) / 2.0 if len(temps) > 1 else 0
@@ -220,7 +227,15 @@ def _neighbours(e: Experiment, space: Space, t_range: tuple[float, float]) -> li
         for f in (0.5, 1.5):
             if e.cycles == 1 or e.power_off_s * f < e.every_s:
                 out.append(replace(e, power_off_s=e.power_off_s * f))
+    for f in (0.5, 2.0):              # the turntable's dwell (the schedule's own first)
+        # in whole steps of the prediction's clock, so that it stays coarse
+        dwell = PREDICT_STEP_S * round((base_dwell_s if e.dwell_s is None else e.dwell_s)
+                                       * f / PREDICT_STEP_S)
+        if MIN_DWELL_S <= dwell <= MAX_DWELL_S:
+            out.append(replace(e, dwell_s=dwell))
     if e.event == "ramp":
+        for f in (0.5, 2.0):
+            out.append(replace(e, rate_c_per_min=e.rate_c_per_min * f))
         for f in (0.5, 1.5):
             to = float(np.clip(e.start_temperature_c + (e.ramp_to_c - e.start_temperature_c)
                                * f, *TEMPERATURE_RANGE_C))
@@ -273,7 +288,7 @@ def design_experiment(rivals: Sequence[Rival], runs: Sequence[Run], base: RunCon
     t_range = (min(space.start_temperatures_c), max(space.start_temperatures_c))
     for _ in range(refine_rounds):
         improved = False
-        for exp in _neighbours(best.experiment, space, t_range):
+        for exp in _neighbours(best.experiment, space, t_range, base.schedule.dwell_s):
             if exp.with_duration(space.max_duration_s) in cache:
                 continue
             if progress is not None:

@@ -65,6 +65,8 @@ class Experiment:
     """Ramp rate [K/min]."""
     soak_h: float = SOAK_H
     """Chamber hours of the soak before power-on."""
+    dwell_s: float | None = None
+    """Time at each turntable position [s]; None: the schedule of the runs taken."""
 
     def __post_init__(self) -> None:
         lo, hi = TEMPERATURE_RANGE_C
@@ -85,6 +87,8 @@ class Experiment:
                            f"{lo:g} to {hi:g} C")
         if not self.duration_s > 0:
             raise NfsError(f"experiment: duration_s must be > 0, got {self.duration_s:g}")
+        if self.dwell_s is not None and not self.dwell_s > 0:
+            raise NfsError(f"experiment: dwell_s must be > 0, got {self.dwell_s:g}")
         if self.event == "power_off" and (isinstance(self.cycles, bool) or self.cycles < 1):
             raise NfsError(f"experiment: cycles must be >= 1, got {self.cycles!r}")
 
@@ -127,7 +131,8 @@ class Experiment:
     def describe(self) -> str:
         """The run in words."""
         head = (f"soak at {self.start_temperature_c:g} C, power on, north-find for "
-                f"{self.duration_s / 3600.0:.3g} h")
+                f"{self.duration_s / 3600.0:.3g} h"
+                + ("" if self.dwell_s is None else f" with dwells of {self.dwell_s:g} s"))
         if self.event == "power_off":
             off = (f"{self.power_off_s / 60.0:.3g} min" if self.power_off_s >= 60.0
                    else f"{self.power_off_s:.0f} s")
@@ -145,15 +150,20 @@ class Experiment:
     def with_duration(self, duration_s: float) -> "Experiment":
         return replace(self, duration_s=float(duration_s))
 
+    def schedule(self, base: Schedule) -> Schedule:
+        """The turntable schedule: ``base`` with this experiment's dwell."""
+        return base if self.dwell_s is None else replace(base, dwell_s=float(self.dwell_s))
+
     def conditions(self, base: RunConditions, name: str = "designed") -> RunConditions:
         """The run's :class:`~nfs.experiment.RunConditions`: ``base``'s site, heading,
-        schedule and sample rate, this experiment's chamber and power."""
+        schedule (this experiment's dwell) and sample rate, this experiment's chamber and
+        power."""
         prog = parse_program(self.program(), file=None, key="design.program")
         fs = base.sample_rate_hz
         return RunConditions(
             name=name, start_temperature_c=self.start_temperature_c,
             latitude_deg=base.latitude_deg, true_heading_deg=base.true_heading_deg,
-            schedule=base.schedule, duration_s=float(self.duration_s), sample_rate_hz=fs,
+            schedule=self.schedule(base.schedule), duration_s=float(self.duration_s), sample_rate_hz=fs,
             seed=base.seed, chamber_c=prog.ambient(self.start_temperature_c, 1.0 / fs),
             power_off_s=prog.power_off_spans_s(self.start_temperature_c, 1.0 / fs))
 
@@ -169,6 +179,8 @@ class Experiment:
                        every_s=self.every_s)
         if self.event == "ramp":
             out.update(ramp_to_c=self.ramp_to_c, rate_c_per_min=self.rate_c_per_min)
+        if self.dwell_s is not None:
+            out["dwell_s"] = self.dwell_s
         return out
 
 
@@ -198,6 +210,9 @@ class Space:
     min_duration_s: float = 0.0
     """The shortest record [s]: two north-finding cycles of the schedule, so that the run
     has a start-up and a later stage to tabulate (``nfs table``)."""
+    schedule: Schedule | None = None
+    """The schedule of the runs taken; with it, a record holds at least two north-finding
+    cycles of the experiment's own dwell too."""
     soak_h: float = SOAK_H
     """Soak hours charged to every run."""
 
@@ -206,8 +221,11 @@ class Space:
         (plus a step: a run must see the unit after it) up to the longest."""
         end = exp.event_end_s
         first = self.duration_step_s * (math.floor(end / self.duration_step_s) + 1)
-        first = max(first, self.duration_step_s * math.ceil(self.min_duration_s
-                                                             / self.duration_step_s - 1e-9))
+        shortest = self.min_duration_s
+        if self.schedule is not None:
+            shortest = max(shortest, 2.0 * exp.schedule(self.schedule).cycle_s)
+        first = max(first, self.duration_step_s * math.ceil(shortest / self.duration_step_s
+                                                             - 1e-9))
         return np.arange(first, self.max_duration_s + 1e-9, self.duration_step_s)
 
     def experiments(self) -> list[Experiment]:
@@ -245,8 +263,9 @@ def default_space(runs: Sequence[Run], *, soak_h: float = SOAK_H) -> Space:
         raise NfsError("a design needs the runs already taken (none given)")
     picks = [t0s[0], t0s[len(t0s) // 2], t0s[-1]]
     temps = tuple(dict.fromkeys(round(t, 6) for t in picks))
+    schedule = base_conditions(runs).schedule
     return Space(start_temperatures_c=temps, soak_h=soak_h,
-                 min_duration_s=2.0 * base_conditions(runs).schedule.cycle_s)
+                 min_duration_s=2.0 * schedule.cycle_s, schedule=schedule)
 
 
 def base_conditions(runs: Sequence[Run]) -> RunConditions:

@@ -238,7 +238,7 @@ def test_every_neighbour_the_search_tries_is_runnable():
     lo, hi = TEMPERATURE_RANGE_C
     sp = Space(start_temperatures_c=(hi - 40.0, hi - 10.0))
     best = Experiment(hi - 10.0, sp.max_duration_s, "ramp", 3600.0, ramp_to_c=hi)
-    for e in _neighbours(best, sp, (hi - 40.0, hi - 10.0)):
+    for e in _neighbours(best, sp, (hi - 40.0, hi - 10.0), 150.0):
         e.conditions(_base())
 
 
