@@ -187,10 +187,15 @@ def plot_drift_vs_compensated(study, run_index: int | None = None, methods=None,
         methods = tuple(why)
     methods = [m for m in methods if m in study.results]
     run = sims[run_index].run
-    sep = separate_drift(run, cutoff_period_s=study.settings.cutoff_period_s)
+    # what the study scored: its separation of the run and each row's prediction (a study
+    # made before they were kept: computed again)
+    sep = (study.test_separations[run_index] if study.test_separations else
+           separate_drift(run, cutoff_period_s=study.settings.cutoff_period_s))
     t_min = np.asarray(run.columns["time_s"]) / 60.0
     raw = np.where(np.asarray(sep.moving, dtype=bool), np.nan, sep.raw_drift_dph)
-    preds = {m: study.results[m].compensator.predict_drift(run) for m in methods}
+    preds = {m: (study.results[m].predicted_drift_dph[run_index]
+                 if study.results[m].predicted_drift_dph else
+                 study.results[m].compensator.predict_drift(run)) for m in methods}
     fig = Figure(figsize=(11.0, 6.4), dpi=110, layout="constrained")
     ax1, ax2 = fig.subplots(2, 1, sharex=True)
     ax1.plot(t_min, raw, color="0.8", lw=0.5,

@@ -105,6 +105,8 @@ class MethodResult:
     """Drift residual statistics."""
     seeds: tuple[SeedResult, ...] = ()
     """Every training of the method, by seed (one for an untuned method or a grid)."""
+    predicted_drift_dph: tuple[np.ndarray, ...] = ()
+    """The drift it predicted for each test run, the one the table scored [deg/h]."""
 
     @property
     def seed_means_deg(self) -> tuple[float, ...]:
@@ -128,6 +130,9 @@ class CompensationStudy:
     """Method name -> result, in table order."""
     uncompensated_drift: DriftRow | None = None
     """STD of the separated start-up drift of the test runs."""
+    test_separations: tuple[Any, ...] = ()
+    """The wavelet separation of each test run (:func:`nfs.denoise.separate_drift`), the
+    target every row is scored against: kept for the report, which draws it."""
 
     def startup_errors(self, method: str) -> list[list[np.ndarray]]:
         """Start-up heading errors [deg] of ``method``'s compensated test runs (a stage row
@@ -268,13 +273,13 @@ def _pooled_within_std(parts) -> float:
 
 
 def _test_drift(runs, cutoff_period_s: float, startup_end_s: float):
-    """Separated drift of each test run on its start-up, non-moving samples."""
+    """Each test run's separation, and its start-up, non-moving samples."""
     out = []
     for run in runs:
         sep = separate_drift(run, cutoff_period_s=cutoff_period_s)
         t = np.asarray(run.columns["time_s"])
         mask = (t < startup_end_s) & ~np.asarray(sep.moving, dtype=bool)
-        out.append((np.asarray(sep.drift_dph), mask))
+        out.append((sep, mask))
     return out
 
 
@@ -359,7 +364,9 @@ def run_study(scenario, settings: CompensationSettings | None = None, *,
     study = CompensationStudy(
         settings=s, test=test, train_runs=train_runs, dataset=data,
         uncompensated_drift=DriftRow("denoised (no compensation)", float("nan"),
-                                     _pooled_within_std([d[m] for d, m in drifts])))
+                                     _pooled_within_std([np.asarray(d.drift_dph)[m]
+                                                         for d, m in drifts])),
+        test_separations=tuple(d for d, _ in drifts))
     # costliest trainings first, so that the workers finish together
     order = sorted(range(len(jobs)), key=lambda j: -jobs[j][0].cost)
     done: dict[int, SeedResult] = {}
@@ -384,13 +391,14 @@ def run_study(scenario, settings: CompensationSettings | None = None, *,
         ranked = sorted(idx, key=lambda j: (done[j].mean_deg, done[j].seed))
         pick = ranked[len(ranked) // 2]                 # the median seed (upper for even)
         comp, nf, preds = fitted[pick]
-        parts = [(d - p)[m] for (d, m), p in zip(drifts, preds)]
+        parts = [(np.asarray(d.drift_dph) - p)[m] for (d, m), p in zip(drifts, preds)]
         res = np.concatenate(parts)
         res = res[np.isfinite(res)]
         study.results[spec.name] = MethodResult(
             compensator=comp, northfind=tuple(nf),
             drift=DriftRow(spec.name, float(np.mean(np.abs(res))), _pooled_within_std(parts)),
-            seeds=tuple(done[j] for j in idx))
+            seeds=tuple(done[j] for j in idx),
+            predicted_drift_dph=tuple(np.asarray(p, dtype=float) for p in preds))
     tick("done")
     return study
 

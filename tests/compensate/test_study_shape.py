@@ -125,3 +125,22 @@ def test_cycle_mode_ssa_svr_on_another_unit():
     table = run_study(load_scenario(FLEET), settings).heading_table()
     c = table.comparison("SSA-SVR", "before")
     assert c.distinguishable and c.difference_deg < 0, c.sentence()
+
+
+def test_the_study_keeps_what_it_scored(study):
+    """The separation of every test run and each row's predicted drift are kept (the report
+    draws them instead of computing them again): the drift row's MAE recomputed from them
+    is the stored one, to rounding."""
+    runs = study.test.simulations
+    assert len(study.test_separations) == len(runs)
+    end = study.test.scenario.northfind.startup_end_s
+    for name, res in study.results.items():
+        assert len(res.predicted_drift_dph) == len(runs)
+        parts = []
+        for sim, sep, pred in zip(runs, study.test_separations, res.predicted_drift_dph):
+            t = np.asarray(sim.run.columns["time_s"])
+            mask = (t < end) & ~np.asarray(sep.moving, dtype=bool)
+            parts.append((np.asarray(sep.drift_dph) - pred)[mask])
+        r = np.concatenate(parts)
+        r = r[np.isfinite(r)]
+        assert np.mean(np.abs(r)) == pytest.approx(res.drift.mae_dph, rel=1e-12), name
