@@ -23,7 +23,13 @@ Figures, all in this process's machine and load:
 - the executor's overhead per cell: (sweep time with 1 worker - the batched loop) / cells
   (the store, the hashing, the table and its bookkeeping);
 - peak memory (max RSS) of a sweep of 100 and of N cells, each in a fresh process with
-  1 worker: flat when the two are close.
+  1 worker: flat when the two are close;
+- the arithmetic floor: the floating-point operations of the thermal march of one start-up
+  (per sample, the n-node state times the step matrix, 2 n^2, and the drive of the chamber
+  and the n node powers through the input matrix, 2 n (n + 1), plus the update, n) at this
+  machine's throughput of a plain NumPy matrix product (two 512 x 512 operands, best of 5):
+  start-ups per second the arithmetic alone would allow, beside those measured, and the
+  goal of 10,000 start-ups in 30 s on 2 cores.
 
 Each sweep writes into a fresh temporary folder, so every cell is computed.
 """
@@ -33,11 +39,14 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import json
+import math
 import resource
 import subprocess
 import sys
 import tempfile
 import time
+
+import numpy as np
 
 from nfs.experiment import simulate_run
 from nfs.studies.scenario_runs import northfind_runs
@@ -102,6 +111,25 @@ def memory_child(cells: int) -> None:
     print(json.dumps({"cells": spec.n_cells, "max_rss_mb": rss_kb / 1024.0}))
 
 
+def matmul_flops_per_s(size: int = 512, repeats: int = 5) -> float:
+    """Throughput of a plain NumPy matrix product on this machine [flop/s] (best of
+    ``repeats``; 2 size^3 operations each)."""
+    rng = np.random.default_rng(0)
+    a, b = rng.standard_normal((size, size)), rng.standard_normal((size, size))
+    best = math.inf
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        a @ b
+        best = min(best, time.perf_counter() - t0)
+    return 2.0 * size ** 3 / best
+
+
+def march_flops(n_nodes: int, n_samples: int) -> float:
+    """Operations of the thermal march of one start-up (module docstring)."""
+    n = n_nodes
+    return n_samples * (2.0 * n * n + 2.0 * n * (n + 1) + n)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--cells", type=int, default=1000, help="start-ups (cells) to sweep")
@@ -131,6 +159,16 @@ def main() -> None:
     print(f"nfs sweep, 2 workers: {t2:.1f} s, {n / t2:.1f} cells/s (workers started apart: a "
           f"4-cell sweep first, {t_warm:.1f} s); speed-up {t1 / t2:.2f}x over 1 worker "
           f"(target >= 1.7x on 2 cores)")
+    sc = load_scenario()
+    n_nodes = len(sc.instrument.network.node_names)
+    n_samples = int(round(sc.run_duration_s(sc.start_temperatures_c[0]) * sc.sample_rate_hz))
+    rate = matmul_flops_per_s()
+    floor = rate / march_flops(n_nodes, n_samples)
+    print(f"arithmetic floor: {march_flops(n_nodes, n_samples) / 1e6:.1f} Mflop per start-up "
+          f"(march of {n_nodes} nodes x {n_samples} samples) at {rate / 1e9:.1f} Gflop/s "
+          f"(NumPy matrix product, one process): {floor:.0f} start-ups/s per core; measured "
+          f"{n / t2:.1f} start-ups/s on 2 workers = {n / t2 / (2 * floor):.2%} of the floor "
+          f"of 2 cores; 10,000 start-ups would take {1e4 * t2 / n:.0f} s (goal <= 30 s)")
     if not args.no_dask:
         try:
             from nfs.sweep import DaskExecutor
