@@ -9,7 +9,7 @@ barely cooled), the run is made (here: simulated from the same unit), and the ri
 put to all the runs.  From the command line::
 
     nfs fit runs/ --model model.toml -o fitted.toml --start soaked
-    nfs diagnose runs/ --model fitted.toml --json diagnosis.json --start soaked
+    nfs diagnose runs/ --model fitted.toml --json diagnosis.json --start soaked --decide
     nfs design runs/ --model fitted.toml --diagnosis diagnosis.json -o design/ --start soaked
     # ... run design/scenario.toml in the chamber, add the run to runs/ ...
     nfs fit runs/ --model model.toml -o fitted2.toml --start soaked
@@ -66,7 +66,7 @@ def main(out_dir: str | Path | None = None) -> dict:
     _nfs("fit", runs, "--model", out / "model.toml", "-o", out / "fitted.toml",
          "--start", "soaked", "--overwrite", "-q")
     _nfs("diagnose", runs, "--model", out / "fitted.toml", "--json", out / "diagnosis.json",
-         "--start", "soaked", "--overwrite", "-q")
+         "--start", "soaked", "--overwrite", "-q", "--decide")
     diag = json.loads((out / "diagnosis.json").read_text(encoding="utf-8"))
     print("1. nfs diagnose:", diag["verdict"])
 

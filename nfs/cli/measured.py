@@ -74,8 +74,6 @@ def cmd_diagnose(args) -> int:
     if args.rivals is not None and len(args.rivals) < 2:
         raise NfsError(f"--rivals: a decision needs at least two explanations, got "
                        f"{len(args.rivals)}")
-    if args.rivals is not None and args.no_decide:
-        raise NfsError("--rivals asks for a decision, --no-decide refuses one: give one")
     if args.rivals is not None and args.apply:
         raise NfsError("--rivals puts explanations to the runs, --apply adds one: give one")
     if args.apply and args.output is None:
@@ -141,7 +139,7 @@ def cmd_diagnose(args) -> int:
         print(f"| {i} | {row['effect']} | {row['target'] or ''} | {row['channel']} | {sig} | "
               f"{row['cv_rms_before']:.4g} | {row['cv_rms_after']:.4g} | {coef} |")
     settled = None
-    if (d.answer.kind == "tie" or args.rivals) and not args.no_decide:
+    if (d.answer.kind == "tie" and args.decide) or args.rivals:
         from ..design.decide import settle_tie
         if not args.quiet:
             print(f"{'a tie: ' if not args.rivals else ''}fitting each explanation and "

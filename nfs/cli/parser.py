@@ -255,9 +255,11 @@ def build_parser() -> argparse.ArgumentParser:
                     help="put these explanations to the runs (the rivals an nfs design was "
                          "made for, after its run was added): 'model', EFFECT[:TARGET], 'a "
                          "rate term on every node' or a structural alternative's name")
-    dg.add_argument("--no-decide", action="store_true",
-                    help="on a tie, do not fit the tied explanations and put them to the "
-                         "runs by their likelihood ratio (nfs.design.decide)")
+    dg.add_argument("--decide", action="store_true",
+                    help="on a tie, fit the tied explanations and put them to the runs by "
+                         "their likelihood ratio (nfs.design.decide); its error rates hold "
+                         "where one of them is the unit's physics, not yet on units the "
+                         "model does not describe (docs/design.md, Limits)")
     dg.add_argument("--no-structure", action="store_true",
                     help="skip setting the model's thermal structure against generic "
                          "alternatives (one more node, a free link, a moved thermometer)")

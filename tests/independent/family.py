@@ -38,6 +38,7 @@ import math
 import zlib
 from dataclasses import dataclass, replace
 from pathlib import Path
+from typing import Sequence
 
 import numpy as np
 from scipy.linalg import expm
@@ -628,16 +629,31 @@ def simulate_family_run(draw: FamilyDraw, run_index: int, t0_c: float, *,
                         hidden: str | None = None, params: dict | None = None,
                         duration_s: float = 9000.0, sample_rate_hz: float = 1.0,
                         latitude_deg: float = 30.26, true_heading_deg: float = 212.7,
-                        start=None) -> g.RunData:
+                        start=None, power_off_s: Sequence[tuple[float, float]] = (),
+                        chamber_offset_c=None, dwell_s: float = g._DWELL_S,
+                        move_s: float = g._MOVE_S) -> g.RunData:
     """One run of the drawn unit: :func:`start_state` then :func:`generator.simulate_run`
-    with the unit's own noise seed.  ``start``: a (initial, air) pair already computed."""
+    with the unit's own noise seed.  ``start``: a (initial, air) pair already computed.
+
+    ``power_off_s``: power cycles, ``dwell_s`` and ``move_s`` the turntable's schedule,
+    passed through (:func:`generator.simulate_run`).
+    ``chamber_offset_c``: a chamber program's departure from T0 over the run, one value per
+    sample [K] (a ramp: 0 until it starts, then the ramp, then the hold), added to the
+    drawn air (the controller's cycling and wander go on about the new set point)."""
     initial, air = start if start is not None else start_state(
         draw, run_index, t0_c, duration_s=duration_s, sample_rate_hz=sample_rate_hz)
+    if chamber_offset_c is not None:
+        offset = np.asarray(chamber_offset_c, dtype=float)
+        if offset.shape != air.shape:
+            raise ValueError(f"chamber_offset_c needs {air.size} samples, got shape "
+                             f"{offset.shape}")
+        air = air + offset
     return g.simulate_run(t0_c, hidden=hidden, params=params, seed=draw.noise_seed,
                           run_index=run_index, duration_s=duration_s,
                           sample_rate_hz=sample_rate_hz, latitude_deg=latitude_deg,
                           true_heading_deg=true_heading_deg, unit=draw.unit,
-                          chamber_c=air, initial_c=initial)
+                          chamber_c=air, initial_c=initial, power_off_s=power_off_s,
+                          dwell_s=dwell_s, move_s=move_s)
 
 
 # ---------------------------------------------------------------------------------------------

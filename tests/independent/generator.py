@@ -24,6 +24,10 @@ Sensors
     quadrupole-like weight, a mean-rate term, angle random walk and a first-order
     Gauss-Markov bias; two accelerometers on a tilted table; a chamber that cycles and
     wanders; a TEC drive current and an oscillator voltage.
+Power cycles
+    ``power_off_s`` spans switch the unit off and on again (a warm restart): no heat inside
+    while off, the unit's columns NaN and a ``powered`` column, the turn-on transient
+    restarting at each switch-on (:func:`simulate_run`).
 
 Family
     ``family.py`` next to this file draws a whole unit (structure, noise, chamber, soak and
@@ -42,6 +46,7 @@ import math
 import sys
 from dataclasses import dataclass, field, replace
 from pathlib import Path
+from typing import Sequence
 
 import numpy as np
 from scipy.linalg import expm
@@ -50,7 +55,8 @@ from scipy.signal import lfilter
 __all__ = ["OMEGA_IE_DPH", "T_REF_C", "HIDDEN_EFFECTS", "TEC_LAWS", "BIAS_NOISE_LAWS",
            "CoilGeometry", "Unit", "Network", "RunData", "coil_network", "unit_network",
            "Stepper", "tec_power_w", "gauss_markov", "flicker_sum", "rate_random_walk",
-           "simulate_run", "generate_set", "measure_strength", "main",
+           "simulate_run", "generate_set", "measure_strength", "main", "POWERED_COLUMN",
+           "check_power_spans", "powered_state", "time_since_switch_on_s",
            # from family.py (loaded on first use)
            "FamilyDraw", "draw_unit", "generate_family_set"]
 
@@ -62,6 +68,11 @@ _S_PER_MIN = 60.0
 _POSITIONS_DEG = (0.0, 90.0, 180.0, 270.0)
 _DWELL_S = 150.0
 _MOVE_S = 10.0
+#: The run's power-state column (1.0 on, 0.0 off), written only for runs with power cycles.
+POWERED_COLUMN = "powered"
+#: The unit's own columns: NaN while it is switched off (the laboratory's go on recording).
+_UNIT_COLUMNS = ("gyro_dph", "acc_x_g", "acc_y_g", "temp_fog_c", "temp_acc_x_c",
+                 "temp_acc_y_c", "aux_source_current_ma", "aux_osc_v")
 
 #: hidden effect -> default parameters.  ``outside`` is the one outside the nfs library.
 HIDDEN_EFFECTS: dict[str, dict] = {
@@ -502,15 +513,16 @@ def rate_random_walk(rng: np.random.Generator, n: int, h_s: float, k_dph_per_rth
     return step * np.concatenate([[0.0], np.cumsum(rng.standard_normal(n - 1))])
 
 
-def _turntable(time_s: np.ndarray):
-    """theta(t) [deg] and moving: 4 positions, dwell 150 s, move 10 s (rewinding 270 -> 0)."""
-    step = _DWELL_S + _MOVE_S
+def _turntable(time_s: np.ndarray, dwell_s: float = _DWELL_S, move_s: float = _MOVE_S):
+    """theta(t) [deg] and moving: 4 positions, dwell 150 s, move 10 s (rewinding 270 -> 0)
+    unless told otherwise."""
+    step = dwell_s + move_s
     k = np.floor(time_s / step).astype(np.int64)
     tau = time_s - k * step
     pos = np.asarray(_POSITIONS_DEG)
     start, end = pos[k % 4], pos[(k + 1) % 4]
-    moving = tau >= _DWELL_S
-    frac = np.where(moving, (tau - _DWELL_S) / _MOVE_S, 0.0)
+    moving = tau >= dwell_s
+    frac = np.where(moving, (tau - dwell_s) / (move_s if move_s > 0 else 1.0), 0.0)
     return start + frac * (end - start), moving
 
 
@@ -568,6 +580,10 @@ class RunData:
     """Parts of each accelerometer output [g] (``x_hidden``, ``x_noise``, ...)."""
     clean: dict
     """Noise-free versions of the thermometers (before noise and quantum) and aux columns."""
+    dwell_s: float = _DWELL_S
+    """Time at each turntable position [s] (the sidecar's ``dwell_s``)."""
+    move_s: float = _MOVE_S
+    """Time of each move [s] (the sidecar's ``move_s``)."""
 
     def node(self, name: str) -> np.ndarray:
         """Temperature of one node [degC]."""
@@ -603,13 +619,57 @@ _STREAMS = ("arw", "gauss_markov", "acc_x", "acc_y", "therm_fog", "therm_x", "th
             "chamber", "osc", "current")
 
 
+def check_power_spans(spans) -> tuple[tuple[float, float], ...]:
+    """The power cycles as a tuple of (switched off, switched on again) [s from power-on];
+    ValueError unless each has 0 < t_off < t_on, finite, in time order, none overlapping."""
+    out = []
+    for span in spans:
+        try:
+            t_off, t_on = (float(v) for v in span)
+        except (TypeError, ValueError):
+            raise ValueError(f"power_off_s: each span is (switched off, switched on) in s, "
+                             f"got {span!r}") from None
+        if not (math.isfinite(t_off) and math.isfinite(t_on) and 0.0 < t_off < t_on):
+            raise ValueError(f"power_off_s: a span needs 0 < switched off < switched on "
+                             f"(finite, s from power-on), got {span!r}")
+        if out and t_off < out[-1][1]:
+            raise ValueError(f"power_off_s: spans must be in time order without overlap, "
+                             f"got {out[-1]!r} then {span!r}")
+        out.append((t_off, t_on))
+    return tuple(out)
+
+
+def powered_state(time_s: np.ndarray, spans) -> np.ndarray:
+    """s(t_k) as floats: 0.0 where t_off <= t_k < t_on for a span, 1.0 elsewhere.
+
+    The switch is seen on the sample grid: the heat of the step [t_k, t_k+1) is released
+    when s(t_k) is 1 (held over the step, like every power here)."""
+    t = np.asarray(time_s, dtype=float)
+    s = np.ones(t.shape)
+    for t_off, t_on in spans:
+        s[(t >= t_off) & (t < t_on)] = 0.0
+    return s
+
+
+def time_since_switch_on_s(time_s: np.ndarray, spans) -> np.ndarray:
+    """t - t_k with t_k the latest switch-on at or before t: 0 (power-on) or a span's end
+    [s].  The physical clock of every turn-on effect: a warm restart starts it again.  A
+    switch-on between two samples gives the first sample after it t - t_on in [0, h)."""
+    t = np.asarray(time_s, dtype=float)
+    last = np.zeros(t.shape)
+    for _, t_on in spans:
+        last = np.where(t >= t_on, t_on, last)
+    return t - last
+
+
 def simulate_run(start_temperature_c: float, *, hidden: str | None = None,
                  params: dict | None = None, seed: int = 0, run_index: int = 0,
                  duration_s: float = 9000.0, sample_rate_hz: float = 1.0,
                  latitude_deg: float = 30.26, true_heading_deg: float = 212.7,
                  unit: Unit | None = None, noise: bool = True,
-                 chamber_c: np.ndarray | None = None, initial_c: np.ndarray | None = None
-                 ) -> RunData:
+                 chamber_c: np.ndarray | None = None, initial_c: np.ndarray | None = None,
+                 power_off_s: Sequence[tuple[float, float]] = (),
+                 dwell_s: float = _DWELL_S, move_s: float = _MOVE_S) -> RunData:
     """Generate one start-up run at T0 = ``start_temperature_c`` [degC].
 
     The unit is soaked at T0 (every node at T0) and powered on at t = 0.  Random streams:
@@ -618,15 +678,39 @@ def simulate_run(start_temperature_c: float, *, hidden: str | None = None,
 
     ``chamber_c`` (one value per sample [degC]) replaces the chamber air process (kept as
     given, noise or not), ``initial_c`` (one value per node of :func:`unit_network` [degC])
-    the soaked start: the family's unfinished soak (``family.py``) passes both.
+    the soaked start: the family's unfinished soak (``family.py``) passes both.  A chamber
+    ramp (or any chamber program) is a ``chamber_c`` too.
+
+    ``power_off_s``: power cycles (warm restarts), each a span (switched off, switched on
+    again) [s from power-on], 0 < t_off < t_on, in time order (:func:`check_power_spans`).
+    While off (:func:`powered_state`) nothing is released inside the unit: the node powers,
+    a hidden heat source and the TEC law are zero, and the network relaxes towards the
+    chamber air, which goes on driving it; the unit's own columns (gyro, accelerometers,
+    the three thermometers, the aux columns) are NaN, the chamber, time and turntable go on,
+    and the run gets the column ``powered`` (1.0 on, 0.0 off; only when spans are given, so
+    a run without them is the same bytes as before).  Turn-on effects restart at every
+    switch-on: the hidden ``turn_on_transient`` is a exp(-t_on / tau) in the time since the
+    latest switch-on (:func:`time_since_switch_on_s`), and is zero while off.  The gyro's
+    and the other sensors' noise processes, the oscillator's random walk and the
+    thermometers' own lags go on through the off time (the sensing elements are bodies
+    that follow their mounts whether read or not); :attr:`RunData.gyro_terms_dph` and
+    ``clean`` hold the terms at every sample.
+
+    ``dwell_s``, ``move_s``: the turntable's schedule (default 150 s at each position, 10 s
+    to move), written to the sidecar.
     """
     unit = Unit() if unit is None else unit
     p = _check_hidden(hidden, params)
     if sample_rate_hz <= 0 or duration_s * sample_rate_hz < 2:
         raise ValueError("need sample_rate_hz > 0 and at least two samples")
+    spans = check_power_spans(power_off_s)
+    if not (dwell_s > 0 and move_s >= 0):
+        raise ValueError(f"need dwell_s > 0 and move_s >= 0, got {dwell_s!r}, {move_s!r}")
     h = 1.0 / sample_rate_hz
     n = int(round(duration_s * sample_rate_hz))
     t = np.arange(n) * h
+    on = powered_state(t, spans)         # all 1.0 without spans: every product below exact
+    t_on = time_since_switch_on_s(t, spans)
     rngs = dict(zip(_STREAMS, (np.random.default_rng(s) for s in
                                np.random.SeedSequence([seed, run_index]).spawn(len(_STREAMS)))))
     gain = 1.0 if noise else 0.0
@@ -656,7 +740,8 @@ def simulate_run(start_temperature_c: float, *, hidden: str | None = None,
         if not noise:
             chamber = np.full(n, float(start_temperature_c))
     st = Stepper(net, h)
-    drive = st.boundary_terms(chamber[:, None]) + st.gamma_p @ base_p
+    # the constant powers of the step [t_k, t_k+1) gated by s(t_k); the chamber goes on
+    drive = st.boundary_terms(chamber[:, None]) + np.outer(on[:-1], st.gamma_p @ base_p)
     g_e = st.gamma_p[:, idx["electronics"]]
     phi = st.phi
     temp = np.empty((n, len(names)))
@@ -672,10 +757,10 @@ def simulate_run(start_temperature_c: float, *, hidden: str | None = None,
     # A plain loop: the TEC power depends on the state, so the steps are sequential.
     for k in range(n):
         temp[k] = x
-        p_tec[k] = tec_power_w(unit, x[ie])
+        p_tec[k] = tec_power_w(unit, x[ie]) * on[k]
         if k + 1 < n:
             x = phi @ x + drive[k] + g_e * p_tec[k]
-    power = np.broadcast_to(base_p, temp.shape).copy()
+    power = on[:, None] * base_p
     power[:, ie] += p_tec
     rate = st.rate(temp, chamber[:, None], power)
 
@@ -685,7 +770,7 @@ def simulate_run(start_temperature_c: float, *, hidden: str | None = None,
     t_src = temp[:, ie]
 
     # 2. turntable and axis geometry
-    theta, moving = _turntable(t)
+    theta, moving = _turntable(t, float(dwell_s), float(move_s))
     az = np.radians(true_heading_deg + theta)
     elev_x = unit.tilt_north_deg * np.cos(az) + unit.tilt_east_deg * np.sin(az)
     az_y = az + np.pi / 2
@@ -722,7 +807,7 @@ def simulate_run(start_temperature_c: float, *, hidden: str | None = None,
     elif hidden == "turn_on_transient":
         if p["tau"] <= 0:
             raise ValueError("turn_on_transient tau must be > 0 s")
-        hid = p["a"] * np.exp(-t / p["tau"])
+        hid = p["a"] * np.exp(-t_on / p["tau"]) * on
     elif hidden == "aux_linear":
         if p["channel"] != "aux_osc_v":
             raise ValueError("aux_linear acts on aux_osc_v only in this generator")
@@ -785,10 +870,16 @@ def simulate_run(start_temperature_c: float, *, hidden: str | None = None,
                "temp_fog_c": fog, "temp_acc_x_c": tq["x"], "temp_acc_y_c": tq["y"],
                "temp_chamber_c": 0.01 * np.round(logged / 0.01),
                "aux_source_current_ma": current, "aux_osc_v": osc}
+    if spans:
+        off = on < 0.5
+        for c in _UNIT_COLUMNS:
+            columns[c] = np.where(off, np.nan, columns[c])
+        columns[POWERED_COLUMN] = on.copy()
     return RunData(name=_run_name(run_index, start_temperature_c),
                    start_temperature_c=float(start_temperature_c), columns=columns,
                    node_names=names, temperature_c=temp, rate_c_per_s=rate, power_w=power,
-                   chamber_c=chamber, gyro_terms_dph=terms, acc_terms_g=acc_terms, clean=clean)
+                   chamber_c=chamber, gyro_terms_dph=terms, acc_terms_g=acc_terms, clean=clean,
+                   dwell_s=float(dwell_s), move_s=float(move_s))
 
 
 # ---------------------------------------------------------------------------------------------
@@ -806,11 +897,16 @@ def _write_run(run: RunData, out_dir: Path, *, latitude_deg: float, true_heading
     """NAME.csv (one header row, %-formatted rows) and NAME.toml, written by hand.
 
     ``extra``: further sidecar keys (numbers), e.g. the soak history ``soak_from_c`` [degC]
-    and ``soak_h`` [h]."""
+    and ``soak_h`` [h].  A run with power cycles also writes its ``powered`` column (last);
+    the unit's columns hold ``nan`` while it is off (the format's missing sample)."""
     cols = list(_FORMATS)
+    formats = dict(_FORMATS)
+    if POWERED_COLUMN in run.columns:
+        cols.append(POWERED_COLUMN)
+        formats[POWERED_COLUMN] = "%d"
     data = np.column_stack([run.columns[c] for c in cols])
-    fmt = ",".join(_FORMATS[c] for c in cols)
-    # "%d" needs integers; moving is 0.0/1.0, exact.
+    fmt = ",".join(formats[c] for c in cols)
+    # "%d" needs integers; moving and powered are 0.0/1.0, exact.
     lines = [",".join(cols)] + [fmt % tuple(row) for row in data.tolist()]
     (out_dir / f"{run.name}.csv").write_text("\n".join(lines) + "\n", encoding="utf-8")
     toml = (
@@ -820,8 +916,8 @@ def _write_run(run: RunData, out_dir: Path, *, latitude_deg: float, true_heading
         f"true_heading_deg = {float(true_heading_deg)!r}\n"
         f"sample_rate_hz = {float(sample_rate_hz)!r}\n"
         f"positions_deg = [{', '.join(repr(p) for p in _POSITIONS_DEG)}]\n"
-        f"dwell_s = {_DWELL_S!r}\n"
-        f"move_s = {_MOVE_S!r}\n"
+        f"dwell_s = {float(run.dwell_s)!r}\n"
+        f"move_s = {float(run.move_s)!r}\n"
         f'instrument = "{instrument}"\n'
         + "".join(f"{k} = {float(v)!r}\n" for k, v in (extra or {}).items()))
     (out_dir / f"{run.name}.toml").write_text(toml, encoding="utf-8")
@@ -886,12 +982,15 @@ def _after_rescale(d: np.ndarray, rise: np.ndarray) -> np.ndarray:
 
 def strength_of_runs(hidden: str, params: dict, pairs, sample_rate_hz: float = 1.0) -> dict:
     """:func:`measure_strength` of given runs: ``pairs`` yields (with the effect, without it)
-    per run; ``without`` is used on a thermometer channel only (may be None otherwise)."""
+    per run; ``without`` is used on a thermometer channel only (may be None otherwise).
+    Samples of a run with power cycles taken while the unit was off do not count."""
     channel = _CHANNEL[hidden]
     n_win = max(1, int(round(10.0 * sample_rate_hz)))
     ex, ex_d, fl = [], [], []
     for with_, without in pairs:
         mv = with_.columns["moving"] > 0.5
+        if POWERED_COLUMN in with_.columns:
+            mv = mv | (with_.columns[POWERED_COLUMN] < 0.5)
         if channel == "gyro_dph":
             term = with_.gyro_terms_dph["hidden"]
             noise = sum(with_.gyro_terms_dph[k] for k in GYRO_NOISE_TERMS
@@ -900,10 +999,13 @@ def strength_of_runs(hidden: str, params: dict, pairs, sample_rate_hz: float = 1
             ax = channel[4]
             term, noise = with_.acc_terms_g[f"{ax}_hidden"], with_.acc_terms_g[f"{ax}_noise"]
         else:
-            d = with_.clean[channel] - without.clean[channel]
+            ok = ~(with_.columns[POWERED_COLUMN] < 0.5) if POWERED_COLUMN in with_.columns \
+                else slice(None)
+            d = (with_.clean[channel] - without.clean[channel])[ok]
             ex.append(d)
-            ex_d.append(_after_rescale(d, without.clean[channel] - without.clean[channel][0]))
-            fl.append(with_.columns[channel] - with_.clean[channel])
+            rise = (without.clean[channel] - without.clean[channel][0])[ok]
+            ex_d.append(_after_rescale(d, rise))
+            fl.append((with_.columns[channel] - with_.clean[channel])[ok])
             continue
         wm = _window_means(term, mv, n_win)
         ex.append(wm)

@@ -45,7 +45,7 @@ def test_imports_nothing_from_nfs(module):
             roots.add((node.module or "").split(".")[0])
     assert not roots & {"nfs", "thermal"}
     assert roots <= {"__future__", "argparse", "json", "math", "sys", "zlib", "dataclasses",
-                     "pathlib", "numpy", "scipy", "generator", "family"}
+                     "pathlib", "typing", "numpy", "scipy", "generator", "family"}
 
 
 def test_files_load_and_pass_the_readers_checks(tmp_path):
@@ -487,3 +487,180 @@ def test_family_command_line(tmp_path, capsys):
     out = capsys.readouterr().out
     assert '"family": "seed 3:' in out and '"ratio": "ratio_detrended"' in out
     assert len(read_runs(tmp_path)) == 1
+
+
+# ---------------------------------------------------------------------------------------------
+# Power cycles (warm restarts)
+
+SPANS = ((2400.0, 3600.0),)
+
+
+def test_no_power_cycle_is_the_previous_run_byte_for_byte(tmp_path):
+    """Oracle: the behaviour before power cycles existed, i.e. the default call: with
+    ``power_off_s=()`` every column, node temperature, power and gyro term is the same array
+    bit for bit, no ``powered`` column appears and the written files are the same bytes (for
+    the fixed unit with and without a hidden effect, and for a drawn unit)."""
+    d = fam.draw_unit(4)
+    pairs = [(g.simulate_run(-16.0, seed=3, duration_s=900.0),
+              g.simulate_run(-16.0, seed=3, duration_s=900.0, power_off_s=())),
+             (g.simulate_run(43.0, seed=3, duration_s=900.0, hidden="turn_on_transient"),
+              g.simulate_run(43.0, seed=3, duration_s=900.0, hidden="turn_on_transient",
+                             power_off_s=[])),
+             (fam.simulate_family_run(d, 1, 17.0, duration_s=900.0, hidden="heat_source"),
+              fam.simulate_family_run(d, 1, 17.0, duration_s=900.0, hidden="heat_source",
+                                      power_off_s=()))]
+    for k, (a, b) in enumerate(pairs):
+        assert a.columns.keys() == b.columns.keys() and g.POWERED_COLUMN not in b.columns
+        for c in a.columns:
+            assert np.array_equal(a.columns[c], b.columns[c]), c
+        for x, y in ((a.temperature_c, b.temperature_c), (a.power_w, b.power_w),
+                     (a.rate_c_per_s, b.rate_c_per_s)):
+            assert np.array_equal(x, y)
+        for c in a.gyro_terms_dph:
+            assert np.array_equal(a.gyro_terms_dph[c], b.gyro_terms_dph[c]), c
+        for run, where in ((a, tmp_path / f"a{k}"), (b, tmp_path / f"b{k}")):
+            where.mkdir()
+            g._write_run(run, where, latitude_deg=30.26, true_heading_deg=212.7,
+                         sample_rate_hz=1.0)
+        assert _files(tmp_path / f"a{k}") == _files(tmp_path / f"b{k}")
+
+
+def test_power_cycle_columns_nan_while_off_and_powered_column(tmp_path):
+    """Oracle: the power-cycle semantics (docs/power_cycles.md) and the format spec: while
+    off (t_off <= t < t_on) the unit's own columns are NaN and ``powered`` is 0, elsewhere
+    finite and 1; time, turntable and chamber record throughout; nfs reads the files, finds
+    the span back from the ``powered`` column, and before the switch-off the run is the run
+    without a power cycle (nothing acts before its cause); the node powers are zero while
+    off and the TEC and constant powers back after."""
+    base = g.simulate_run(17.0, seed=5, duration_s=6000.0)
+    run = g.simulate_run(17.0, seed=5, duration_s=6000.0, power_off_s=SPANS)
+    t = run.columns["time_s"]
+    off = (t >= 2400.0) & (t < 3600.0)
+    assert np.array_equal(run.columns[g.POWERED_COLUMN], np.where(off, 0.0, 1.0))
+    for c in g._UNIT_COLUMNS:
+        assert np.all(np.isnan(run.columns[c][off])), c
+        assert np.all(np.isfinite(run.columns[c][~off])), c
+    for c in ("time_s", "position_deg", "moving", "temp_chamber_c"):
+        assert np.all(np.isfinite(run.columns[c])) and np.array_equal(run.columns[c],
+                                                                      base.columns[c]), c
+    before = t < 2400.0
+    for c in g._UNIT_COLUMNS:
+        assert np.array_equal(run.columns[c][before], base.columns[c][before]), c
+    assert np.all(run.power_w[off] == 0.0) and np.all(run.power_w[~off].sum(axis=1) > 2.0)
+    g._write_run(run, tmp_path, latitude_deg=30.26, true_heading_deg=212.7,
+                 sample_rate_hz=1.0)
+    header = next(tmp_path.glob("*.csv")).read_text().splitlines()[0]
+    assert header.endswith(",powered")
+    (r,) = read_runs(tmp_path)
+    assert np.array_equal(r[g.POWERED_COLUMN], run.columns[g.POWERED_COLUMN])
+    assert np.array_equal(np.isnan(r["gyro_dph"]), off)
+    from nfs.power import off_spans_s
+    assert off_spans_s(r["time_s"], r[g.POWERED_COLUMN]) == SPANS
+    with pytest.raises(ValueError, match="0 < switched off"):
+        g.simulate_run(17.0, duration_s=100.0, power_off_s=((0.0, 50.0),))
+    with pytest.raises(ValueError, match="overlap"):
+        g.simulate_run(17.0, duration_s=100.0, power_off_s=((10.0, 50.0), (40.0, 60.0)))
+
+
+def test_nodes_relax_towards_the_chamber_while_off():
+    """Oracle: with no heat released inside, a network of positive conductances to a held
+    chamber at T0 relaxes towards T0: after 40 min on (every node above T0) the capacity-
+    weighted mean node temperature falls at every step of the off span and stays above T0,
+    and it rises again after the switch-on; energy balance over the whole run (stored =
+    electrical in - lost to the chamber, trapezoid rule) holds with the gated powers."""
+    run = g.simulate_run(28.0, duration_s=6000.0, noise=False, power_off_s=SPANS)
+    net = g.unit_network(g.Unit())
+    cap = net.capacity_j_per_k
+    mean = run.temperature_c @ cap / cap.sum()
+    t = run.columns["time_s"]
+    off = (t >= 2400.0) & (t < 3600.0)
+    assert np.all(run.temperature_c[2400] > 28.0)
+    assert np.all(np.diff(mean[2400:3601]) < 0.0)
+    assert mean[3600] > 28.0 and mean[3600] < mean[2400] - 1.0
+    assert mean[4200] > mean[3600]
+    # and a run left on is warmer at the switch-on time
+    left_on = g.simulate_run(28.0, duration_s=6000.0, noise=False)
+    assert np.all(left_on.temperature_c[3600] > run.temperature_c[3600])
+    stored = (run.temperature_c - run.temperature_c[0]) @ cap
+    loss = (run.temperature_c - run.chamber_c[:, None]) @ net.boundary_w_per_k[:, 0]
+    net_in = run.power_w.sum(axis=1) - loss
+    # powers are held over each 1 s step (gated at its start): integrate them as steps and
+    # the smooth loss by the trapezoid rule (O(h^2) on it: 4e-9 relative here)
+    integral = np.sum(run.power_w.sum(axis=1)[:-1]) - np.sum(0.5 * (loss[1:] + loss[:-1]))
+    assert abs(stored[-1] - integral) < 1e-6 * abs(stored[-1]), (stored[-1], integral)
+    np.testing.assert_allclose(run.rate_c_per_s @ cap, net_in, rtol=1e-9, atol=1e-9)
+    assert np.all(run.power_w[off] == 0.0)
+
+
+@pytest.mark.parametrize("spans", [SPANS, ((1000.0, 1030.0), (2500.0, 2560.5))])
+def test_turn_on_transient_restarts_at_each_switch_on(spans):
+    """Oracle: the transient's definition in the time since the latest switch-on, a
+    exp(-t_on / tau): without noise, the gyro with the hidden transient minus the gyro
+    without it is a at t = 0 and at the first sample of every restart on the grid (within
+    1e-9), a exp(-(t - t_on)/tau) at every powered sample (a restart between samples gives
+    the first sample after it its fraction of a second), NaN while off."""
+    a, tau = 0.12, 150.0
+    kw = dict(duration_s=4000.0, noise=False, power_off_s=spans)
+    base = g.simulate_run(-5.0, **kw)
+    hid = g.simulate_run(-5.0, hidden="turn_on_transient", params={"a": a, "tau": tau}, **kw)
+    d = hid.columns["gyro_dph"] - base.columns["gyro_dph"]
+    t = base.columns["time_s"]
+    assert abs(d[0] - a) < 1e-9
+    last = np.zeros_like(t)
+    for t_off, t_on in spans:
+        k = int(np.searchsorted(t, t_on))
+        if t[k] == t_on:
+            assert abs(d[k] - a) < 1e-9, t_on
+        last[t >= t_on] = t_on
+    on = base.columns[g.POWERED_COLUMN] > 0.5
+    np.testing.assert_allclose(d[on], a * np.exp(-(t[on] - last[on]) / tau), atol=1e-9,
+                               rtol=0)
+    assert np.all(np.isnan(d[~on]))
+    # everything else in the gyro is the same run: the thermal history does not see it
+    assert np.array_equal(hid.temperature_c, base.temperature_c)
+
+
+def test_family_run_passes_power_cycles_and_a_chamber_ramp_through():
+    """Oracle: pass-through: a drawn unit's run with a power cycle is the generator's run of
+    that unit with the same start, air and spans; a chamber offset (a ramp of +20 K at
+    1 K/min from 1200 s) is added to the drawn air sample by sample, and the unit follows
+    it (warmer than the run without it at the end)."""
+    d = fam.draw_unit(9)
+    start = fam.start_state(d, 7, -16.0, duration_s=4000.0)
+    run = fam.simulate_family_run(d, 7, -16.0, duration_s=4000.0, power_off_s=SPANS,
+                                  start=start)
+    ref = g.simulate_run(-16.0, seed=d.noise_seed, run_index=7, duration_s=4000.0,
+                         unit=d.unit, chamber_c=start[1], initial_c=start[0],
+                         power_off_s=SPANS)
+    for c in ref.columns:
+        assert np.array_equal(run.columns[c], ref.columns[c], equal_nan=True), c
+    t = np.arange(4000.0)
+    ramp = np.clip((t - 1200.0) / 60.0, 0.0, 20.0)
+    up = fam.simulate_family_run(d, 7, -16.0, duration_s=4000.0, start=start,
+                                 chamber_offset_c=ramp)
+    flat = fam.simulate_family_run(d, 7, -16.0, duration_s=4000.0, start=start)
+    np.testing.assert_allclose(up.chamber_c - flat.chamber_c, ramp, atol=1e-12)
+    assert np.all(up.temperature_c[-1] > flat.temperature_c[-1] + 5.0)
+    with pytest.raises(ValueError, match="chamber_offset_c"):
+        fam.simulate_family_run(d, 7, -16.0, duration_s=4000.0, start=start,
+                                chamber_offset_c=ramp[:10])
+
+
+def test_turntable_dwell_is_a_parameter(tmp_path):
+    """Oracle: the schedule's definition (4 positions, a dwell then a move, back to back from
+    power-on) and the format spec: with a 75 s dwell and 10 s moves a 1700 s run holds 20
+    moves of 10 samples, the table leaves 0 deg at 75 s and dwells at 90 deg from 85 s, and the sidecar says dwell_s = 75,
+    which nfs reads back; the family passes the dwell through."""
+    run = g.simulate_run(17.0, duration_s=1700.0, dwell_s=75.0)
+    assert run.columns["moving"].sum() == 200
+    pos, mv = run.columns["position_deg"], run.columns["moving"]
+    assert pos[74] == 0.0 and mv[74] == 0 and mv[75] == 1 and pos[85] == 90.0 and mv[85] == 0
+    g._write_run(run, tmp_path, latitude_deg=30.26, true_heading_deg=212.7,
+                 sample_rate_hz=1.0)
+    (r,) = read_runs(tmp_path)
+    assert r.meta.dwell_s == 75.0 and r.meta.move_s == 10.0
+    d = fam.draw_unit(9)
+    f = fam.simulate_family_run(d, 7, 17.0, duration_s=1700.0, dwell_s=75.0)
+    assert np.array_equal(f.columns["moving"], run.columns["moving"]) and f.dwell_s == 75.0
+    with pytest.raises(ValueError, match="dwell_s > 0"):
+        g.simulate_run(17.0, duration_s=100.0, dwell_s=0.0)
