@@ -105,6 +105,7 @@ from dataclasses import dataclass, replace
 from typing import Any, Mapping, Sequence
 
 import numpy as np
+from threadpoolctl import threadpool_limits
 
 from ..errors import USER_ERRORS, NfsError
 from ..instrument import Instrument
@@ -388,7 +389,9 @@ def diagnose(inst: Instrument, runs: Sequence[Run], **kwargs) -> Diagnosis:
     """
     t0 = time.perf_counter()
     try:
-        return diagnose_candidates(inst, runs, **kwargs)
+        # one BLAS thread, as the fit: the answer must not depend on the core count
+        with threadpool_limits(limits=1, user_api="blas"):
+            return diagnose_candidates(inst, runs, **kwargs)
     except (np.linalg.LinAlgError, FloatingPointError) as exc:
         return Diagnosis(ranking=(), not_tried=(), unexplained={}, baseline=None,
                          time_s=time.perf_counter() - t0, alpha=kwargs.get("alpha", 0.05),

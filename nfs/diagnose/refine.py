@@ -33,6 +33,8 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 from typing import Any, Sequence
 
+from threadpoolctl import threadpool_limits
+
 from ..docfields import document_fields
 from ..instrument import Instrument
 from ..run import Run
@@ -172,9 +174,10 @@ def fit_unit(inst: Instrument, runs: Sequence[Run], *, refine: bool = True,
             or len({r.meta.start_temperature_c for r in runs}) < 2):
         return result
     start_state = fit_kwargs.get("start_state", DEFAULT_START)
-    ref = refine_structure(result.instrument, runs, factor=factor, max_steps=max_steps,
-                           decimate_s=fit_kwargs.get("decimate_s", 10.0),
-                           start_state=start_state)
+    with threadpool_limits(limits=1, user_api="blas"):   # as the fit (nfs.diagnose.fit)
+        ref = refine_structure(result.instrument, runs, factor=factor, max_steps=max_steps,
+                               decimate_s=fit_kwargs.get("decimate_s", 10.0),
+                               start_state=start_state)
     if not ref.steps:
         warn = () if ref.adequacy.worst.ratio <= factor else (f"thermal {ref.stopped}",)
         return replace(result, structure=ref, warnings=result.warnings + warn)
