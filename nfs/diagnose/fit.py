@@ -58,6 +58,7 @@ The result is a :class:`~nfs.diagnose.fit_result.FitResult`.
 
 from __future__ import annotations
 
+import functools
 import math
 import os
 from dataclasses import dataclass, field, replace
@@ -326,6 +327,20 @@ def fitted_name(model_name: str, runs: Sequence[Run]) -> str:
     return f"{base} fitted to {source}"
 
 
+def one_blas_thread(f):
+    """Run ``f`` on one BLAS thread.  The fits' least squares land in different minima when
+    the rounding of a multi-threaded BLAS changes with the core count (measured on a unit of
+    the independent family: thermal cost 8981 on one thread, 9483 on two, and another answer
+    of the diagnosis), so a fit's answer would depend on the machine; the systems are small,
+    and one thread loses no time."""
+    @functools.wraps(f)
+    def pinned(*args, **kwargs):
+        with threadpool_limits(limits=1, user_api="blas"):
+            return f(*args, **kwargs)
+    return pinned
+
+
+@one_blas_thread
 def fit_model(inst: Instrument, runs: Sequence[Run], free: Iterable[str] | None = None, *,
               stages: Sequence[str] = FIT_STAGES, decimate_s: float = DEFAULT_DECIMATE_S,
               max_nfev: int | None = 100, drift_signal: str = "raw",
@@ -392,25 +407,6 @@ def fit_model(inst: Instrument, runs: Sequence[Run], free: Iterable[str] | None 
         No runs, an unknown stage or parameter, a run without a channel a stage needs, no
         true_heading_deg for the drift stage.
     """
-    # one BLAS thread: the stages' least squares land in different minima when the
-    # rounding of a multi-threaded BLAS changes with the core count, so a fit's answer
-    # would depend on the machine (measured on the independent family); the systems are
-    # small, one thread loses no time
-    with threadpool_limits(limits=1, user_api="blas"):
-        return _fit_model(inst, runs, free, stages=stages, decimate_s=decimate_s,
-                          max_nfev=max_nfev, drift_signal=drift_signal, prior=prior,
-                          prior_scale=prior_scale, soak_anchor=soak_anchor,
-                          n_starts=n_starts, fit_noise=fit_noise, start_state=start_state,
-                          start_c=start_c)
-
-
-def _fit_model(inst: Instrument, runs: Sequence[Run], free: Iterable[str] | None = None, *,
-              stages: Sequence[str] = FIT_STAGES, decimate_s: float = DEFAULT_DECIMATE_S,
-              max_nfev: int | None = 100, drift_signal: str = "raw",
-              prior: Mapping[str, float | str] | str | None = "default",
-              prior_scale: float = 1.0, soak_anchor: bool = True, n_starts: int = 1,
-              fit_noise: bool = True, start_state: StartModel | None = DEFAULT_START,
-              start_c: Mapping[str, np.ndarray] | None = None) -> FitResult:
     runs = list(runs)
     if not runs:
         raise NfsError("fit_model: no runs to fit")

@@ -105,7 +105,6 @@ from dataclasses import dataclass, replace
 from typing import Any, Mapping, Sequence
 
 import numpy as np
-from threadpoolctl import threadpool_limits
 
 from ..errors import USER_ERRORS, NfsError
 from ..instrument import Instrument
@@ -120,7 +119,7 @@ from .candidates import Candidate, candidates
 from .columns import (PreparedRun, bare_instrument, grid_columns, model_drift_paths, prepare_runs,
                      same_signature, thermal_candidate_columns, thermal_design)
 from .drift_structure import DriftStructure, beyond_alternative, rate_columns
-from .fit import DEFAULT_DECIMATE_S, fit_model
+from .fit import DEFAULT_DECIMATE_S, fit_model, one_blas_thread
 from .ranking import beyond_rate_terms, explained_by_top, rank, significance, structure_rivals
 from .result import Diagnosis
 from .smoother import smooth_runs
@@ -390,8 +389,7 @@ def diagnose(inst: Instrument, runs: Sequence[Run], **kwargs) -> Diagnosis:
     t0 = time.perf_counter()
     try:
         # one BLAS thread, as the fit: the answer must not depend on the core count
-        with threadpool_limits(limits=1, user_api="blas"):
-            return diagnose_candidates(inst, runs, **kwargs)
+        return one_blas_thread(diagnose_candidates)(inst, runs, **kwargs)
     except (np.linalg.LinAlgError, FloatingPointError) as exc:
         return Diagnosis(ranking=(), not_tried=(), unexplained={}, baseline=None,
                          time_s=time.perf_counter() - t0, alpha=kwargs.get("alpha", 0.05),

@@ -33,14 +33,13 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 from typing import Any, Sequence
 
-from threadpoolctl import threadpool_limits
 
 from ..docfields import document_fields
 from ..instrument import Instrument
 from ..run import Run
 from .adequacy import ThermalAdequacy, thermal_adequacy
 from .alternative_score import BEATS_ALPHA, CV_DROP, better_run_by_run
-from .fit import fit_model
+from .fit import fit_model, one_blas_thread
 from .fit_result import FitResult
 from .free_set import default_free
 from .params import expand_paths
@@ -174,10 +173,9 @@ def fit_unit(inst: Instrument, runs: Sequence[Run], *, refine: bool = True,
             or len({r.meta.start_temperature_c for r in runs}) < 2):
         return result
     start_state = fit_kwargs.get("start_state", DEFAULT_START)
-    with threadpool_limits(limits=1, user_api="blas"):   # as the fit (nfs.diagnose.fit)
-        ref = refine_structure(result.instrument, runs, factor=factor, max_steps=max_steps,
-                               decimate_s=fit_kwargs.get("decimate_s", 10.0),
-                               start_state=start_state)
+    ref = one_blas_thread(refine_structure)(   # as the fit (nfs.diagnose.fit)
+        result.instrument, runs, factor=factor, max_steps=max_steps,
+        decimate_s=fit_kwargs.get("decimate_s", 10.0), start_state=start_state)
     if not ref.steps:
         warn = () if ref.adequacy.worst.ratio <= factor else (f"thermal {ref.stopped}",)
         return replace(result, structure=ref, warnings=result.warnings + warn)
