@@ -6,7 +6,9 @@ The library is imported inside the command (as in every command module) so that
 
 from __future__ import annotations
 
+import dataclasses
 import json
+import math
 import sys
 from pathlib import Path
 
@@ -39,7 +41,7 @@ def cmd_design(args) -> int:
     from ..design import design_experiment, rival_models
     from ..design.report import write_design
     from ..design.rivals import check_label
-    from ..design.space import Space, base_conditions, default_space
+    from ..design.space import base_conditions, default_space
     from ..io.provenance import output_provenance
     if args.rivals is not None and args.diagnosis is not None:
         raise NfsError("give either --diagnosis or --rivals, not both")
@@ -54,14 +56,15 @@ def cmd_design(args) -> int:
     folder = output_folder(args, "design")
     space = default_space(runs, soak_h=args.soak_h)
     if args.start_temperatures is not None:
-        space = Space(**{**space.__dict__,
-                         "start_temperatures_c": tuple(args.start_temperatures)})
+        space = dataclasses.replace(space,
+                                    start_temperatures_c=tuple(args.start_temperatures))
     if args.max_hours is not None:
-        longest = 600.0 * max(1, int((args.max_hours - args.soak_h) * 6.0))
-        if longest <= 0:
-            raise NfsError(f"--max-hours {args.max_hours:g}: no run fits after the "
-                           f"{args.soak_h:g} h soak")
-        space = Space(**{**space.__dict__, "max_duration_s": longest})
+        step = space.duration_step_s
+        longest = step * math.floor((args.max_hours - args.soak_h) * 3600.0 / step + 1e-9)
+        if longest < step:
+            raise NfsError(f"--max-hours {args.max_hours:g}: no run of {step / 60.0:g} min "
+                           f"fits after the {args.soak_h:g} h soak (--soak-h)")
+        space = dataclasses.replace(space, max_duration_s=longest)
     say = (lambda m: None) if args.quiet else (lambda m: print(m, file=sys.stderr))
     say(f"fitting {len(labels)} rivals ({', '.join(labels)}) to {len(runs)} run(s)...")
     rivals = rival_models(inst, runs, labels, start_state=start_model(args))

@@ -32,11 +32,10 @@ import numpy as np
 from scipy.stats import norm
 
 from ..diagnose.result import Answer
-from ..experiment import conditions_from_run
 from ..instrument import Instrument
 from ..run import Run
-from .noise_level import excess_factors, measured_numbers, scaled, sensor_sigma
-from .predict import CHANNELS, predict
+from .predict import CHANNELS
+from .replay import replay_runs_taken
 from .rivals import MODEL, Rival, rival_models, rivals_from_diagnosis
 from .separation import RivalPrediction, separation
 
@@ -125,17 +124,9 @@ def _llr(y, mu_a, mu_b, sigma, channels) -> tuple[float, dict[str, float]]:
 
 def decide(rivals: Sequence[Rival], runs: Sequence[Run]) -> list[Decision]:
     """The decision between every pair of ``rivals`` on ``runs`` (module docstring)."""
-    runs = list(runs)
-    preds = []
-    for r in rivals:
-        start = r.fit.start_c if r.fit is not None else {}
-        preds.append([predict(r.instrument, conditions_from_run(run,
-                                                                initial_c=start.get(run.name)),
-                              native=True) for run in runs])
-    measured = measured_numbers(runs)
-    sigma0 = sensor_sigma(rivals[0].instrument, measured)
-    factors = excess_factors(measured, [RivalPrediction(p) for p in preds], sigma0)
-    sigma = [scaled(s, factors) for s in sigma0]
+    taken = replay_runs_taken(rivals, list(runs))
+    preds = [p.mean for p in taken.predictions]
+    measured, sigma, factors = taken.measured, taken.sigma, taken.factors
     out = []
     for i, j in combinations(range(len(rivals)), 2):
         llr, by = _llr(measured, preds[i], preds[j], sigma, CHANNELS)

@@ -29,8 +29,7 @@ from typing import Sequence
 
 import numpy as np
 
-from ..run import Run
-from .predict import CHANNELS, Prediction, noise_sigma, reduce_run
+from .predict import CHANNELS, Prediction
 from .separation import RivalPrediction
 
 __all__ = ["excess_factors", "scaled"]
@@ -76,12 +75,3 @@ def scaled(sigma: dict[str, np.ndarray], factors: dict[str, float]) -> dict[str,
     """The noise ``sigma`` with every channel scaled by its factor."""
     return {c: v * factors.get(c, 1.0) for c, v in sigma.items()}
 
-
-def measured_numbers(runs: Sequence[Run]) -> list[Prediction]:
-    """The numbers of the runs taken, reduced as a prediction is."""
-    return [reduce_run(r) for r in runs]
-
-
-def sensor_sigma(inst, preds: Sequence[Prediction]) -> list[dict[str, np.ndarray]]:
-    """The sensor noise of every run's numbers under ``inst``."""
-    return [noise_sigma(inst, p) for p in preds]

@@ -130,15 +130,13 @@ def reduce_run(run, step_s: float | None = None) -> Prediction:
     return Prediction(values, times, spans)
 
 
-def predict(inst: Instrument, cond: RunConditions, *, quiet_model: bool = True,
-            native: bool = False) -> Prediction:
+def predict(inst: Instrument, cond: RunConditions, *, native: bool = False) -> Prediction:
     """``inst``'s noise-free prediction of the run ``cond`` (module docstring).
 
-    ``quiet_model`` False: ``inst`` is simulated as given (already :func:`quiet`);
     ``native``: on the run's own samples (a replayed run, number for number the same
     reduction as its measurement) instead of the coarser clock.
     """
-    model = quiet(inst) if quiet_model else inst
+    model = quiet(inst)
     if native:
         c = replace(cond, variability=None, seed=0)
         step = 1.0 / cond.sample_rate_hz

@@ -26,6 +26,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from ..io.atomic import atomic_write_files
+from ..scoring.intervals import json_number
 from ..run import Run
 from .decide import LAMBDA_NAME, decision_rates
 from .predict import CHANNELS
@@ -46,14 +47,6 @@ def _png(fig) -> bytes:
     buf = io.BytesIO()
     fig.savefig(buf, format="png", metadata={"Software": None})   # same design, same bytes
     return buf.getvalue()
-
-
-def _off_spans(design: Design) -> list[tuple[float, float]]:
-    e = design.experiment
-    if e.event != "power_off":
-        return []
-    return [(e.event_s + k * e.every_s, e.event_s + k * e.every_s + e.power_off_s)
-            for k in range(e.cycles)]
 
 
 def plot_design(design: Design):
@@ -102,9 +95,8 @@ def plot_design(design: Design):
     ax2.set_ylabel("separation if the run stopped here\n[noise standard deviations]")
     ax2.set_xlabel("time from power-on [min]")
     e = design.experiment
-    spans = _off_spans(design)
-    if e.event == "ramp":
-        spans = [(e.event_s, e.event_end_s)]
+    spans = e.off_spans_s() if e.event == "power_off" else (
+        [(e.event_s, e.event_end_s)] if e.event == "ramp" else [])
     for ax in (ax1, ax2):
         for k, (a, b) in enumerate(spans):
             ax.axvspan(a / 60.0, b / 60.0, color="0.85", zorder=0,
@@ -251,14 +243,7 @@ def write_design(design: Design, folder: str | os.PathLike, runs: list[Run],
     files = {folder / "scenario.toml": scenario_toml(design, runs, model_path, folder),
              folder / "report.md": to_markdown(design),
              folder / "design.png": _png(plot_design(design)),
-             folder / "design.json": json.dumps(data, indent=1, default=_json_default) + "\n"}
+             folder / "design.json": json.dumps(data, indent=1, default=json_number) + "\n"}
     atomic_write_files(files)
     return list(files)
 
-
-def _json_default(x):
-    if isinstance(x, (np.floating, np.integer)):
-        return x.item()
-    if isinstance(x, float) and not math.isfinite(x):
-        return None
-    raise TypeError(f"not JSON: {type(x).__name__}")

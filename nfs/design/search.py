@@ -25,16 +25,17 @@ from typing import Callable, Sequence
 
 import numpy as np
 
-from ..experiment import RunConditions, conditions_from_run
+from ..experiment import RunConditions
 from ..ranges import TEMPERATURE_RANGE_C
 from ..run import Run
-from .noise_level import excess_factors, measured_numbers, scaled, sensor_sigma
-from .predict import PREDICT_STEP_S, noise_sigma, predict
+from .noise_level import scaled
+from .predict import PREDICT_STEP_S, noise_sigma
+from .replay import predict_rival, replay_runs_taken
 from .rivals import Rival
 from .separation import MARGIN_SIGMA, RivalPrediction, Separation, separation
 from .space import Experiment, Space
 
-__all__ = ["Design", "Trial", "design_experiment", "current_separation", "predict_rival",
+__all__ = ["Design", "Trial", "design_experiment", "current_separation",
            "N_DRAWS"]
 
 #: Parameter draws per rival and experiment.
@@ -134,16 +135,6 @@ class Design:
             "time_s": self.time_s}
 
 
-def predict_rival(rival: Rival, conds: Sequence[RunConditions], n_draws: int,
-                  rng: np.random.Generator, *, native: bool = False) -> RivalPrediction:
-    """``rival``'s predictions of the runs ``conds`` at its fit and at ``n_draws`` draws
-    (``native``: on the runs' own samples, :func:`nfs.design.predict.predict`)."""
-    mean = [predict(rival.instrument, c, native=native) for c in conds]
-    draws = [[predict(inst, c, native=native) for c in conds]
-             for inst in rival.draws(n_draws, rng)]
-    return RivalPrediction(mean, draws)
-
-
 def _pairs(n: int) -> list[tuple[int, int]]:
     return list(combinations(range(n), 2))
 
@@ -159,17 +150,9 @@ def current_separation(rivals: Sequence[Rival], runs: Sequence[Run], *, n_draws:
                                                dict[str, float]]:
     """Every pair's separation on the runs already taken, each rival replaying them from
     its own start states, in the noise the runs show; and that noise's factors
-    (:mod:`nfs.design.noise_level`)."""
-    rng = np.random.default_rng(seed)
-    preds = []
-    for r in rivals:
-        start = r.fit.start_c if r.fit is not None else {}
-        conds = [conditions_from_run(run, initial_c=start.get(run.name)) for run in runs]
-        preds.append(predict_rival(r, conds, n_draws, rng, native=True))
-    measured = measured_numbers(runs)
-    sigma = sensor_sigma(rivals[0].instrument, measured)
-    factors = excess_factors(measured, preds, sigma)
-    return _separations(preds, [scaled(s, factors) for s in sigma]), factors
+    (:func:`nfs.design.replay.replay_runs_taken`)."""
+    taken = replay_runs_taken(rivals, runs, n_draws=n_draws, rng=np.random.default_rng(seed))
+    return _separations(taken.predictions, taken.sigma), taken.factors
 
 
 def _shortest(exp: Experiment, preds: Sequence[RivalPrediction], space: Space,

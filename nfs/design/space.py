@@ -128,6 +128,12 @@ class Experiment:
             steps.append({"hold_s": float(rest)})
         return steps
 
+    def off_spans_s(self) -> tuple[tuple[float, float], ...]:
+        """(switched off, switched on again) of every power cycle, from power-on [s], read
+        from the program as the simulator reads it."""
+        prog = parse_program(self.program(), file=None, key="design.program")
+        return prog.power_off_spans_s(self.start_temperature_c, 1.0)
+
     def describe(self) -> str:
         """The run in words."""
         head = (f"soak at {self.start_temperature_c:g} C, power on, north-find for "

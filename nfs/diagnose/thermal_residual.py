@@ -315,11 +315,9 @@ def simulate_knots(insts: Sequence[Instrument], data: Sequence[ThermalRun],
                     contrib[key] = c * on
                 varying[:, s, :, j] += contrib[key]
         gated = not np.all(on == 1.0)
+        # (on = 1 multiplies exactly: a run without power cycles keeps its bits)
         drive = (amb[:, None, :, None] * g_amb[None, :, None, :]
-                 + on[:, None, :, None] * (p_const[:, None, :] @ g_pow)[None, :, :, :]
-                 if gated else
-                 amb[:, None, :, None] * g_amb[None, :, None, :]
-                 + (p_const[:, None, :] @ g_pow)[None, :, :, :])
+                 + on[:, None, :, None] * (p_const[:, None, :] @ g_pow)[None, :, :, :])
         if varying is not None:
             drive += _each(varying, g_pow)
         temp = np.empty((n_k, n_s, r, n))

@@ -55,6 +55,10 @@ def test_errors_are_one_line_before_any_work(data, capsys, tmp_path):
     _one_line_error(capsys, ["design", runs, "--model", model, "-o", tmp_path / "a",
                              "--rivals", "model", "turn_on_transient", "--margin", "-1"],
                     "--margin")
+    # a chamber booking shorter than the soak plus one 10-min step leaves no run
+    _one_line_error(capsys, ["design", runs, "--model", model, "-o", tmp_path / "a",
+                             "--rivals", "model", "turn_on_transient", "--max-hours", "3.1"],
+                    "--max-hours", "soak")
     bad = tmp_path / "not_a_tie.json"
     bad.write_text(json.dumps({"answer": {"kind": "nothing", "labels": [],
                                          "text": "nothing beyond noise"}}))
