@@ -32,7 +32,7 @@ from .variability import (Variability, drawn_soak, start_up_state, unit_instrume
                           unpowered_network)
 
 __all__ = ["RunConditions", "SimulationResult", "simulate_run", "simulate_runs", "effect_context",
-           "conditions_from_run", "chamber_assumption", "thermal_power"]
+           "conditions_from_run", "chamber_assumption", "thermal_power", "fixed_thermal_power"]
 
 _UG = 1e-6
 #: Stacked runs up to this many get the state-dependent heat law row by row.
@@ -209,20 +209,14 @@ def thermal_effects(inst: Instrument) -> list[tuple[EffectInstance, int, dict[st
     return out
 
 
-def thermal_power(inst: Instrument, time_s: np.ndarray, moving: np.ndarray,
-                  powered: np.ndarray | None = None):
-    """The heat input of the thermal effects: (power, terms, stateful).
+def fixed_thermal_power(inst: Instrument, time_s: np.ndarray, moving: np.ndarray,
+                        powered: np.ndarray | None = None):
+    """The state-free part of the heat input: (fixed, terms, stateful).
 
-    ``powered``: the power state s(t_k) of a run with power cycles (:mod:`nfs.power`), or
-    None (on throughout).  Off, the network's constant node powers are cancelled (an extra
-    -P_j) and every thermal effect releases nothing.
-
-    ``power`` is an array (n_samples, n_nodes) when no effect depends on the state, else a
-    per-sample law ``power(t_s, temperature_c)`` for :func:`thermal.simulate` (or, with
-    temperatures (R, n_nodes) of R stacked runs, for :func:`thermal.simulate_many`: a
-    state-dependent effect then gets an array of the runs' node temperatures); ``terms``
-    holds each state-free effect's power by label; ``stateful`` lists the state-dependent
-    effects (effect, node index, params) to evaluate on the solution afterwards.
+    ``fixed`` (n_samples, n_nodes) [W]: the state-free thermal effects' power, and, while
+    the unit is off (``powered`` False, :mod:`nfs.power`), nothing of them and an extra
+    -P_j cancelling the network's constant node powers; ``terms`` each state-free effect's
+    power by label; ``stateful`` the state-dependent effects (effect, node index, params).
     """
     n = len(inst.network.node_names)
     fixed = np.zeros((len(time_s), n))
@@ -241,8 +235,28 @@ def thermal_power(inst: Instrument, time_s: np.ndarray, moving: np.ndarray,
             terms[e.label] = p
     if off is not None:
         fixed[off] -= inst.network.node_power_w
+    return fixed, terms, stateful
+
+
+def thermal_power(inst: Instrument, time_s: np.ndarray, moving: np.ndarray,
+                  powered: np.ndarray | None = None):
+    """The heat input of the thermal effects: (power, terms, stateful).
+
+    ``powered``: the power state s(t_k) of a run with power cycles (:mod:`nfs.power`), or
+    None (on throughout).  Off, the network's constant node powers are cancelled (an extra
+    -P_j) and every thermal effect releases nothing.
+
+    ``power`` is an array (n_samples, n_nodes) when no effect depends on the state, else a
+    per-sample law ``power(t_s, temperature_c)`` for :func:`thermal.simulate` (or, with
+    temperatures (R, n_nodes) of R stacked runs, for :func:`thermal.simulate_many`: a
+    state-dependent effect then gets an array of the runs' node temperatures); ``terms``
+    holds each state-free effect's power by label; ``stateful`` lists the state-dependent
+    effects (effect, node index, params) to evaluate on the solution afterwards.
+    """
+    fixed, terms, stateful = fixed_thermal_power(inst, time_s, moving, powered)
     if not stateful:
         return fixed, terms, stateful
+    off = None if powered is None else ~np.asarray(powered, dtype=bool)
     # The per-sample law: the state-dependent sources from the current node temperature,
     # held over the sample interval by the exact solver.
     index = {float(t): k for k, t in enumerate(time_s)}

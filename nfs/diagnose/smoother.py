@@ -48,7 +48,7 @@ from thermal.network import index_of
 from ..docfields import document_fields
 from ..effects.thermometer import THERMOMETERS
 from ..errors import InputError, NfsError, ThermalError
-from ..experiment import conditions_from_run, thermal_effects
+from ..experiment import conditions_from_run, fixed_thermal_power
 from ..instrument import Instrument
 from ..run import Run
 
@@ -206,16 +206,8 @@ def _prepare(inst: Instrument, run: Run, decimate_s: float,
     # the heat of the thermal effects; while the unit is off (power cycles, nfs.power)
     # none, and the network's constant node powers cancelled
     powered = cond.powered(t)
-    fixed = np.zeros((t.size, n))
-    stateful = []
-    for e, j, params in thermal_effects(inst):
-        if e.spec.state_dependent:
-            stateful.append((e.spec.function, j, params))
-        else:
-            fixed[:, j] += np.broadcast_to(np.asarray(
-                e.spec.function(t, None, moving, **params), dtype=float), t.shape)
-    if powered is not None:
-        fixed[~powered] = -inst.network.node_power_w
+    fixed, _, stateful_effects = fixed_thermal_power(inst, t, moving, powered)
+    stateful = [(e.spec.function, j, params) for e, j, params in stateful_effects]
     law = None
     if stateful:
         times, moves = t_knot.tolist(), moving_knot.tolist()
