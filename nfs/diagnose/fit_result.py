@@ -92,14 +92,9 @@ class FitResult:
     def summary(self) -> str:
         """A few lines of text: each parameter with its error, flags and warnings."""
         lines = []
-        for p, v in self.params.items():
-            flag = " (at bound)" if p in self.at_bound else ""
-            if p in self.unidentifiable:
-                flag += " (not identifiable)"
-            shift = self.prior_shift.get(p, math.nan)
-            moved = f", {shift:+.2f} prior widths" if math.isfinite(shift) else ""
-            lines.append(f"{p} = {v:.6g} +- {self.stderr.get(p, math.nan):.3g}"
-                         f" (start {self.initial_params[p]:.6g}{moved}){flag}")
+        for p in self.params:
+            value, start, flags = _parameter(self, p)
+            lines.append(f"{value} ({start})" + "".join(f" ({f})" for f in flags))
         if self.noise is not None:
             n = self.noise
             lines.append(f"gyro noise from the Allan deviation of the drift residual: "
@@ -115,6 +110,17 @@ class FitResult:
         return "\n".join(lines)
 
 
+def _parameter(result: FitResult, p: str) -> tuple[str, str, list[str]]:
+    """One fitted parameter in words: ``"path = value +- error"``, ``"start value[, how
+    far the data moved it in prior widths]"`` and its flags (at bound, not identifiable)."""
+    shift = result.prior_shift.get(p, math.nan)
+    moved = f", {shift:+.2f} prior widths" if math.isfinite(shift) else ""
+    flags = [f for f, on in (("at bound", p in result.at_bound),
+                             ("not identifiable", p in result.unidentifiable)) if on]
+    return (f"{p} = {result.params[p]:.6g} +- {result.stderr.get(p, math.nan):.3g}",
+            f"start {result.initial_params[p]:.6g}{moved}", flags)
+
+
 def write_fitted_model(result: FitResult, path: str | Path) -> Path:
     """Write the fitted instrument as a TOML file a user can read and edit.
 
@@ -125,17 +131,10 @@ def write_fitted_model(result: FitResult, path: str | Path) -> Path:
     path = Path(path)
     lines = [f"# Instrument fitted by nfs.diagnose.fit_model from '{result.initial.name}'.",
              "# Fitted parameters (value +- standard error; start value):"]
-    for p, v in result.params.items():
-        flags = []
-        if p in result.at_bound:
-            flags.append("AT BOUND")
-        if p in result.unidentifiable:
-            flags.append("NOT IDENTIFIABLE")
-        flag = f"  [{', '.join(flags)}]" if flags else ""
-        shift = result.prior_shift.get(p, math.nan)
-        moved = f", {shift:+.2f} prior widths" if math.isfinite(shift) else ""
-        lines.append(f"#   {p} = {v:.6g} +- {result.stderr.get(p, math.nan):.3g}"
-                     f"; start {result.initial_params[p]:.6g}{moved}{flag}")
+    for p in result.params:
+        value, start, flags = _parameter(result, p)
+        flag = f"  [{', '.join(f.upper() for f in flags)}]" if flags else ""
+        lines.append(f"#   {value}; {start}{flag}")
     if result.noise is not None:
         n = result.noise
         lines.append(f"# gyro noise from the Allan deviation of the drift residual at rest: "
