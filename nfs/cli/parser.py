@@ -20,6 +20,13 @@ def _runs_argument(p: argparse.ArgumentParser) -> None:
     p.add_argument("data", nargs="+", help="NAME.csv files, NAME.toml files or folders")
 
 
+def _trust_effects_option(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--trust-effects", action="store_true",
+                   help="let the scenario's effects_files (Python files of your own "
+                        "effects) run; read them first: a scenario file does not run code "
+                        "otherwise")
+
+
 def _runs_and_model_arguments(p: argparse.ArgumentParser) -> None:
     _runs_argument(p)
     p.add_argument("--model", default="default",
@@ -70,10 +77,7 @@ def build_parser() -> argparse.ArgumentParser:
     t.add_argument("--tolerance", type=float, default=None,
                    help="relative change a worse cell must also exceed (default 0.05: 5 %%)")
     t.add_argument("-q", "--quiet", action="store_true", help="no progress on stderr")
-    t.add_argument("--trust-effects", action="store_true",
-                    help="let the scenario's effects_files (Python files of your own "
-                         "effects) run; read them first: a scenario file does not run code "
-                         "otherwise")
+    _trust_effects_option(t)
     t.add_argument("--overwrite", action="store_true",
                    help="replace an existing --json file, and write into a folder that holds "
                         "another command's output or files of unknown origin (files of the "
@@ -136,10 +140,7 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--seed", type=int, default=None, help="override the scenario's seed")
     s.add_argument("--repeats", type=int, default=None, help="override runs per temperature")
     s.add_argument("-q", "--quiet", action="store_true", help="no progress on stderr")
-    s.add_argument("--trust-effects", action="store_true",
-                    help="let the scenario's effects_files (Python files of your own "
-                         "effects) run; read them first: a scenario file does not run code "
-                         "otherwise")
+    _trust_effects_option(s)
     s.add_argument("--overwrite", action="store_true",
                     help="write into a folder that holds another command's output or files "
                          "of unknown origin (files of the earlier output that are not "
@@ -342,10 +343,7 @@ def build_parser() -> argparse.ArgumentParser:
     sw.add_argument("sweep", help="sweep TOML file")
     sw.add_argument("-o", "--output", required=True, metavar="DIR",
                     help="the sweep's folder (cells/, results.csv, figures); reused by a rerun")
-    sw.add_argument("--trust-effects", action="store_true",
-                    help="let the scenario's effects_files (Python files of your own "
-                         "effects) run; read them first: a scenario file does not run code "
-                         "otherwise")
+    _trust_effects_option(sw)
     sw.add_argument("--jobs", type=int, default=-1, metavar="N",
                     help="local worker processes (default -1: every core; 1: this process)")
     sw.add_argument("--dask-local", type=int, default=None, metavar="N",

@@ -161,9 +161,11 @@ def _shortest(exp: Experiment, preds: Sequence[RivalPrediction], space: Space,
     """The shortest prefix of ``exp`` on which the worst of ``pairs`` reaches ``margin``;
     else the longest, with its worst separation."""
     worst = -1.0
+    # the noise of every number of the longest record: a prefix's is its first numbers
+    full = scaled(noise_sigma(ref_inst, preds[0].mean[0]), factors)
     for d in space.durations_s(exp):
         cut = [p.until(d) for p in preds]
-        sigma = [scaled(noise_sigma(ref_inst, cut[0].mean[0]), factors)]
+        sigma = [{c: v[: cut[0].mean[0].values[c].size] for c, v in full.items()}]
         w = min(s.sigma for s in _separations(cut, sigma, pairs).values())
         worst = w
         if w >= margin:
