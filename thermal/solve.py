@@ -61,6 +61,7 @@ from scipy.linalg import expm, eigh
 from scipy.signal import lfilter
 
 from thermal.errors import ThermalError
+from thermal.march import march, step_maps
 from thermal.network import Network, index_of
 
 __all__ = ["ThermalResult", "simulate", "step_matrices", "StepMatrices", "AMBIENT_HOLDS"]
@@ -247,59 +248,6 @@ def _modal_recursion(phi_minus_i: np.ndarray, capacity: np.ndarray, t0: np.ndarr
     return (z @ q.T) / d
 
 
-def _step_maps(steps: list[StepMatrices], node_power_w: np.ndarray) -> list[np.ndarray]:
-    """Per step class, [Phi - I | Gamma_P | Gamma_amb | Gamma_P P_const (| Lambda)]: the
-    increment of (3) (and (7)) from one augmented row [T_k, p_k, T_amb,k, 1 (, v_k)]."""
-    return [np.column_stack([m.phi_minus_i, m.gamma[:, 1:], m.gamma[:, 0],
-                             m.gamma[:, 1:] @ node_power_w]
-                            + ([] if m.lam is None else [m.lam])) for m in steps]
-
-
-def _march(steps: list[StepMatrices], cls: list[int], x: np.ndarray, time_s: np.ndarray,
-           node_power_w: np.ndarray, power: PowerLaw | None) -> None:
-    """Fill T_1, ..., T_{n_t-1} of ``x`` one interval at a time, calling the power law.
-
-    Row k of ``x`` is the augmented state [T_k, p_k, T_amb,k, 1] with p_k the extra power
-    (n columns each) and P_const the constant node powers, so that one product per step
-    gives the increment of (3):
-
-        T_{k+1} = T_k + [Phi - I | Gamma_P | Gamma_amb | Gamma_P P_const] x_k,
-
-    and with a first-order hold of the chamber (steps carrying Lambda) one more column, the
-    chamber slope v_k, multiplied by Lambda (7).
-
-    with Phi - I = A Psi computed without cancellation.  (Stepping with a rounded Phi
-    instead biases the slow modes: an error eps in Phi near 1 shifts their fixed point by
-    eps / (1 - lambda), a few 1e-12 K after 9000 steps of 1 s.)
-
-    With a power law, p_{k+1} = power(t_{k+1}, T_{k+1}) is written into row k+1 as soon as
-    T_{k+1} is known; the law gets a read-only view of T_{k+1}, which is never changed after.
-    """
-    n = node_power_w.size
-    maps = _step_maps(steps, node_power_w)
-    frozen = x.view()
-    frozen.flags.writeable = False
-    times = time_s.tolist()
-    steps_dot = [m.dot for m in maps]
-    # row views made once: indexing x inside the loop would cost as much as the product
-    rows, temps, new_temps = list(x), list(x[:-1, :n]), list(x[1:, :n])
-    if power is None:
-        for c, row, temp, new_temp in zip(cls, rows, temps, new_temps):
-            steps_dot[c](row, out=new_temp)
-            new_temp += temp
-        return
-    first = np.asarray(power(times[0], frozen[0, :n]), dtype=float)
-    if first.shape != (n,):
-        raise ThermalError(f"power_w(t_s, temperature_c) must return shape ({n},), got "
-                           f"shape {first.shape}")
-    x[0, n:2 * n] = first
-    for c, row, temp, new_temp, new_power, seen, t_s in zip(
-            cls, rows, temps, new_temps, list(x[1:, n:2 * n]), list(frozen[1:, :n]), times[1:]):
-        steps_dot[c](row, out=new_temp)
-        new_temp += temp
-        new_power[...] = power(t_s, seen)
-
-
 def _as_time(time_s: object) -> np.ndarray:
     """The sample times as a 1-D, finite, strictly increasing float array."""
     t = np.asarray(time_s, dtype=float)
@@ -374,8 +322,9 @@ def simulate(network: Network, time_s: np.ndarray, *,
         temperature-dependent law over a step h errs by O(h) against the same law applied
         continuously (3e-4 K for the TEC of benchmarks/bench_thermal.py at h = 1 s); the
         value at the last sample is reported (``power_w``, ``rate_c_per_s``) but not held.
-        With a callable the march is a Python loop, about 2-4 us per step plus the
-        callable; without one it is vectorised.
+        With a callable the march (thermal/march.py, equation (9)) is a Python loop over
+        the samples, a few microseconds per step plus the callable, in the same arithmetic
+        as a run of :func:`thermal.simulate_many`; without one it is vectorised.
 
     Returns
     -------
@@ -408,34 +357,33 @@ def simulate(network: Network, time_s: np.ndarray, *,
         slope[:-1] = np.diff(amb) / np.diff(t)
 
     law = power_w if callable(power_w) else None
-    x = np.zeros((n_t, 2 * n + 2 + linear))   # rows [T_k, p_k, T_amb,k, 1(, v_k)], _march
-    x[0, :n] = t0
-    x[:, 2 * n] = amb
-    x[:, 2 * n + 1] = 1.0
-    if linear:
-        x[:, 2 * n + 2] = slope
+    extra = None
     if law is None and power_w is not None:
         extra = np.asarray(power_w, dtype=float)
         if extra.shape != (n_t, n):
             raise ThermalError(f"power_w must be a callable or an array of shape ({n_t}, {n}), "
                                f"got shape {extra.shape}")
         _check_power_array(extra, t, names, "power_w")
-        x[:, n:2 * n] = extra
 
     inputs = np.empty((n_t, 1 + n))     # u_k = [T_amb,k, P_1,k, ..., P_n,k], equation (2)
     inputs[:, 0] = amb
     if law is None and len(mats) == 1:
-        inputs[:, 1:] = network.node_power_w + x[:, n:2 * n]
+        inputs[:, 1:] = network.node_power_w + (0.0 if extra is None else extra)
         drive = _per_interval([mats[0].gamma], cls, inputs[:-1], n)
         if linear:
             drive += slope[:-1, None] * mats[0].lam
         temp = _modal_recursion(mats[0].phi_minus_i, network.capacity_j_per_k, t0, drive)
     else:
-        _march(mats, cls.tolist(), x, t, network.node_power_w, law)
+        # the march of thermal/march.py with one run: a run's bits are those it gets in a
+        # batch of any size (thermal.simulate_many)
+        state = march(step_maps(mats, network.node_power_w), cls, t, t0[:, None],
+                      amb[:, None], slope[:, None] if linear else None, extra, law,
+                      stacked=False)
+        temp = np.ascontiguousarray(state[:, :n, 0])
+        power = state[:, n:, 0]
         if law is not None:
-            _check_power_array(x[:, n:2 * n], t, names, "power_w(t_s, temperature_c)")
-        inputs[:, 1:] = network.node_power_w + x[:, n:2 * n]
-        temp = x[:, :n]
+            _check_power_array(power, t, names, "power_w(t_s, temperature_c)")
+        inputs[:, 1:] = network.node_power_w + power
 
     return _result(network, a, b, mats, steps, cls, t, amb, slope, linear, temp, inputs,
                    ambient_hold)

@@ -1,0 +1,115 @@
+"""A run's bits do not depend on the batch it is marched in (thermal/march.py, equation (9)).
+
+Oracle: invariance.  Every run of a batch goes through the same correctly rounded
+elementwise operations on its own numbers, so each run's temperatures, powers, rates and
+heat bookkeeping are equal (np.array_equal, every bit) whether it is marched alone
+(thermal.simulate), in batches of 1, 2, 7 or all R runs, in any order, beside any
+neighbours, and whether the step's sum is taken by ``np.add.accumulate`` (few runs) or by
+block additions (many).
+"""
+
+import numpy as np
+import pytest
+
+from thermal import iter_simulate_many, simulate, simulate_many
+from thermal.march import _ACCUMULATE_UP_TO
+from thermal_networks import seven_nodes
+
+R = 40          # above _ACCUMULATE_UP_TO: the block additions; batches of 1, 2, 7 accumulate
+FIELDS = ("temperature_c", "power_w", "rate_c_per_s", "heat_in_j", "heat_lost_j")
+
+
+def _tec(j):
+    """A TEC-like law on node j for one run (n,) or many (R, n) [W]."""
+    def law(t_s, temperature_c):
+        p = np.zeros(np.shape(temperature_c))
+        d = np.asarray(temperature_c)[..., j] - 25.0
+        p[..., j] = np.where(d < 0, -0.03 * d, 0.08 * d) + 0.2 * np.sin(t_s / 90.0)
+        return p
+    return law
+
+
+@pytest.fixture(scope="module")
+def case():
+    net = seven_nodes()
+    rng = np.random.default_rng(25)
+    t = np.arange(0.0, 1500.0, 1.0)
+    starts = rng.uniform(-40.0, 60.0, R)
+    ambient = (starts[:, None] + rng.uniform(-2.0, 2.0, (R, 1)) * np.sin(t / 300.0)
+               + rng.uniform(-1.0, 1.0, (R, 1)) * t / 1500.0)
+    initial = starts[:, None] + rng.uniform(-3.0, 3.0, (R, len(net.node_names)))
+    law = _tec(net.node_names.index("electronics"))
+    return net, t, ambient, initial, law
+
+
+def _same(a, b):
+    for f in FIELDS:
+        assert np.array_equal(getattr(a, f), getattr(b, f)), f
+
+
+@pytest.mark.parametrize("hold", ["zero-order", "first-order"])
+def test_every_run_has_its_bits_in_any_batch(case, hold):
+    net, t, ambient, initial, law = case
+    assert R > _ACCUMULATE_UP_TO >= 7
+    all_runs = simulate_many(net, t, ambient_c=ambient, initial_c=initial, power_w=law,
+                             ambient_hold=hold)
+    for size in (1, 2, 7):
+        for b0 in range(0, R, size):
+            idx = list(range(b0, min(R, b0 + size)))
+            part = simulate_many(net, t, ambient_c=ambient[idx], initial_c=initial[idx],
+                                 power_w=law, ambient_hold=hold)
+            for i, res in zip(idx, part):
+                _same(res, all_runs[i])
+
+
+def test_order_and_neighbours_do_not_matter(case):
+    net, t, ambient, initial, law = case
+    all_runs = simulate_many(net, t, ambient_c=ambient, initial_c=initial, power_w=law,
+                             ambient_hold="first-order")
+    order = np.random.default_rng(7).permutation(R)
+    shuffled = simulate_many(net, t, ambient_c=ambient[order], initial_c=initial[order],
+                             power_w=law, ambient_hold="first-order")
+    for i, res in zip(order, shuffled):
+        _same(res, all_runs[i])
+    # run 0 beside copies of run 5 and beside its own copies
+    for mix in ([0, 5, 5, 5], [5] * 20 + [0], [0] * (R + 3)):
+        res = simulate_many(net, t, ambient_c=ambient[mix], initial_c=initial[mix],
+                            power_w=law, ambient_hold="first-order")
+        _same(res[mix.index(0)], all_runs[0])
+
+
+@pytest.mark.parametrize("hold", ["zero-order", "first-order"])
+def test_a_single_run_is_a_batch_of_one(case, hold):
+    net, t, ambient, initial, law = case
+    all_runs = simulate_many(net, t, ambient_c=ambient, initial_c=initial, power_w=law,
+                             ambient_hold=hold)
+    for i in (0, 13, R - 1):
+        one = simulate(net, t, ambient_c=ambient[i], initial_c=initial[i], power_w=law,
+                       ambient_hold=hold)
+        _same(one, all_runs[i])
+
+
+def test_batches_by_memory_and_streaming_give_the_same_bits(case):
+    net, t, ambient, initial, law = case
+    all_runs = simulate_many(net, t, ambient_c=ambient, initial_c=initial, power_w=law)
+    per_run = 8 * 2 * len(net.node_names) * t.size
+    for max_bytes in (1, 3 * per_run, 17 * per_run):
+        streamed = iter_simulate_many(net, t, ambient_c=ambient, initial_c=initial,
+                                      power_w=law, max_bytes=max_bytes)
+        for a, b in zip(streamed, all_runs, strict=True):
+            _same(a, b)
+
+
+def test_uneven_steps_keep_batch_independence(case):
+    """Two step classes (a grid with a gap): each interval takes its own class's maps."""
+    net, _, _, _, law = case
+    t = np.concatenate([np.arange(0.0, 300.0, 1.0), 310.0 + np.arange(0.0, 300.0, 2.0)])
+    rng = np.random.default_rng(3)
+    starts = rng.uniform(-30.0, 50.0, 20)
+    ambient = starts[:, None] + np.sin(t / 60.0)[None, :]
+    many = simulate_many(net, t, ambient_c=ambient, initial_c=starts, power_w=law,
+                         ambient_hold="first-order")
+    for i in (0, 19):
+        one = simulate(net, t, ambient_c=ambient[i], initial_c=starts[i], power_w=law,
+                       ambient_hold="first-order")
+        _same(one, many[i])

@@ -1,0 +1,154 @@
+"""The march of R runs of one network through their samples, in arithmetic whose every bit
+of a run is independent of the runs beside it.
+
+A run's augmented state at sample k is s_k = [T_k, p_k] (2n rows: the node temperatures
+[degC] and the extra node powers held over [t_k, t_k+1) [W]).  One step of the exact
+solution, thermal/solve.py equations (3) and (7), is
+
+    T_{k+1} = T_k + (sum_{j=0}^{2n-1} M_j s_k,j + d_k),        M = [Phi - I | Gamma_P],  (9)
+    d_k = (Gamma_amb T_amb,k + Gamma_P P_const) + Lambda v_k,
+
+with Phi - I = A Psi free of the cancellation of Phi - I (solve.py), M_j column j of M
+[K per K, or K per W], Gamma_amb the chamber column of Gamma, P_const the constant node
+powers [W] and v_k the chamber's slope [K/s] (zero under a zero-order hold).
+
+Bits independent of the batch.  The sum over j in (9) is taken in the fixed order j = 0, 1,
+..., 2n-1, one product M_j s_k,j and one addition at a time, each an IEEE-754 operation on
+that run's own numbers (NumPy's elementwise ``multiply`` and ``add``, which round every
+result and never fuse a multiply and an add).  Every run of a batch goes through the same
+sequence of correctly rounded operations on its own operands, so its bits are those it gets
+alone: no BLAS product, whose summation order may follow the shape of the batch, is
+involved.  The states of R runs lie side by side in the last axis, ``state[k]`` of shape
+(2n, R), so each operation serves every run at once; the sum is one
+``np.add.accumulate`` over j for a few runs (documented as the running sum r_j = r_{j-1} +
+a_j, the same order) and a loop of 2n - 1 additions over whole (n, R) blocks for many.
+
+The drive d_k depends on no state: it is computed for every sample at once before the
+march, elementwise, in the order written in (9).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from thermal.errors import ThermalError
+
+__all__ = ["StepMaps", "step_maps", "march"]
+
+#: Up to this many runs the sum (9) is one ``np.add.accumulate`` (fewer calls); above it a
+#: loop of block additions (less memory traffic).  The two give the same bits.
+_ACCUMULATE_UP_TO = 16
+
+
+@dataclass(frozen=True)
+class StepMaps:
+    """The matrices of (9) for each step class (distinct step h)."""
+
+    columns: tuple[np.ndarray, ...]
+    """Per class, M^T as (2n, n, 1): row j is the column M_j of [Phi - I | Gamma_P]."""
+
+    ambient: np.ndarray
+    """Gamma_amb per class [K/K], shape (n_classes, n)."""
+
+    constant: np.ndarray
+    """Gamma_P P_const per class [K], shape (n_classes, n)."""
+
+    slope: np.ndarray | None
+    """Lambda per class [K per K/s], shape (n_classes, n); None under a zero-order hold."""
+
+
+def step_maps(steps, node_power_w: np.ndarray) -> StepMaps:
+    """The :class:`StepMaps` of the step matrices ``steps`` (solve.StepMatrices, one per
+    step class) and the constant node powers ``node_power_w`` [W], shape (n,)."""
+    n = node_power_w.size
+    if not steps:                           # one sample: nothing to step
+        return StepMaps((), np.empty((0, n)), np.empty((0, n)), None)
+    columns = tuple(np.ascontiguousarray(
+        np.column_stack([m.phi_minus_i, m.gamma[:, 1:]]).T[:, :, None]) for m in steps)
+    ambient = np.array([m.gamma[:, 0] for m in steps])
+    constant = np.array([m.gamma[:, 1:] @ node_power_w for m in steps])
+    slope = None if steps[0].lam is None else np.array([m.lam for m in steps])
+    return StepMaps(columns, ambient, constant, slope)
+
+
+def _drive(maps: StepMaps, cls: np.ndarray, ambient_c: np.ndarray,
+           slope_c_per_s: np.ndarray | None, out: np.ndarray) -> None:
+    """d_k of (9) for k = 0 .. n_t-2 into ``out`` (n_t-1, n, R); ``ambient_c`` and
+    ``slope_c_per_s`` (n_t, R)."""
+    np.multiply(maps.ambient[cls][:, :, None], ambient_c[:-1, None, :], out=out)
+    out += maps.constant[cls][:, :, None]
+    if maps.slope is not None and slope_c_per_s is not None:
+        lam = maps.slope[cls]
+        for i in range(out.shape[1]):       # one node at a time: no (n_t, n, R) temporary
+            out[:, i, :] += lam[:, i, None] * slope_c_per_s[:-1]
+
+
+def march(maps: StepMaps, cls: np.ndarray, time_s: np.ndarray, initial_c: np.ndarray,
+          ambient_c: np.ndarray, slope_c_per_s: np.ndarray | None,
+          extra_w: np.ndarray | None, law: Callable | None, *,
+          stacked: bool) -> np.ndarray:
+    """The states [T_k, p_k] of R runs at every sample by (9), shape (n_t, 2n, R).
+
+    Parameters
+    ----------
+    maps, cls :
+        The step maps (:func:`step_maps`) and, per interval k, its step class.
+    time_s : array (n_t,)
+        Sample times [s].
+    initial_c : array (n, R)
+        T_0 of every run [degC].
+    ambient_c, slope_c_per_s : array (n_t, R)
+        T_amb,k [degC] and its slope v_k [K/s] (None: held) of every run.
+    extra_w : array (n_t, n), optional
+        The extra powers p_k [W] shared by every run, when there is no law.
+    law : callable(t_s, temperature_c) -> array, optional
+        p_k = law(t_k, T_k), called once per sample for every run: with ``stacked`` the
+        temperatures of the runs (R, n) -> (R, n), else (one run) (n,) -> (n,).  It gets a
+        read-only view of T_k, which is never changed after.
+    """
+    n, r = initial_c.shape
+    n_t = time_s.size
+    state = np.empty((n_t, 2 * n, r))
+    temp, power = state[:, :n], state[:, n:]
+    temp[0] = initial_c
+    _drive(maps, cls, ambient_c, slope_c_per_s, temp[1:])
+    if law is None:
+        power[...] = 0.0 if extra_w is None else extra_w[:, :, None]
+    frozen = state.view()
+    frozen.flags.writeable = False
+    seen = list(frozen[:, :n].transpose(0, 2, 1)) if stacked else list(frozen[:, :n, 0])
+    want = (r, n) if stacked else (n,)
+    columns = maps.columns
+    classes = cls.tolist()
+    few = r <= _ACCUMULATE_UP_TO
+    prod = np.empty((2 * n, n, r))
+    acc = np.empty((2 * n, n, r)) if few else np.empty((n, r))
+    pairs = range(2, 2 * n)
+    times = time_s.tolist()
+    rows, temps, new_temps = list(state), list(temp[:-1]), list(temp[1:])
+    powers = list(power.transpose(0, 2, 1)) if stacked else list(power[:, :, 0])
+    for k, t_s in enumerate(times):
+        if law is not None:
+            p = np.asarray(law(t_s, seen[k]), dtype=float)
+            if p.shape != want:
+                raise ThermalError(f"power_w(t_s, temperature_c) must return shape {want}"
+                                   f"{f' for {r} runs' if stacked else ''}, got shape "
+                                   f"{p.shape}")
+            powers[k][...] = p
+        if k == n_t - 1:
+            break
+        np.multiply(columns[classes[k]], rows[k][:, None, :], out=prod)
+        new = new_temps[k]                  # holds d_k
+        if few:
+            np.add.accumulate(prod, axis=0, out=acc)
+            new += acc[-1]
+        else:
+            np.add(prod[0], prod[1], out=acc)
+            for j in pairs:
+                acc += prod[j]
+            new += acc
+        new += temps[k]
+    return state
