@@ -7,9 +7,15 @@ The kernel regressors (:mod:`~nfs.learners.svr`, :mod:`~nfs.learners.lssvm`,
 
     k(x, x') = exp(-||x - x'||^2 / (2 sigma^2))        (gamma_libsvm = 1 / (2 sigma^2))
 
-computed by one function, :func:`gaussian_kernel` (LIBSVM evaluates the same formula inside
-:class:`~nfs.learners.svr.SVRRegressor` with ``gamma = sigma_to_gamma(sigma)``), and summed
+computed by one function, :func:`gaussian_kernel`, as ``exp(-D2 / (2 sigma^2))`` of the
+squared distances D2 (:func:`squared_distances`, :func:`kernel_from_sq_distances`), and summed
 over training points by :func:`kernel_expansion`.
+
+Reuse.  The kernel of a new width is a cheap transform of the same squared distances, so a
+search over sigma computes D2 once per training set (cross-validation fold) and each
+candidate only exponentiates it: :meth:`KernelRegressor.training_sq_distances` gives D2 of
+the inputs as ``fit`` scales them, and the tuned regressors' ``fit(X, y, sq_distances=D2)``
+takes it instead of computing it again (bit for bit the same kernel).
 
 Scaling.  With ``standardize=True`` (the default) every input column is standardised with
 its training mean and standard deviation before the kernel is evaluated
@@ -35,6 +41,8 @@ from .validation import HyperparameterError, fit_scaling, validate
 __all__ = [
     "PREDICT_BATCH",
     "sigma_to_gamma",
+    "squared_distances",
+    "kernel_from_sq_distances",
     "gaussian_kernel",
     "kernel_expansion",
     "KernelRegressor",
@@ -49,6 +57,36 @@ def sigma_to_gamma(sigma: float) -> float:
     """LIBSVM/scikit-learn RBF ``gamma`` [1/unit^2] for the width ``sigma`` [unit]:
     gamma = 1 / (2 sigma^2), so that exp(-gamma d^2) = exp(-d^2 / (2 sigma^2))."""
     return 1.0 / (2.0 * float(sigma) ** 2)
+
+
+def squared_distances(XA: np.ndarray, XB: np.ndarray | None = None) -> np.ndarray:
+    """Squared Euclidean distances D2[i, j] = ||XA[i] - XB[j]||^2 [unit of the inputs ^2].
+
+    Parameters
+    ----------
+    XA : array (n_a, n_features)
+    XB : array (n_b, n_features), optional
+        Defaults to ``XA`` (the training set against itself).
+
+    Returns
+    -------
+    D2 : array (n_a, n_b), >= 0, exactly 0 on the diagonal of D2(X, X).
+
+    From ``scipy.spatial.distance.cdist`` (direct differences, no ||a||^2 + ||b||^2 - 2 a.b
+    cancellation), so D2(X, X) is exactly symmetric.
+    """
+    XA = np.asarray(XA, dtype=float)
+    XB = XA if XB is None else np.asarray(XB, dtype=float)
+    return cdist(XA, XB, "sqeuclidean")
+
+
+def kernel_from_sq_distances(d2: np.ndarray, sigma: float) -> np.ndarray:
+    """Gaussian kernel exp(-D2 / (2 sigma^2)) of squared distances ``d2`` [unit^2] for the
+    width ``sigma`` [unit], > 0 (Tao et al. (2019) eq. (11)); entries in (0, 1]."""
+    sigma = float(sigma)
+    if not (np.isfinite(sigma) and sigma > 0.0):
+        raise HyperparameterError(f"kernel width sigma must be a positive number, got {sigma}")
+    return np.exp(-np.asarray(d2) / (2.0 * sigma * sigma))
 
 
 def gaussian_kernel(XA: np.ndarray, XB: np.ndarray | None = None, sigma: float = 1.0
@@ -69,16 +107,10 @@ def gaussian_kernel(XA: np.ndarray, XB: np.ndarray | None = None, sigma: float =
     -------
     K : array (n_a, n_b), entries in (0, 1], exactly 1 on the diagonal of K(X, X).
 
-    The squared distances come from ``scipy.spatial.distance.cdist`` (direct differences,
-    no ||a||^2 + ||b||^2 - 2 a.b cancellation), so K(X, X) is exactly symmetric.
+    :func:`kernel_from_sq_distances` of :func:`squared_distances`, so K(X, X) is exactly
+    symmetric.
     """
-    sigma = float(sigma)
-    if not (np.isfinite(sigma) and sigma > 0.0):
-        raise HyperparameterError(f"kernel width sigma must be a positive number, got {sigma}")
-    XA = np.asarray(XA, dtype=float)
-    XB = XA if XB is None else np.asarray(XB, dtype=float)
-    d2 = cdist(XA, XB, "sqeuclidean")
-    return np.exp(-d2 / (2.0 * sigma * sigma))
+    return kernel_from_sq_distances(squared_distances(XA, XB), sigma)
 
 
 def kernel_expansion(Xs: np.ndarray, centers: np.ndarray, coef: np.ndarray,
@@ -132,6 +164,33 @@ class KernelRegressor(RegressorMixin, BaseEstimator):
 
     def _scale_X(self, X: np.ndarray) -> np.ndarray:
         return (np.asarray(X, dtype=float) - self.x_mean_) / self.x_scale_
+
+    def training_sq_distances(self, X) -> np.ndarray:
+        """Squared distances between the rows of ``X`` scaled as :meth:`fit` scales them
+        (standardised with X's own means and standard deviations when ``standardize``)
+        [standard deviations^2, or unit^2 of X], shape (n, n).
+
+        What a search computes once per training set and passes to ``fit(X, y,
+        sq_distances=...)`` of every candidate (a new sigma only rescales it); the
+        estimator is not changed.
+        """
+        X = np.asarray(X, dtype=float)
+        if self.standardize:
+            mean, scale = fit_scaling(X)
+            X = (X - mean) / scale
+        return squared_distances(X)
+
+    def _train_sq_distances(self, Xs: np.ndarray, sq_distances) -> np.ndarray:
+        """D2 of the scaled training inputs ``Xs``: ``sq_distances`` when given (checked
+        for its shape), computed otherwise."""
+        if sq_distances is None:
+            return squared_distances(Xs)
+        d2 = np.asarray(sq_distances, dtype=float)
+        n = Xs.shape[0]
+        if d2.shape != (n, n):
+            raise ValueError(f"sq_distances must be the ({n}, {n}) squared distances of the "
+                             f"training inputs, got shape {d2.shape}")
+        return d2
 
     def _validate_fit(self, X, y):
         X, y = validate(self, X, y, reset=True)

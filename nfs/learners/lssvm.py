@@ -19,7 +19,7 @@ from typing import Callable
 import numpy as np
 import scipy.linalg
 
-from .kernels import KernelRegressor, gaussian_kernel, kernel_expansion
+from .kernels import KernelRegressor, kernel_expansion, kernel_from_sq_distances
 from .validation import HyperparameterError, check_count, check_positive
 from .weights import get_weight_function, robust_scale
 
@@ -133,17 +133,22 @@ class LSSVMRegressor(KernelRegressor):
         self.sigma = sigma
         self.standardize = standardize
 
-    def _prepare(self, X, y):
+    def _prepare(self, X, y, sq_distances):
         X, y = self._validate_fit(X, y)
         gamma = check_positive("gamma", self.gamma)
         sigma = check_positive("sigma", self.sigma)
         Xs, y = self._fit_scaling(X, y, scale_y=False)
         self.X_fit_ = X
-        return gaussian_kernel(Xs, Xs, sigma), y, gamma
+        return (kernel_from_sq_distances(self._train_sq_distances(Xs, sq_distances), sigma),
+                y, gamma)
 
-    def fit(self, X, y):
-        """Fit on features X (n_samples, n_features) and drift y (n_samples,). Returns self."""
-        K, y, gamma = self._prepare(X, y)
+    def fit(self, X, y, sq_distances=None):
+        """Fit on features X (n_samples, n_features) and drift y (n_samples,). Returns self.
+
+        ``sq_distances``: the squared distances of the scaled training inputs
+        (:meth:`~nfs.learners.kernels.KernelRegressor.training_sq_distances` of X) when a
+        search already holds them."""
+        K, y, gamma = self._prepare(X, y, sq_distances)
         self.alpha_, self.b_ = lssvm_solve(K, y, gamma)
         return self
 
@@ -242,12 +247,14 @@ class IRLSSVMRegressor(LSSVMRegressor):
                 f"Hampel knots need c1 < c2, got c1={self.c1!r}, c2={self.c2!r}")
         return lambda r: entry.func(r, **params)
 
-    def fit(self, X, y):
-        """Fit on features X (n_samples, n_features) and drift y (n_samples,). Returns self."""
+    def fit(self, X, y, sq_distances=None):
+        """Fit on features X (n_samples, n_features) and drift y (n_samples,). Returns self.
+
+        ``sq_distances``: as :meth:`LSSVMRegressor.fit`."""
         W = self._weight_callable()
         max_iter = check_count("max_iter", self.max_iter)
         tol = check_positive("tol", self.tol)
-        K, y, gamma = self._prepare(X, y)
+        K, y, gamma = self._prepare(X, y, sq_distances)
         alpha, b = lssvm_solve(K, y, gamma)
         v = np.ones_like(y)
         e = alpha / gamma

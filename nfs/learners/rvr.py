@@ -14,7 +14,7 @@ import scipy.linalg.lapack
 from sklearn.exceptions import ConvergenceWarning
 from sklearn.utils import gen_batches
 
-from .kernels import PREDICT_BATCH, KernelRegressor, gaussian_kernel
+from .kernels import PREDICT_BATCH, KernelRegressor, gaussian_kernel, kernel_from_sq_distances
 from .validation import HyperparameterError, check_count, check_positive
 
 __all__ = ["RVRRegressor"]
@@ -149,8 +149,12 @@ class RVRRegressor(KernelRegressor):
         w = np.maximum(w, np.finfo(float).eps * max(w.max(), np.finfo(float).tiny))
         return beta * (V @ ((V.T @ Ptt) / w)), np.einsum("ik,ik->i", V / w, V)
 
-    def fit(self, X, y):
-        """Fit on features X (n_samples, n_features) and drift y (n_samples,). Returns self."""
+    def fit(self, X, y, sq_distances=None):
+        """Fit on features X (n_samples, n_features) and drift y (n_samples,). Returns self.
+
+        ``sq_distances``: the (n_samples, n_samples) squared distances of the scaled training
+        inputs, :meth:`~nfs.learners.kernels.KernelRegressor.training_sq_distances` of X,
+        when a search already holds them (computed here otherwise; the same bits)."""
         X, y = self._validate_fit(X, y)
         if self.kernel not in self._KERNELS:
             raise HyperparameterError(
@@ -161,30 +165,34 @@ class RVRRegressor(KernelRegressor):
         threshold = check_positive("alpha_threshold", self.alpha_threshold)
         Xs, t = self._fit_scaling(X, y, scale_y=True)
         n = Xs.shape[0]
-        Phi = np.hstack([np.ones((n, 1)), gaussian_kernel(Xs, Xs, sigma)])
-        PtP, Ptt = Phi.T @ Phi, Phi.T @ t        # formed once; sub-indexed as bases go
+        K = kernel_from_sq_distances(self._train_sq_distances(Xs, sq_distances), sigma)
+        Phi = np.hstack([np.ones((n, 1)), K])
+        PtP, Ptt = Phi.T @ Phi, Phi.T @ t        # formed once; cut down as bases are pruned
         tiny = np.finfo(float).tiny
         eps = np.finfo(float).eps
 
-        keep = np.arange(n + 1)                 # column 0 is the bias
+        # the kept bases: their indices (column 0 is the bias), precisions and blocks of
+        # Phi^T Phi and Phi^T t, cut down only when a basis is pruned
+        keep = np.arange(n + 1)
         alpha = np.full(n + 1, 1.0 / n**2)
         beta = 100.0 / max(float(np.var(t)), eps)
         n_iter, converged = 0, False
         for n_iter in range(1, max_iter + 1):
-            Phi_k = Phi[:, keep]
-            mu, diag = self._posterior_diag(PtP[np.ix_(keep, keep)], Ptt[keep], alpha[keep],
-                                            beta)
-            g = np.clip(1.0 - alpha[keep] * diag, eps, 1.0)
+            mu, diag = self._posterior_diag(PtP, Ptt, alpha, beta)
+            g = np.clip(1.0 - alpha * diag, eps, 1.0)
             with np.errstate(divide="ignore"):
                 alpha_new = g / (mu * mu)
-            rss = float(np.sum((t - Phi_k @ mu) ** 2))
+            rss = float(np.sum((t - Phi[:, keep] @ mu) ** 2))
             beta = max(n - float(g.sum()), eps * n) / max(rss, tiny)
             beta = min(beta, 1.0 / (eps * max(float(np.var(t)), eps)))  # noise >= 1e-8 std
             finite = np.isfinite(alpha_new)
-            dlog = np.log(alpha_new[finite]) - np.log(alpha[keep][finite])
+            dlog = np.log(alpha_new[finite]) - np.log(alpha[finite])
             change = float(np.max(np.abs(dlog), initial=0.0))
-            alpha[keep] = alpha_new
-            keep = keep[alpha_new < threshold]
+            alpha = alpha_new
+            kept = alpha < threshold
+            if not kept.all():
+                keep, alpha, Ptt = keep[kept], alpha[kept], Ptt[kept]
+                PtP = PtP[np.ix_(kept, kept)]
             if keep.size == 0 or (change < tol and np.all(finite)):
                 converged = True
                 break
@@ -195,13 +203,13 @@ class RVRRegressor(KernelRegressor):
                           stacklevel=2)
 
         if keep.size:
-            mu, Sigma = self._posterior(PtP[np.ix_(keep, keep)], Ptt[keep], alpha[keep], beta)
+            mu, Sigma = self._posterior(PtP, Ptt, alpha, beta)
         else:
             mu, Sigma = np.zeros(0), np.zeros((0, 0))
         self.bias_used_ = bool(keep.size and keep[0] == 0)
         self.relevance_indices_ = keep[keep > 0] - 1
         self.relevance_vectors_ = X[self.relevance_indices_]
-        self.alpha_ = alpha[keep]
+        self.alpha_ = alpha
         self.beta_ = float(beta)
         self.mu_ = mu
         self.Sigma_ = Sigma
