@@ -12,7 +12,7 @@ The whole experiment (simulate -> north-find -> compensate -> table) is :class:`
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any, Callable
+from typing import Any, Callable, Iterator
 
 import numpy as np
 
@@ -31,7 +31,8 @@ from .sensors import (Schedule, earth_rate_along_axis_dph, thermometer_reading,
 from .variability import (Variability, drawn_soak, start_up_state, unit_instrument,
                           unpowered_network)
 
-__all__ = ["RunConditions", "SimulationResult", "simulate_run", "simulate_runs", "effect_context",
+__all__ = ["RunConditions", "SimulationResult", "simulate_run", "simulate_runs",
+           "iter_simulate_runs", "effect_context",
            "conditions_from_run", "chamber_assumption", "thermal_power", "fixed_thermal_power"]
 
 _UG = 1e-6
@@ -357,8 +358,14 @@ class _Prepared:
     powered: np.ndarray | None = None         # power state at the samples (None: always on)
 
 
-def _prepare(inst: Instrument, cond: RunConditions) -> _Prepared:
-    """Everything of one run before its thermal solve, the unpowered soak included."""
+def _prepare(inst: Instrument, cond: RunConditions, shared: dict | None = None) -> _Prepared:
+    """Everything of one run before its thermal solve, the unpowered soak included.
+
+    ``shared``: a dict kept across the runs of one call (:func:`simulate_runs`) that holds
+    what runs have in common (a unit's drawn instrument, the heat input of one unit, grid
+    and schedule), built once for all of them; None: built for this run.
+    """
+    shared = {} if shared is None else shared
     _check_simulated_channels(inst)
     tilt = inst.turntable
     check_geometry(inst.effects, cond.schedule.positions_deg, tilt.tilt_north_deg,
@@ -368,7 +375,10 @@ def _prepare(inst: Instrument, cond: RunConditions) -> _Prepared:
     rngs = _streams(cond.seed)
     var = cond.variability
     if var is not None and var.per_unit:
-        inst = unit_instrument(inst, var, cond.unit)
+        key = ("unit", id(var), cond.unit)
+        if key not in shared:
+            shared[key] = unit_instrument(inst, var, cond.unit)
+        inst = shared[key]
     theta, moving = cond.turntable(t)
     tilt = inst.turntable
     geom = apply_geometry(Geometry(
@@ -379,7 +389,12 @@ def _prepare(inst: Instrument, cond: RunConditions) -> _Prepared:
 
     # 1. thermal network: the unpowered soak of a chamber program, then the run
     powered = cond.powered(t)
-    power, thermal_terms, stateful = thermal_power(inst, t, moving, powered)
+    key = ("power", id(inst), t.size, float(t[0]), float(t[-1]), moving.tobytes(),
+           None if powered is None else powered.tobytes())
+    if key not in shared:
+        shared[key] = thermal_power(inst, t, moving, powered)
+    power, thermal_terms, stateful = shared[key]
+    thermal_terms = dict(thermal_terms)     # _finish adds the run's own state-dependent terms
     n_pre = int(np.ceil(cond.soak_s * fs - 1e-9)) if cond.soak_s > 0.0 else 0
     t_all = np.concatenate([-cond.soak_s + np.arange(n_pre) / fs, t]) if n_pre else t
     ambient = (np.full(t_all.shape, cond.start_temperature_c) if cond.chamber_c is None
@@ -418,8 +433,9 @@ def simulate_run(inst: Instrument, cond: RunConditions) -> SimulationResult:
     return _finish(prep, th)
 
 
-#: Memory the stacked thermal march of :func:`simulate_runs` may take [bytes].
-STACK_BYTES = 64 * 2 ** 20
+#: Memory the stacked thermal march of :func:`iter_simulate_runs` may take [bytes]: the
+#: marched states of 128 start-ups of 2.5 h at 1 Hz on 7 nodes.
+STACK_BYTES = 128 * 2 ** 20
 
 
 def _stack_key(prep: _Prepared):
@@ -434,37 +450,71 @@ def _stack_key(prep: _Prepared):
 def simulate_runs(inst: Instrument, conds, *,
                   progress: Callable[[int, int, str], None] | None = None
                   ) -> list[SimulationResult]:
-    """:func:`simulate_run` for many runs of ``inst``, their thermal states stacked.
+    """:func:`simulate_run` for many runs of ``inst``, their thermal states stacked
+    (:func:`iter_simulate_runs`, every result kept).  Each result is :func:`simulate_run`'s,
+    bit for bit, whatever else is simulated beside it."""
+    return list(iter_simulate_runs(inst, conds, progress=progress))
 
-    Runs of one unit on one time grid and schedule share the network and the heat input law:
-    their thermal networks are solved together (:func:`thermal.simulate_many`, one loop over
-    the samples for all of them, in batches of at most :data:`STACK_BYTES` of state), the
-    rest run by run.  Each result is :func:`simulate_run`'s, bit for bit, whatever else is
-    simulated beside it.
-    ``progress(i, n, name)`` is called before each run's preparation.
+
+def iter_simulate_runs(inst: Instrument, conds, *,
+                       progress: Callable[[int, int, str], None] | None = None
+                       ) -> Iterator[SimulationResult]:
+    """:func:`simulate_run` for many runs of ``inst``, yielded one at a time, in order.
+
+    The runs are taken in consecutive chunks whose marched thermal states fit in
+    :data:`STACK_BYTES` (8 bytes x 2 n_nodes x n_samples per run, [T_k, p_k] of each sample):
+    a chunk is prepared, the runs of one unit on one time grid and schedule share the network
+    and the heat input law and are solved together (:func:`thermal.iter_simulate_many`, one
+    array operation per term of the step for all of them), and each run is finished
+    (effects, sensors, noise) only when it is yielded.  So at most one chunk of runs is held,
+    whatever the number of runs.  Each result is :func:`simulate_run`'s, bit for bit,
+    whatever else is simulated beside it.  ``progress(i, n, name)`` is called before each
+    run's preparation.
     """
     conds = list(conds)
-    preps = []
-    for i, cond in enumerate(conds):
-        if progress is not None:
-            progress(i, len(conds), cond.name)
-        preps.append(_prepare(inst, cond))
+    width = 2 * len(inst.network.node_names)          # [T_k, p_k] per sample
+    shared: dict = {}
+    i = 0
+    while i < len(conds):
+        chunk, used = [], 0
+        while i < len(conds) and (not chunk or used + 8 * width * conds[i].time_s.size
+                                  <= STACK_BYTES):
+            used += 8 * width * conds[i].time_s.size
+            chunk.append(i)
+            i += 1
+        preps = []
+        for j in chunk:
+            if progress is not None:
+                progress(j, len(conds), conds[j].name)
+            preps.append(_prepare(inst, conds[j], shared))
+        yield from _solve_chunk(preps)
+        shared = {k: v for k, v in shared.items() if k[0] == "unit"}
+
+
+def _solve_chunk(preps: list[_Prepared]) -> Iterator[SimulationResult]:
+    """The prepared runs solved (stacked by :func:`_stack_key`) and finished, in order."""
     groups: dict = {}
-    for i, p in enumerate(preps):
-        groups.setdefault(_stack_key(p), []).append(i)
-    ths: list = [None] * len(preps)
+    for k, p in enumerate(preps):
+        groups.setdefault(_stack_key(p), []).append(k)
+    solutions: dict = {}
+    streams = {}                        # run -> its group's (run, solution) stream
     for idx in groups.values():
         first = preps[idx[0]]
         n = len(first.inst.network.node_names)
-        initial = np.array([np.broadcast_to(np.asarray(preps[i].initial, dtype=float), (n,))
-                            for i in idx])
-        res = thermal.simulate_many(first.inst.network, first.cond.time_s,
-                                    ambient_c=np.array([preps[i].ambient for i in idx]),
-                                    initial_c=initial, power_w=first.power,
-                                    ambient_hold="first-order", max_bytes=STACK_BYTES)
-        for i, th in zip(idx, res):
-            ths[i] = th
-    return [_finish(p, th) for p, th in zip(preps, ths)]
+        initial = np.array([np.broadcast_to(np.asarray(preps[k].initial, dtype=float), (n,))
+                            for k in idx])
+        stream = zip(idx, thermal.iter_simulate_many(
+            first.inst.network, first.cond.time_s,
+            ambient_c=np.array([preps[k].ambient for k in idx]), initial_c=initial,
+            power_w=first.power, ambient_hold="first-order"))
+        streams.update((k, stream) for k in idx)
+    for k, p in enumerate(preps):
+        for m, th in streams.pop(k) if k not in solutions else ():
+            solutions[m] = th           # the group's solutions, in order, up to run k
+            if m == k:
+                break
+        yield _finish(p, solutions.pop(k))
+        preps[k] = None
 
 
 def _finish(prep: _Prepared, th) -> SimulationResult:

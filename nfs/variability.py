@@ -341,12 +341,23 @@ def _ou(t: np.ndarray, sigma: float, tau_s: float, z: np.ndarray) -> np.ndarray:
     w[0] = x[0]
     k = 0                                           # w[k] known; fill the run of equal steps
     while k < a.size:
-        j = k + 1
-        while j < a.size and abs(a[j] - a[k]) <= 1e-12:
-            j += 1
+        j = _run_end(a, k)
         w[k + 1:j + 1] = lfilter([1.0], [1.0, -a[k]], x[k + 1:j + 1], zi=[a[k] * w[k]])[0]
         k = j
     return w
+
+
+def _run_end(a: np.ndarray, k: int) -> int:
+    """The first j > k with |a[j] - a[k]| > 1e-12 (a.size if none), searched in windows
+    that double: a grid of equal steps costs a few array comparisons, not a Python loop
+    over its samples."""
+    j, width = k + 1, 64
+    while j < a.size:
+        far = np.flatnonzero(np.abs(a[j:j + width] - a[k]) > 1e-12)
+        if far.size:
+            return j + int(far[0])
+        j, width = j + width, 2 * width
+    return a.size
 
 
 def chamber_terms(var: Variability, time_s: np.ndarray, entropy) -> np.ndarray:

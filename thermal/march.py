@@ -23,8 +23,8 @@ involved.  The states of R runs lie side by side in the last axis, ``state[k]`` 
 ``np.add.accumulate`` over j for a few runs (documented as the running sum r_j = r_{j-1} +
 a_j, the same order) and a loop of 2n - 1 additions over whole (n, R) blocks for many.
 
-The drive d_k depends on no state: it is computed for every sample at once before the
-march, elementwise, in the order written in (9).
+The drive d_k depends on no state; it is computed at each step, elementwise, in the order
+written in (9), into the slot of T_{k+1}.
 """
 
 from __future__ import annotations
@@ -74,18 +74,6 @@ def step_maps(steps, node_power_w: np.ndarray) -> StepMaps:
     return StepMaps(columns, ambient, constant, slope)
 
 
-def _drive(maps: StepMaps, cls: np.ndarray, ambient_c: np.ndarray,
-           slope_c_per_s: np.ndarray | None, out: np.ndarray) -> None:
-    """d_k of (9) for k = 0 .. n_t-2 into ``out`` (n_t-1, n, R); ``ambient_c`` and
-    ``slope_c_per_s`` (n_t, R)."""
-    np.multiply(maps.ambient[cls][:, :, None], ambient_c[:-1, None, :], out=out)
-    out += maps.constant[cls][:, :, None]
-    if maps.slope is not None and slope_c_per_s is not None:
-        lam = maps.slope[cls]
-        for i in range(out.shape[1]):       # one node at a time: no (n_t, n, R) temporary
-            out[:, i, :] += lam[:, i, None] * slope_c_per_s[:-1]
-
-
 def march(maps: StepMaps, cls: np.ndarray, time_s: np.ndarray, initial_c: np.ndarray,
           ambient_c: np.ndarray, slope_c_per_s: np.ndarray | None,
           extra_w: np.ndarray | None, law: Callable | None, *,
@@ -114,7 +102,6 @@ def march(maps: StepMaps, cls: np.ndarray, time_s: np.ndarray, initial_c: np.nda
     state = np.empty((n_t, 2 * n, r))
     temp, power = state[:, :n], state[:, n:]
     temp[0] = initial_c
-    _drive(maps, cls, ambient_c, slope_c_per_s, temp[1:])
     if law is None:
         power[...] = 0.0 if extra_w is None else extra_w[:, :, None]
     frozen = state.view()
@@ -129,6 +116,13 @@ def march(maps: StepMaps, cls: np.ndarray, time_s: np.ndarray, initial_c: np.nda
     pairs = range(2, 2 * n)
     times = time_s.tolist()
     rows, temps, new_temps = list(state), list(temp[:-1]), list(temp[1:])
+    ambients = list(ambient_c[:, None, :])
+    slopes = (None if maps.slope is None or slope_c_per_s is None else
+              list(slope_c_per_s[:, None, :]))
+    g_amb = [m[:, None] for m in maps.ambient]
+    g_const = [m[:, None] for m in maps.constant]
+    g_slope = None if slopes is None else [m[:, None] for m in maps.slope]
+    lam_v = np.empty((n, r))
     powers = list(power.transpose(0, 2, 1)) if stacked else list(power[:, :, 0])
     for k, t_s in enumerate(times):
         if law is not None:
@@ -140,8 +134,14 @@ def march(maps: StepMaps, cls: np.ndarray, time_s: np.ndarray, initial_c: np.nda
             powers[k][...] = p
         if k == n_t - 1:
             break
-        np.multiply(columns[classes[k]], rows[k][:, None, :], out=prod)
-        new = new_temps[k]                  # holds d_k
+        c = classes[k]
+        new = new_temps[k]
+        np.multiply(g_amb[c], ambients[k], out=new)         # d_k, in the order of (9)
+        new += g_const[c]
+        if slopes is not None:
+            np.multiply(g_slope[c], slopes[k], out=lam_v)
+            new += lam_v
+        np.multiply(columns[c], rows[k][:, None, :], out=prod)
         if few:
             np.add.accumulate(prod, axis=0, out=acc)
             new += acc[-1]

@@ -248,6 +248,25 @@ def _modal_recursion(phi_minus_i: np.ndarray, capacity: np.ndarray, t0: np.ndarr
     return (z @ q.T) / d
 
 
+def _closed_form(mats: list[StepMatrices], cls: np.ndarray, capacity: np.ndarray,
+                 t0: np.ndarray, inputs: np.ndarray, slope: np.ndarray,
+                 linear: bool) -> np.ndarray:
+    """T_k at every sample for inputs known in advance: each stretch of equal steps (one
+    step class) by :func:`_modal_recursion` from the temperatures where the previous
+    stretch ended, so a grid of a few step sizes (a soak on a coarse grid, then one step to
+    the record) costs a few closed forms, not a loop over the samples."""
+    temp = np.empty((cls.size + 1, t0.size))
+    temp[0] = t0
+    edges = np.flatnonzero(np.diff(cls)) + 1
+    for a, b in zip(np.concatenate([[0], edges]), np.concatenate([edges, [cls.size]])):
+        m = mats[cls[a]]
+        drive = inputs[a:b] @ m.gamma.T
+        if linear:
+            drive += slope[a:b, None] * m.lam
+        temp[a:b + 1] = _modal_recursion(m.phi_minus_i, capacity, temp[a], drive)
+    return temp
+
+
 def _as_time(time_s: object) -> np.ndarray:
     """The sample times as a 1-D, finite, strictly increasing float array."""
     t = np.asarray(time_s, dtype=float)
@@ -367,12 +386,12 @@ def simulate(network: Network, time_s: np.ndarray, *,
 
     inputs = np.empty((n_t, 1 + n))     # u_k = [T_amb,k, P_1,k, ..., P_n,k], equation (2)
     inputs[:, 0] = amb
-    if law is None and len(mats) == 1:
+    if law is None and n_t > 1:
         inputs[:, 1:] = network.node_power_w + (0.0 if extra is None else extra)
-        drive = _per_interval([mats[0].gamma], cls, inputs[:-1], n)
-        if linear:
-            drive += slope[:-1, None] * mats[0].lam
-        temp = _modal_recursion(mats[0].phi_minus_i, network.capacity_j_per_k, t0, drive)
+        temp = _closed_form(mats, cls, network.capacity_j_per_k, t0, inputs, slope, linear)
+    elif law is None:
+        inputs[:, 1:] = network.node_power_w + (0.0 if extra is None else extra)
+        temp = t0[None, :].copy()
     else:
         # the march of thermal/march.py with one run: a run's bits are those it gets in a
         # batch of any size (thermal.simulate_many)

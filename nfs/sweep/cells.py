@@ -34,7 +34,8 @@ import nfs
 from ..studies.startup_study import run_study
 from ..compensate.settings import CompensationSettings
 from ..errors import NfsError
-from ..studies.scenario_runs import floor_deg, run_scenario, run_scenarios
+from ..experiment import iter_simulate_runs
+from ..studies.scenario_runs import ScenarioResult, floor_deg, northfind_runs, run_scenario
 from ..io.provenance import sha256_of_text
 from ..config.scenario import load_scenario
 from ..northfind import heading_rmse
@@ -48,7 +49,7 @@ __all__ = ["CellTask", "canonical", "digest", "scenario_digest", "cell_key", "ce
 STORE_FORMAT = 1
 #: Cells of one point computed in one task, at most (:func:`run_cells`): enough to stack
 #: their start-ups' thermal solves, few enough that a killed sweep loses little.
-BATCH_CELLS = 16
+BATCH_CELLS = 256
 #: The stages of a run, as in the heading-RMSE table: the start-up stage (cycles ending
 #: within ``northfind.startup_end_s``) and the stable stage (cycles starting after
 #: ``northfind.stable_start_s``).
@@ -218,9 +219,10 @@ def run_cells(tasks: list[CellTask]) -> list[dict[str, Any]]:
     """Compute a batch of cells (:func:`cell_batches`); their records, in order.
 
     The cells of one point share the instrument: every start-up of the batch is simulated
-    with its thermal state stacked beside the others (:func:`~nfs.experiment.simulate_runs`),
+    with its thermal state stacked beside the others (:func:`~nfs.experiment.iter_simulate_runs`),
     whose arithmetic gives each run the same bits whatever is stacked beside it, so a cell's
-    record does not depend on its batch.  A cell with a compensation method is computed
+    record does not depend on its batch; the runs stream through (simulated, north-found,
+    reduced to the cell's record), so a batch holds a bounded number of runs.  A cell with a compensation method is computed
     alone (:func:`run_cell`).
     """
     tasks = list(tasks)
@@ -228,8 +230,17 @@ def run_cells(tasks: list[CellTask]) -> list[dict[str, Any]]:
         return [run_cell(t) for t in tasks]
     with threadpool_limits(limits=1):
         base = _point_scenario(tasks[0])
-        results = run_scenarios([dataclasses.replace(base, seed=t.seed) for t in tasks])
-        return [_record(task, res, None) for task, res in zip(tasks, results)]
+        scenarios = [dataclasses.replace(base, seed=t.seed) for t in tasks]
+        conds = [sc.conditions() for sc in scenarios]
+        sims = iter_simulate_runs(base.instrument, [c for cs in conds for c in cs])
+        records = []
+        for task, sc, cs in zip(tasks, scenarios, conds):
+            # a cell's runs, north-found and reduced to its record before the next cell's
+            # are finished: a batch holds one chunk of marched states, not every run
+            mine = tuple(next(sims) for _ in cs)
+            nf = northfind_runs([s.run for s in mine], sc.northfind)
+            records.append(_record(task, ScenarioResult(sc, mine, tuple(nf)), None))
+        return records
 
 
 def _compute(task: CellTask) -> dict[str, Any]:
