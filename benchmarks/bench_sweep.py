@@ -1,35 +1,39 @@
 """Speed and memory of ``nfs sweep`` on many start-ups.
 
-Run as ``python benchmarks/bench_sweep.py`` (``--cells N`` for a quicker run; ``--no-dask``
-to leave the Dask cluster out).  The sweep: the default instrument and scenario, one start-up
-per cell (2.5 h at 1 Hz, 4 positions, 150 s dwells), start temperatures -32, 17, 54 and
--5 C on an axis and N/4 seeds, each cell simulated and north-found (no compensation).
+Run as ``python benchmarks/bench_sweep.py`` (``--startups N`` for another size, 1000 by
+default; ``--full`` adds the goal's sweep of 10,000 start-ups on 2 workers and its peak
+memory, a few minutes; ``--no-dask`` leaves the Dask cluster out).  The sweep: the default
+instrument and scenario, one start-up per cell (2.5 h at 1 Hz, 4 positions, 150 s dwells),
+start temperatures -32, 17, 54 and -5 C on an axis and N/4 seeds, each cell simulated and
+north-found (no compensation).
 
 Figures, all in this process's machine and load:
 
-- baseline: every cell's start-up simulated alone (:func:`nfs.experiment.simulate_run`,
-  the single-run thermal march) and north-found, in a loop in this process (no executor, no
-  store): the work of a sweep without stacking;
-- the cell function (:func:`nfs.sweep.run_cell`) in a loop: a cell alone (what a resumed
-  sweep's stray cell costs: the stacked march with one run);
-- the same cells in batches of ``BATCH_CELLS`` of one point (:func:`nfs.sweep.run_cells`),
-  their start-ups' thermal states stacked (one march over the samples for the whole batch):
-  the speed-up of stacking;
-- cells per second through :func:`nfs.sweep.run_sweep` with 1 local worker (in process) and
-  2 local workers (joblib's loky processes, started by a 4-cell sweep before the timing, as
-  a sweep of thousands of cells amortises their start): the speed-up of 2 workers (target
-  >= 1.7x on 2 cores);
-- cells per second on a 2-worker Dask LocalCluster (cluster start-up timed apart);
-- the executor's overhead per cell: (sweep time with 1 worker - the batched loop) / cells
-  (the store, the hashing, the table and its bookkeeping);
-- peak memory (max RSS) of a sweep of 100 and of N cells, each in a fresh process with
-  1 worker: flat when the two are close;
+- baseline: start-ups simulated alone (:func:`nfs.experiment.simulate_run`, the march with
+  one run) and north-found, in a loop in this process (no executor, no store), on the first
+  ``--alone`` cells: the work of a sweep without stacking;
+- the same cells in batches of 16 cells of one point, the batch of the sweep before the
+  march was arithmetic over the runs (its thermal states stacked 16 at a time), and in
+  batches of :data:`~nfs.sweep.BATCH_CELLS` (:func:`nfs.sweep.run_cells`, the runs streamed
+  in chunks of :data:`~nfs.experiment.STACK_BYTES`): the speed-up of stacking;
+- start-ups per second through :func:`nfs.sweep.run_sweep` with 1 local worker (in process)
+  and 2 local workers (joblib's loky processes, started by a 4-cell sweep before the timing,
+  as a sweep of thousands of cells amortises their start);
+- the same on a 2-worker Dask LocalCluster (cluster start-up timed apart);
+- the executor's overhead per cell: (sweep time with 1 worker - the batched loop) / cells;
 - the arithmetic floor: the floating-point operations of the thermal march of one start-up
   (per sample, the n-node state times the step matrix, 2 n^2, and the drive of the chamber
   and the n node powers through the input matrix, 2 n (n + 1), plus the update, n) at this
   machine's throughput of a plain NumPy matrix product (two 512 x 512 operands, best of 5):
   start-ups per second the arithmetic alone would allow, beside those measured, and the
-  goal of 10,000 start-ups in 30 s on 2 cores.
+  goal of 10,000 start-ups in 30 s on 2 cores;
+- peak memory (max RSS) of a sweep of N/10 and N cells (and 10,000 with ``--full``), each
+  in a fresh process with 1 worker: flat when they are close (goal: 1,000 and 10,000 within
+  1.2x);
+- a fully stored sweep rerun: ``nfs sweep`` of a 4-cell sweep, every cell stored, as a
+  command (the process start, the imports, the table and the figures), in seconds and in
+  units of the reference workload ``../shared/tools/refwork.py`` timed beside it (goal
+  <= 1 unit).
 
 Each sweep writes into a fresh temporary folder, so every cell is computed.
 """
@@ -38,23 +42,30 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import itertools
 import json
 import math
+import os
 import resource
 import subprocess
 import sys
 import tempfile
 import time
+from pathlib import Path
 
 import numpy as np
+from threadpoolctl import threadpool_limits
 
-from nfs.experiment import simulate_run
+from nfs.errors import NfsError
+from nfs.experiment import STACK_BYTES, simulate_run
 from nfs.studies.scenario_runs import northfind_runs
 from nfs.config.scenario import load_scenario
-from nfs.sweep import (BATCH_CELLS, LocalExecutor, cell_batches, cell_tasks, run_cell, run_cells,
-                       run_sweep, sweep_from_dict)
+from nfs.sweep import (BATCH_CELLS, DaskExecutor, LocalExecutor, cell_batches, cell_tasks,
+                       run_cells, run_sweep, sweep_from_dict)
 
 T0 = ([-32.0], [17.0], [54.0], [-5.0])
+#: The reference workload of machine-normalised timings ("units").
+REFWORK = Path(__file__).resolve().parents[2] / "shared" / "tools" / "refwork.py"
 
 
 def spec_for(cells: int):
@@ -73,9 +84,10 @@ def timed_sweep(spec, executor) -> float:
     return dt
 
 
-def baseline(spec) -> float:
+def baseline(spec, cells: int) -> float:
+    """Seconds to simulate alone and north-find the first ``cells`` cells of ``spec``."""
     t0 = time.perf_counter()
-    for task in cell_tasks(spec):
+    for task in itertools.islice(cell_tasks(spec), cells):
         sc = load_scenario(task.scenario_path, dict(task.scenario_values))
         sc = dataclasses.replace(sc, seed=task.seed)
         northfind_runs([simulate_run(sc.instrument, c).run for c in sc.conditions()],
@@ -83,17 +95,12 @@ def baseline(spec) -> float:
     return time.perf_counter() - t0
 
 
-def cells_alone(spec) -> float:
+def batched(spec, size: int) -> float:
+    """Seconds to compute every cell of ``spec`` in batches of ``size`` (this process)."""
     t0 = time.perf_counter()
-    for task in cell_tasks(spec):
-        run_cell(task)
-    return time.perf_counter() - t0
-
-
-def batched(spec) -> float:
-    t0 = time.perf_counter()
-    for batch in cell_batches(cell_tasks(spec)):
-        run_cells(batch)
+    with threadpool_limits(limits=1):
+        for batch in cell_batches(cell_tasks(spec), size):
+            run_cells(batch)
     return time.perf_counter() - t0
 
 
@@ -109,6 +116,31 @@ def memory_child(cells: int) -> None:
     timed_sweep(spec, LocalExecutor(1))
     rss_kb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
     print(json.dumps({"cells": spec.n_cells, "max_rss_mb": rss_kb / 1024.0}))
+
+
+def refwork_s() -> float:
+    """The reference workload's seconds on this machine (the faster of two runs)."""
+    return min(float(subprocess.run([sys.executable, str(REFWORK)], check=True,
+                                    capture_output=True, text=True).stdout.split()[-1])
+               for _ in range(2))
+
+
+def stored_rerun_s(cells: int = 4) -> float:
+    """Wall seconds of ``nfs sweep`` rerun on a sweep whose every cell is stored (the
+    faster of two reruns): the process, the imports, the table and the figures."""
+    with tempfile.TemporaryDirectory() as d:
+        sweep = Path(d) / "sweep.toml"
+        sweep.write_text(f'scenario = "default"\n[seeds]\nfirst = 0\ncount = {cells}\n',
+                         encoding="utf-8")
+        cmd = [sys.executable, "-m", "nfs.cli", "sweep", str(sweep), "-o", str(Path(d) / "out"),
+               "--jobs", "1", "-q"]
+        subprocess.run(cmd, check=True, capture_output=True)
+        best = math.inf
+        for _ in range(2):
+            t0 = time.perf_counter()
+            subprocess.run(cmd, check=True, capture_output=True)
+            best = min(best, time.perf_counter() - t0)
+    return best
 
 
 def matmul_flops_per_s(size: int = 512, repeats: int = 5) -> float:
@@ -132,33 +164,42 @@ def march_flops(n_nodes: int, n_samples: int) -> float:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--cells", type=int, default=1000, help="start-ups (cells) to sweep")
+    ap.add_argument("--startups", "--cells", type=int, default=1000, dest="startups",
+                    help="start-ups (one per cell) to sweep")
+    ap.add_argument("--alone", type=int, default=100,
+                    help="cells of the baseline (each start-up simulated alone)")
+    ap.add_argument("--full", action="store_true",
+                    help="also 10,000 start-ups on 2 workers and their peak memory")
     ap.add_argument("--no-dask", action="store_true", help="leave the Dask cluster out")
     ap.add_argument("--memory-child", type=int, default=None, help=argparse.SUPPRESS)
     args = ap.parse_args()
     if args.memory_child is not None:
         memory_child(args.memory_child)
         return
-    spec = spec_for(args.cells)
+    spec = spec_for(args.startups)
     n = spec.n_cells
-    print(f"{n} cells: one default start-up each (2.5 h at 1 Hz), simulated and north-found")
-    t_base = baseline(spec)
-    print(f"baseline (each start-up simulated alone and north-found, in a loop): "
-          f"{t_base:.1f} s, "
-          f"{n / t_base:.1f} cells/s")
-    t_alone = cells_alone(spec)
-    print(f"cell function alone, in a loop: {t_alone:.1f} s, {n / t_alone:.1f} cells/s")
-    t_stack = batched(spec)
-    print(f"stacked, batches of {BATCH_CELLS} cells of one point (this process): "
-          f"{t_stack:.1f} s, {n / t_stack:.1f} cells/s; {t_base / t_stack:.2f}x the baseline")
+    print(f"{n} start-ups (one per cell): the default start-up (2.5 h at 1 Hz, 4 positions), "
+          f"simulated and north-found; {os.cpu_count()} cores, load average "
+          f"{os.getloadavg()[0]:.1f} at the start")
+    alone = min(n, args.alone)
+    t_base = baseline(spec, alone)
+    print(f"baseline, each start-up simulated alone and north-found ({alone} cells): "
+          f"{alone / t_base:.1f} start-ups/s")
+    t16 = batched(spec, 16)
+    print(f"batches of 16 cells (the sweep's batch before), this process: {t16:.1f} s, "
+          f"{n / t16:.1f} start-ups/s")
+    t_stack = batched(spec, BATCH_CELLS)
+    print(f"batches of {BATCH_CELLS} cells, streamed in chunks of "
+          f"{STACK_BYTES / 2 ** 20:.0f} MiB of marched state, this process: {t_stack:.1f} s, "
+          f"{n / t_stack:.1f} start-ups/s; {t16 / t_stack:.2f}x batches of 16, "
+          f"{t_base / alone * n / t_stack:.2f}x the baseline")
     t1 = timed_sweep(spec, LocalExecutor(1))
-    print(f"nfs sweep, 1 worker:  {t1:.1f} s, {n / t1:.1f} cells/s; executor overhead "
-          f"{1e3 * (t1 - t_stack) / n:.1f} ms per cell")
+    print(f"nfs sweep, 1 worker:  {t1:.1f} s, {n / t1:.1f} start-ups/s; executor overhead "
+          f"{1e3 * (t1 - t_stack) / n:.2f} ms per cell")
     t_warm = timed_sweep(spec_for(4), LocalExecutor(2))  # start joblib's 2 worker processes
     t2 = timed_sweep(spec, LocalExecutor(2))
-    print(f"nfs sweep, 2 workers: {t2:.1f} s, {n / t2:.1f} cells/s (workers started apart: a "
-          f"4-cell sweep first, {t_warm:.1f} s); speed-up {t1 / t2:.2f}x over 1 worker "
-          f"(target >= 1.7x on 2 cores)")
+    print(f"nfs sweep, 2 workers: {t2:.1f} s, {n / t2:.1f} start-ups/s (workers started apart: "
+          f"a 4-cell sweep first, {t_warm:.1f} s); speed-up {t1 / t2:.2f}x over 1 worker")
     sc = load_scenario()
     n_nodes = len(sc.instrument.network.node_names)
     n_samples = int(round(sc.run_duration_s(sc.start_temperatures_c[0]) * sc.sample_rate_hz))
@@ -168,26 +209,39 @@ def main() -> None:
           f"(march of {n_nodes} nodes x {n_samples} samples) at {rate / 1e9:.1f} Gflop/s "
           f"(NumPy matrix product, one process): {floor:.0f} start-ups/s per core; measured "
           f"{n / t2:.1f} start-ups/s on 2 workers = {n / t2 / (2 * floor):.2%} of the floor "
-          f"of 2 cores; 10,000 start-ups would take {1e4 * t2 / n:.0f} s (goal <= 30 s)")
+          f"of 2 cores; 10,000 start-ups would take {1e4 * t2 / n:.0f} s at this rate "
+          f"(goal <= 30 s)")
+    if args.full:
+        big = spec_for(10_000)
+        t_big = timed_sweep(big, LocalExecutor(2))
+        print(f"10,000 start-ups, nfs sweep on 2 workers: {t_big:.1f} s, "
+              f"{big.n_cells / t_big:.1f} start-ups/s (goal <= 30 s)")
     if not args.no_dask:
         try:
-            from nfs.sweep import DaskExecutor
+            ex = None
             t0 = time.perf_counter()
             ex = DaskExecutor(workers=2)
             t_start = time.perf_counter() - t0
-        except Exception as exc:  # the optional extra missing: say so, keep the rest
+        except NfsError as exc:  # the optional extra missing: say so, keep the rest
             print(f"Dask LocalCluster: not run ({exc})")
         else:
             try:
                 td = timed_sweep(spec, ex)
             finally:
                 ex.close()
-            print(f"Dask LocalCluster, 2 workers: {td:.1f} s, {n / td:.1f} cells/s "
+            print(f"Dask LocalCluster, 2 workers: {td:.1f} s, {n / td:.1f} start-ups/s "
                   f"(cluster start {t_start:.1f} s apart); {t1 / td:.2f}x over 1 local worker")
-    small = peak_memory_mb(100)
-    big = peak_memory_mb(n)
-    print(f"peak memory (max RSS, 1 worker): {small:.0f} MB at 100 cells, {big:.0f} MB at "
-          f"{n} cells ({big / small:.2f}x)")
+    sizes = [max(4, n // 10), n] + ([10_000] if args.full and n != 10_000 else [])
+    peaks = [peak_memory_mb(c) for c in sizes]
+    print("peak memory (max RSS, 1 worker): " + ", ".join(
+        f"{p:.0f} MB at {c} start-ups" for c, p in zip(sizes, peaks))
+        + f" ({peaks[-1] / peaks[0]:.2f}x from the smallest to the largest; goal 1,000 and "
+          f"10,000 within 1.2x)")
+    unit = refwork_s()
+    rerun = stored_rerun_s()
+    print(f"stored rerun (nfs sweep of 4 cells, every cell stored, figures included, as a "
+          f"command): {rerun:.2f} s = {rerun / unit:.2f} units (reference workload "
+          f"{unit:.2f} s here; goal <= 1 unit)")
 
 
 if __name__ == "__main__":

@@ -23,8 +23,9 @@ involved.  The states of R runs lie side by side in the last axis, ``state[k]`` 
 ``np.add.accumulate`` over j for a few runs (documented as the running sum r_j = r_{j-1} +
 a_j, the same order) and a loop of 2n - 1 additions over whole (n, R) blocks for many.
 
-The drive d_k depends on no state; it is computed at each step, elementwise, in the order
-written in (9), into the slot of T_{k+1}.
+The drive d_k depends on no state; it is computed elementwise, in the order written in
+(9), into the slot of T_{k+1}: for every sample at once for a few runs, at each step for
+many (no array of the record's size beside the states).
 """
 
 from __future__ import annotations
@@ -74,6 +75,16 @@ def step_maps(steps, node_power_w: np.ndarray) -> StepMaps:
     return StepMaps(columns, ambient, constant, slope)
 
 
+def _drive(maps: StepMaps, cls: np.ndarray, ambient_c: np.ndarray,
+           slope_c_per_s: np.ndarray | None, out: np.ndarray) -> None:
+    """d_k of (9) for every interval at once into ``out`` (n_t-1, n, R), elementwise in the
+    order of the march's own step (a few runs: the record's drive is small)."""
+    np.multiply(maps.ambient[cls][:, :, None], ambient_c[:-1, None, :], out=out)
+    out += maps.constant[cls][:, :, None]
+    if maps.slope is not None and slope_c_per_s is not None:
+        out += maps.slope[cls][:, :, None] * slope_c_per_s[:-1, None, :]
+
+
 def march(maps: StepMaps, cls: np.ndarray, time_s: np.ndarray, initial_c: np.ndarray,
           ambient_c: np.ndarray, slope_c_per_s: np.ndarray | None,
           extra_w: np.ndarray | None, law: Callable | None, *,
@@ -115,6 +126,8 @@ def march(maps: StepMaps, cls: np.ndarray, time_s: np.ndarray, initial_c: np.nda
     acc = np.empty((2 * n, n, r)) if few else np.empty((n, r))
     pairs = range(2, 2 * n)
     times = time_s.tolist()
+    if few:
+        _drive(maps, cls, ambient_c, slope_c_per_s, temp[1:])
     rows, temps, new_temps = list(state), list(temp[:-1]), list(temp[1:])
     ambients = list(ambient_c[:, None, :])
     slopes = (None if maps.slope is None or slope_c_per_s is None else
@@ -136,11 +149,12 @@ def march(maps: StepMaps, cls: np.ndarray, time_s: np.ndarray, initial_c: np.nda
             break
         c = classes[k]
         new = new_temps[k]
-        np.multiply(g_amb[c], ambients[k], out=new)         # d_k, in the order of (9)
-        new += g_const[c]
-        if slopes is not None:
-            np.multiply(g_slope[c], slopes[k], out=lam_v)
-            new += lam_v
+        if not few:                         # d_k, in the order of (9)
+            np.multiply(g_amb[c], ambients[k], out=new)
+            new += g_const[c]
+            if slopes is not None:
+                np.multiply(g_slope[c], slopes[k], out=lam_v)
+                new += lam_v
         np.multiply(columns[c], rows[k][:, None, :], out=prod)
         if few:
             np.add.accumulate(prod, axis=0, out=acc)
