@@ -1,25 +1,32 @@
-"""Decide between rivals on the runs taken: the likelihood ratio, and how sure it is.
+"""Decide between rivals on the runs taken, and how sure it is.
 
 Two rivals a and b fitted to the same runs predict the recorded numbers mu_a and mu_b
 (:mod:`nfs.design.predict`, each replaying every run from its own start states).  In the
-noise the runs show (:mod:`nfs.design.noise_level`: the sensor noise raised per channel,
-a constant per channel and run free), the log-likelihood ratio of the measured numbers y is
+noise the runs show (:mod:`nfs.design.noise_level`: the sensor noise raised per channel, a
+constant per channel and run free), :mod:`nfs.design.evidence` gives the log-likelihood
+ratio Lambda of a over b, Lambda_adj: Lambda less the price of the numbers the rival it
+leans to fits beyond the other, and Vuong's statistic Z = Lambda_adj / sqrt(V) with a variance V that allows
+for model error correlated along the runs (at least D, the squared separation of the two
+predictions).  The rule
 
-    Lambda = (|P (y - mu_b) / sigma|^2 - |P (y - mu_a) / sigma|^2) / 2,
+    name a when Lambda_adj >= LAMBDA_NAME and Z >= Z_NAME (b: both <= minus them),
+    else a tie,
 
-positive when the runs lie closer to a.  If a is the unit, Lambda ~ N(D / 2, D) with D the
-squared separation of the two predictions (:mod:`nfs.design.separation`, here without
-parameter draws: both rivals are at their fit), so the rule
+asks two things.  Lambda_adj >= :data:`LAMBDA_NAME` = 2 is a likelihood ratio of e^2 = 7.4
+(2 Lambda = 4 is "positive" evidence on the scale of Kass and Raftery 1995, J. Am. Stat.
+Assoc. 90(430) 773).  Z >= :data:`Z_NAME` = 1.645 is Vuong's one-sided 5 % test that a is
+closer to the unit than b, which holds where neither rival is the unit: a likelihood ratio
+alone assumes one of them is, and on units the model does not describe it names a rival
+for differences that the runs' own model error makes.
 
-    name a when Lambda >= LAMBDA_NAME, name b when Lambda <= -LAMBDA_NAME, else a tie,
+If a is the unit and the noise is what the runs show (V = D = s^2, no price), Lambda ~
+N(s^2 / 2, s^2): the rule decides right with probability Phi(s/2 - max(LAMBDA_NAME / s,
+Z_NAME)) and names the wrong rival with probability Phi(-s/2 - max(LAMBDA_NAME / s,
+Z_NAME)) (:func:`decision_rates`; at s = 3: 0.44 and 0.0012, at s = 5: 0.81 and 0.0001;
+measured on simulated runs in tests/design/test_decide.py).
 
-names the wrong rival with probability Phi(-s / 2 - LAMBDA_NAME / s) and decides right
-with probability Phi(s / 2 - LAMBDA_NAME / s), s = sqrt(D).  :data:`LAMBDA_NAME` = 2
-(a likelihood ratio of e^2 = 7.4; 2 Lambda = 4 is "positive" evidence on the scale of Kass
-and Raftery 1995, J. Am. Stat. Assoc. 90(430) 773, where 2 ln K from 2 to 6 is): at the default
-design margin s = 3 a designed run decides right with probability 0.80 and wrong with 0.015
-(:func:`decision_rates`; the rates measured on simulated runs are in
-tests/design/test_decide.py).
+Every decision of a tie (:func:`settle_tie`) puts the model as it is beside the tied
+explanations: an explanation is added only when it beats the model too.
 """
 
 from __future__ import annotations
@@ -34,24 +41,29 @@ from scipy.stats import norm
 from ..diagnose.result import Answer
 from ..instrument import Instrument
 from ..run import Run
+from .evidence import Evidence, evidence
 from .predict import CHANNELS
 from .replay import replay_runs_taken
-from .rivals import MODEL, Rival, rival_models, rivals_from_diagnosis
+from .rivals import MODEL, RATE_ALTERNATIVE, Rival, rival_models, rivals_from_diagnosis
 from .separation import RivalPrediction, separation
 
-__all__ = ["Decision", "Settlement", "decide", "decision_rates", "settle_tie", "LAMBDA_NAME"]
+__all__ = ["Decision", "Settlement", "decide", "decision_rates", "settle_tie", "LAMBDA_NAME",
+           "Z_NAME"]
 
-#: |Lambda| a decision needs (module docstring).
+#: Lambda_adj a decision needs (module docstring).
 LAMBDA_NAME = 2.0
+#: Vuong's Z a decision needs: the one-sided 5 % point of N(0, 1) (module docstring).
+Z_NAME = 1.6448536269514722
 
 
-def decision_rates(s: float, threshold: float = LAMBDA_NAME) -> tuple[float, float]:
+def decision_rates(s: float, threshold: float = LAMBDA_NAME,
+                   z: float = Z_NAME) -> tuple[float, float]:
     """(P(the right rival named), P(the wrong one named)) at separation ``s`` [noise
     standard deviations] (module docstring)."""
     if not s > 0:
         return 0.0, 0.0
-    return (float(norm.cdf(s / 2.0 - threshold / s)),
-            float(norm.cdf(-s / 2.0 - threshold / s)))
+    need = max(threshold / s, z)
+    return float(norm.cdf(s / 2.0 - need)), float(norm.cdf(-s / 2.0 - need))
 
 
 @dataclass(frozen=True)
@@ -62,64 +74,61 @@ class Decision:
     """The first rival's label."""
     b: str
     """The second rival's label."""
-    llr: float
-    """Lambda: log-likelihood ratio of a over b on the runs (module docstring)."""
+    evidence: Evidence
+    """Lambda, its price, its variance and Z (:mod:`nfs.design.evidence`)."""
     separation_sigma: float
     """s = sqrt(D) of the two fitted rivals' predictions of the runs."""
     noise_factors: dict[str, float]
     """The factors the sensor noise was raised by, per channel."""
-    by_channel: dict[str, float]
-    """Lambda of each channel alone."""
+
+    @property
+    def llr(self) -> float:
+        """Lambda: the log-likelihood ratio of a over b on the runs."""
+        return self.evidence.llr
+
+    @property
+    def by_channel(self) -> dict[str, float]:
+        """Lambda of each channel alone."""
+        return self.evidence.by_channel
 
     @property
     def winner(self) -> str | None:
         """The rival named, or None (a tie)."""
-        if self.llr >= LAMBDA_NAME:
+        e = self.evidence
+        if e.adjusted >= LAMBDA_NAME and e.z >= Z_NAME:
             return self.a
-        if self.llr <= -LAMBDA_NAME:
+        if e.adjusted <= -LAMBDA_NAME and e.z <= -Z_NAME:
             return self.b
         return None
 
     @property
     def text(self) -> str:
         """The decision in one sentence."""
-        p_right, p_wrong = decision_rates(self.separation_sigma)
-        ratio = f"likelihood ratio e^{abs(self.llr):.1f}"
+        e = self.evidence
+        _, p_wrong = decision_rates(self.separation_sigma)
+        payer = (self.a if e.llr >= 0.0 and e.price > 0.0 else
+                 self.b if e.llr < 0.0 and e.price < 0.0 else None)
+        price = (f" less {abs(e.price):g} for the numbers {payer} fits beyond the other"
+                 if payer else "")
+        said = (f"likelihood ratio e^{abs(e.llr):.1f}{price}, Vuong's Z {abs(e.z):.1f} with "
+                f"the model error along the runs counted")
         if self.winner is None:
-            return (f"the runs cannot decide between {self.a} and {self.b} ({ratio}, "
-                    f"their predictions {self.separation_sigma:.1f} noise standard "
-                    f"deviations apart; a decision needs e^{LAMBDA_NAME:g}): nfs design")
+            return (f"the runs cannot decide between {self.a} and {self.b} ({said}; their "
+                    f"predictions {self.separation_sigma:.1f} noise standard deviations "
+                    f"apart; a decision needs e^{LAMBDA_NAME:g} and Z {Z_NAME:.3g}): "
+                    "nfs design")
         loser = self.b if self.winner == self.a else self.a
-        return (f"the runs favour {self.winner} over {loser} ({ratio}; the predictions "
+        return (f"the runs favour {self.winner} over {loser} ({said}; the predictions "
                 f"{self.separation_sigma:.1f} noise standard deviations apart, where this "
                 f"rule names the wrong one with probability {p_wrong:.2g})")
 
     def to_dict(self) -> dict:
-        return {"a": self.a, "b": self.b, "llr": self.llr, "winner": self.winner,
-                "separation_sigma": self.separation_sigma,
-                "noise_factors": dict(self.noise_factors), "by_channel": dict(self.by_channel),
+        e = self.evidence
+        return {"a": self.a, "b": self.b, "llr": e.llr, "price": e.price,
+                "llr_adjusted": e.adjusted, "variance": e.variance, "z": e.z,
+                "winner": self.winner, "separation_sigma": self.separation_sigma,
+                "noise_factors": dict(self.noise_factors), "by_channel": dict(e.by_channel),
                 "text": self.text}
-
-
-def _llr(y, mu_a, mu_b, sigma, channels) -> tuple[float, dict[str, float]]:
-    """Lambda over the runs, and per channel (constants per channel and run projected)."""
-    by = {}
-    for c in channels:
-        total = 0.0
-        for yr, ar, br, sr in zip(y, mu_a, mu_b, sigma):
-            w = 1.0 / np.maximum(sr[c], 1e-300)
-            ok = np.isfinite(yr.values[c])
-            ra = (yr.values[c] - ar.values[c])[ok] * w[ok]
-            rb = (yr.values[c] - br.values[c])[ok] * w[ok]
-            if ra.size == 0:
-                continue
-            ww = w[ok] * w[ok]
-            # the constant projected out in the 1/sigma^2 metric (as in separation.py)
-            ra = ra - w[ok] * (np.sum(w[ok] * ra) / np.sum(ww))
-            rb = rb - w[ok] * (np.sum(w[ok] * rb) / np.sum(ww))
-            total += 0.5 * float(rb @ rb - ra @ ra)
-        by[c] = total
-    return float(sum(by.values())), by
 
 
 def decide(rivals: Sequence[Rival], runs: Sequence[Run]) -> list[Decision]:
@@ -129,11 +138,11 @@ def decide(rivals: Sequence[Rival], runs: Sequence[Run]) -> list[Decision]:
     measured, sigma, factors = taken.measured, taken.sigma, taken.factors
     out = []
     for i, j in combinations(range(len(rivals)), 2):
-        llr, by = _llr(measured, preds[i], preds[j], sigma, CHANNELS)
+        ev = evidence(measured, preds[i], preds[j], sigma, CHANNELS,
+                      price=rivals[i].n_added - rivals[j].n_added)
         sep = separation(RivalPrediction(preds[i]), RivalPrediction(preds[j]), sigma)
-        out.append(Decision(rivals[i].label, rivals[j].label, llr, sep.sigma, factors, by))
+        out.append(Decision(rivals[i].label, rivals[j].label, ev, sep.sigma, factors))
     return out
-
 
 
 #: z of the two-sided 95 % interval of a fitted coefficient.
@@ -186,7 +195,8 @@ class Settlement:
     """A diagnosis's tie put to the runs: one answer."""
 
     answer: Answer
-    """``add`` the winner (its coefficients' intervals in the text), or still ``tie``."""
+    """``add`` the winner (its coefficients' intervals in the text), ``nothing`` (the model
+    as it is won), ``unexplained`` (a change of structure won), or still ``tie``."""
     decisions: tuple[Decision, ...]
     """Every pair's decision."""
     rivals: tuple[Rival, ...]
@@ -194,6 +204,14 @@ class Settlement:
     interval: dict[str, tuple[float, float]] = field(default_factory=dict)
     """95 % interval of each coefficient of the winner's new effect
     (:func:`winner_interval`); empty without a winner."""
+
+    @property
+    def standing(self) -> tuple[Rival, ...]:
+        """The rivals a tie leaves standing (none beaten by another): the rivals a run
+        should be designed for (:func:`nfs.design.design_experiment`); the winner alone
+        after a decision."""
+        keep = set(self.answer.labels) or {MODEL}
+        return tuple(r for r in self.rivals if r.label in keep)
 
     def to_dict(self) -> dict:
         return {"answer": self.answer.to_dict(),
@@ -205,10 +223,18 @@ class Settlement:
 def settle_tie(diagnosis: dict, inst: Instrument, runs: Sequence[Run], *,
                labels: Sequence[str] | None = None, **fit_kw) -> Settlement | None:
     """Put a diagnosis's tie (``diagnosis``: :meth:`nfs.diagnose.Diagnosis.to_dict`) to the
-    runs: fit each tied explanation (:func:`nfs.design.rivals.rival_models`) and decide
-    (:func:`decide`).  A rival that wins every pair it is in gives the answer ``add`` it,
-    with its coefficients' 95 % intervals; otherwise the tie stands, with the weakest
-    pair's likelihood ratio.  None when the diagnosis is no tie.
+    runs: fit each tied explanation and the model as it is
+    (:func:`nfs.design.rivals.rival_models`) and decide every pair (:func:`decide`).
+
+    One answer:
+
+    - a rival that wins every pair it is in: ``add`` it, with its coefficients' 95 %
+      intervals; ``nothing`` when it is the model as it is; ``unexplained`` when it is a
+      change of structure (a rate term on every node, a structural alternative) rather
+      than one effect;
+    - otherwise a ``tie`` of the rivals no other beats, with the weakest pair's evidence.
+
+    None when the diagnosis is no tie.
 
     ``labels``: the explanations to put to the runs instead of the tie's (the rivals a run
     was designed for, :func:`nfs.design.design_experiment`: after that run, the diagnosis
@@ -221,30 +247,52 @@ def settle_tie(diagnosis: dict, inst: Instrument, runs: Sequence[Run], *,
             return None
         labels = rivals_from_diagnosis(diagnosis)
     labels = list(labels)
-    rivals = rival_models(inst, runs, labels, **fit_kw)
+    put = labels + ([] if MODEL in labels else [MODEL])
+    rivals = rival_models(inst, runs, put, **fit_kw)
     decisions = decide(rivals, runs)
-    # the rival that wins every pair it is in (with two rivals: the pair's winner)
-    wins = [r.label for r in rivals
+    # the rival that wins every pair it is in
+    wins = [r for r in rivals
             if all(d.winner == r.label for d in decisions if r.label in (d.a, d.b))]
     if wins:
-        win = wins[0]
-        r = next(x for x in rivals if x.label == win)
-        others = ", ".join(x.label for x in rivals if x.label != win)
-        lr = min(abs(d.llr) for d in decisions if win in (d.a, d.b))
-        kind = next((e.spec.kind for e in r.instrument.effects if e.label == win), "thermal")
-        channel = "drift_dph" if kind == "gyro" else "temp_fog_c"
-        factor = max(d.noise_factors.get(channel, 1.0) for d in decisions)
-        interval = winner_interval(r, diagnosis, factor)
-        coef = _interval_text(r, interval)
-        what = "keep the model as it is" if win == MODEL else f"add {win}"
-        text = (f"{what}" + (f" ({coef})" if coef else "")
-                + f": the runs decide the tie with {others} (likelihood ratio e^{lr:.1f}, "
-                f"a decision needs e^{LAMBDA_NAME:g})")
-        return Settlement(Answer("add" if win != MODEL else "nothing", (win,), text),
-                          tuple(decisions), tuple(rivals), interval)
-    d = min(decisions, key=lambda x: abs(x.llr))
+        return _settled(wins[0], rivals, decisions, diagnosis)
+    beaten = {d.b if d.winner == d.a else d.a for d in decisions if d.winner is not None}
+    standing = [r.label for r in rivals if r.label not in beaten] or put
+    weakest = min((d for d in decisions if d.a in standing and d.b in standing),
+                  key=lambda x: abs(x.evidence.z), default=decisions[0])
     head = (answer.get("text", "").split("; a run that would")[0]
-            if answer.get("kind") == "tie" else
-            f"these runs cannot tell apart: {', '.join(labels)}")
-    text = head + f"; put to the runs, {d.text}"
-    return Settlement(Answer("tie", tuple(labels), text), tuple(decisions), tuple(rivals))
+            if answer.get("kind") == "tie" and set(standing) == set(labels) else
+            "these runs cannot tell apart: " + ", ".join(
+                "the model as it is" if x == MODEL else x for x in standing))
+    text = head + f"; put to the runs, {weakest.text}"
+    return Settlement(Answer("tie", tuple(standing), text), tuple(decisions), tuple(rivals))
+
+
+def _settled(r: Rival, rivals: Sequence[Rival], decisions: Sequence[Decision],
+             diagnosis: dict) -> Settlement:
+    """The settlement won by ``r``: its answer, in words."""
+    win = r.label
+    others = ", ".join("the model as it is" if x.label == MODEL else x.label
+                       for x in rivals if x.label != win)
+    mine = [d for d in decisions if win in (d.a, d.b)]
+    weakest = min(mine, key=lambda x: abs(x.evidence.z))
+    why = (f"the runs decide between it and {others} (weakest: likelihood ratio "
+           f"e^{abs(weakest.evidence.adjusted):.1f} after the price of its numbers, Vuong's "
+           f"Z {abs(weakest.evidence.z):.1f}; a decision needs e^{LAMBDA_NAME:g} and Z "
+           f"{Z_NAME:.3g})")
+    if win == MODEL:
+        return Settlement(Answer("nothing", (), f"keep the model as it is: {why}"),
+                          tuple(decisions), tuple(rivals))
+    spec = next((e.spec for e in r.instrument.effects if e.label == win), None)
+    if spec is None or win == RATE_ALTERNATIVE:
+        # a change of structure fits better than any one effect: what is missing is the
+        # model's structure, not a library effect
+        text = (f"no single effect: {win} ({r.description}) fits the runs better; "
+                f"{why}: revise the model's structure rather than add one effect")
+        return Settlement(Answer("unexplained", (win,), text), tuple(decisions),
+                          tuple(rivals))
+    channel = "drift_dph" if spec.kind == "gyro" else "temp_fog_c"
+    factor = max(d.noise_factors.get(channel, 1.0) for d in decisions)
+    interval = winner_interval(r, diagnosis, factor)
+    coef = _interval_text(r, interval)
+    text = f"add {win}" + (f" ({coef})" if coef else "") + f": {why}"
+    return Settlement(Answer("add", (win,), text), tuple(decisions), tuple(rivals), interval)

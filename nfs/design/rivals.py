@@ -64,6 +64,10 @@ class Rival:
     """The fitted instrument."""
     fit: FitResult | None
     """The fit that made it (standard errors, correlations, priors); None: no uncertainty."""
+    n_added: int = 0
+    """How many numbers it fits beyond the model as given (the new effect's coefficients,
+    the rate term's one per node, the structural alternative's new numbers): the price a
+    decision charges it (:mod:`nfs.design.evidence`)."""
 
     def draws(self, n: int, rng: np.random.Generator) -> list[Instrument]:
         """``n`` instruments with parameters drawn from the fit's linearised posterior
@@ -101,7 +105,7 @@ class Rival:
         """A JSON-ready summary: label, description, fitted parameters and errors."""
         fr = self.fit
         return {"label": self.label, "description": self.description,
-                "instrument": self.instrument.name,
+                "instrument": self.instrument.name, "n_added": self.n_added,
                 "params": {} if fr is None else {p: float(v) for p, v in fr.params.items()},
                 "stderr": {} if fr is None else {p: (float(v) if math.isfinite(v) else None)
                                                  for p, v in fr.stderr.items()}}
@@ -136,7 +140,8 @@ def _rate_rival(inst: Instrument, runs: Sequence[Run], **fit_kw) -> Rival:
     free = model_drift_paths(inst) + [f"effects.{e.label}.k_s" for e in added]
     fr = fit_model(new, runs, free=free, stages=("drift",), **fit_kw)
     return Rival(RATE_ALTERNATIVE, "a Shupe rate term on every node of the network (the "
-                 "discretised Shupe integral), coefficients fitted", fr.instrument, fr)
+                 "discretised Shupe integral), coefficients fitted", fr.instrument, fr,
+                 len(added))
 
 
 def _structure_rival(inst: Instrument, runs: Sequence[Run], label: str, alt,
@@ -147,7 +152,7 @@ def _structure_rival(inst: Instrument, runs: Sequence[Run], label: str, alt,
     scored = next((a for a in ad.alternatives if a.name == label), None)
     changed = scored.instrument if scored is not None else alt.build(alt.start)
     fr = fit_model(changed, runs, free=default_free(changed), **fit_kw)
-    return Rival(label, alt.description, fr.instrument, fr)
+    return Rival(label, alt.description, fr.instrument, fr, len(alt.free))
 
 
 def check_label(inst: Instrument, runs: Sequence[Run], label: str) -> None:
@@ -206,7 +211,9 @@ def rival_model(inst: Instrument, runs: Sequence[Run], label: str, **fit_kw) -> 
             f"as EFFECT or EFFECT:TARGET, '{RATE_ALTERNATIVE}', or a structural alternative "
             f"of this model ({', '.join(sorted(alts))})") from None
     new, fr, _ = apply_candidate(inst, runs, name, target or None, **_apply_kw(fit_kw))
-    return Rival(label, f"adds the effect {label}, refitted", new, fr)
+    own = f"effects.{label}."
+    return Rival(label, f"adds the effect {label}, refitted", new, fr,
+                 sum(1 for p in fr.params if p.startswith(own)))
 
 
 def _apply_kw(fit_kw: dict) -> dict:
@@ -231,12 +238,16 @@ def rivals_from_diagnosis(diagnosis: dict[str, Any]) -> list[str]:
     """The labels a diagnosis (``diagnosis.json`` of ``nfs diagnose``, or
     :meth:`nfs.diagnose.Diagnosis.to_dict`) could not tell apart.
 
-    A tie gives its two explanations (the diagnosis's own tie, ``tie``, when ``nfs
-    diagnose`` went on to decide it); an answer that names one effect gives that effect
-    against the model as given (is the effect there at all?).  Anything else has nothing to
+    A tie gives its explanations (when ``nfs diagnose`` put the tie to the runs and it
+    stands, the rivals it left standing; when the runs decided it, the diagnosis's own tie,
+    kept as ``tie``); an answer that names one effect gives that effect against the model
+    as given (is the effect there at all?).  Anything else has nothing to
     decide: :class:`~nfs.errors.NfsError` saying so.
     """
-    answer = (diagnosis or {}).get("tie") or (diagnosis or {}).get("answer") or {}
+    doc = diagnosis or {}
+    answer = doc.get("answer") or {}
+    if answer.get("kind") != "tie":
+        answer = doc.get("tie") or answer
     kind, labels = answer.get("kind"), list(answer.get("labels") or ())
     if kind == "tie" and len(labels) >= 2:
         return labels
