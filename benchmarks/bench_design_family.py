@@ -176,7 +176,8 @@ def _one_set(case: str, seed: int) -> dict:
                 if settle is not None:
                     kind, labels = _answer(settle.answer)
                     row["settled"] = "; ".join(
-                        f"{x.a} vs {x.b}: ln LR {x.llr:+.1f}, {x.separation_sigma:.1f} sigma"
+                        f"{x.a} vs {x.b}: ln LR {x.llr:+.1f}, Z {x.evidence.z:+.1f}, "
+                        f"{x.separation_sigma:.1f} sigma"
                         for x in settle.decisions)
             lap(step)
             absorbed = _absorbed(hidden, fit, _own_lag(draw.unit, params), params)
@@ -188,8 +189,10 @@ def _one_set(case: str, seed: int) -> dict:
                 return row
             step = "design"
             base = base_conditions(runs)
-            rivals = settle.rivals
-            design = design_experiment(rivals, runs, base, default_space(runs), seed=seed)
+            # the rivals the tie left standing (the model as it is among them when no
+            # explanation beat it)
+            design = design_experiment(settle.standing, runs, base, default_space(runs),
+                                       seed=seed)
             e = design.experiment
             row.update(design=f"{e.describe()} ({e.hours:.1f} h)", met=design.met)
             lap(step)

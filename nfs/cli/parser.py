@@ -253,14 +253,16 @@ def build_parser() -> argparse.ArgumentParser:
                          "from the measured thermometers through the model's network "
                          "(smoothed, default) or the model's open-loop solution (model)")
     dg.add_argument("--rivals", nargs="+", default=None, metavar="RIVAL",
-                    help="put these explanations to the runs (the rivals an nfs design was "
-                         "made for, after its run was added): 'model', EFFECT[:TARGET], 'a "
-                         "rate term on every node' or a structural alternative's name")
+                    help="put these explanations, and the model as it is, to the runs (the "
+                         "rivals an nfs design was made for, after its run was added): "
+                         "'model', EFFECT[:TARGET], 'a rate term on every node' or a "
+                         "structural alternative's name")
     dg.add_argument("--decide", action="store_true",
-                    help="on a tie, fit the tied explanations and put them to the runs by "
-                         "their likelihood ratio (nfs.design.decide); its error rates hold "
-                         "where one of them is the unit's physics, not yet on units the "
-                         "model does not describe (docs/design.md, Limits)")
+                    help="on a tie, fit the tied explanations and the model as it is and "
+                         "put them to the runs (nfs.design.decide: a likelihood ratio of e^2 "
+                         "after the price of the numbers a rival adds, and Vuong's Z 1.645 "
+                         "with the model error along the runs counted); its rates on units "
+                         "the model does not describe: docs/design.md, Limits")
     dg.add_argument("--no-structure", action="store_true",
                     help="skip setting the model's thermal structure against generic "
                          "alternatives (one more node, a free link, a moved thermometer)")

@@ -28,7 +28,7 @@ from matplotlib.figure import Figure
 from ..io.atomic import atomic_write_files
 from ..scoring.intervals import json_number
 from ..run import Run
-from .decide import LAMBDA_NAME, decision_rates
+from .decide import LAMBDA_NAME, Z_NAME, decision_rates
 from .predict import CHANNELS
 from .search import Design
 from .separation import separation
@@ -210,11 +210,12 @@ def to_markdown(design: Design) -> str:
                        + " |")
     worst = min(design.proposed[k].sigma for k in design.open_pairs)
     right, wrong = decision_rates(worst)
-    out += ["", f"After the run, the rivals are put to the runs by their likelihood ratio "
-            f"(`{decide_command(design)}`, a decision at e^{LAMBDA_NAME:g}): at "
-            f"{worst:.1f} sigma the "
-            f"run names the right one with probability {right:.2f} and the wrong one with "
-            f"{wrong:.2g} (the rest: still a tie).", "",
+    out += ["", f"After the run, the rivals and the model as it is are put to the runs "
+            f"(`{decide_command(design)}`: a decision needs a likelihood ratio of "
+            f"e^{LAMBDA_NAME:g} after the price of the numbers a rival adds, and Vuong's Z "
+            f"{Z_NAME:.3g}, `nfs.design.decide`): at {worst:.1f} sigma the run names the "
+            f"right one with probability {right:.2f} and the wrong one with {wrong:.2g} "
+            "where one rival is the unit (the rest: still a tie).", "",
             "Noise factors (the runs' residual over the sensor noise, per channel): "
             + ", ".join(f"{_WORDS[c]} {f:.2f}" for c, f in design.noise_factors.items()), "",
             "## Rivals", ""]
