@@ -11,6 +11,7 @@ from typing import Any, Callable
 import nfs
 
 from ..io.atomic import atomic_write_text
+from ..io.provenance import sha256_of_text
 from .cells import canonical, cell_batches, cell_tasks, run_cells, scenario_digest
 from .executors import LocalExecutor, SweepProgress
 from .figures import write_figures
@@ -18,7 +19,10 @@ from .definition import SweepSpec
 from .store import CellStore
 from .results_table import write_csv, write_parquet
 
-__all__ = ["SweepResult", "run_sweep"]
+__all__ = ["SweepResult", "run_sweep", "FIGURES_RECORD"]
+
+#: The digest of what the figures show and their file names (:func:`run_sweep`).
+FIGURES_RECORD = "figures.json"
 
 
 @dataclass(frozen=True)
@@ -75,7 +79,8 @@ def run_sweep(spec: SweepSpec, output: str | Path, *, executor=None, quiet: bool
     store = CellStore(output)
     store.prepare()
     base = scenario_digest(spec)
-    atomic_write_text(store.folder / "sweep.json", _manifest(spec, base))
+    manifest = _manifest(spec, base)
+    atomic_write_text(store.folder / "sweep.json", manifest)
     missing = [t for t in cell_tasks(spec, base) if not store.has(t.key)]
     n_missing = len(missing)
     executor = executor or LocalExecutor()
@@ -100,5 +105,29 @@ def run_sweep(spec: SweepSpec, output: str | Path, *, executor=None, quiet: bool
     if write_parquet(spec, store, store.folder / "results.parquet"):
         paths.append(store.folder / "results.parquet")
     if figures:
-        paths += write_figures(spec, store, store.folder)
+        paths += _figures(spec, store, manifest)
     return SweepResult(spec.n_cells, n_done, n_rows, tuple(paths))
+
+
+def _figures(spec: SweepSpec, store: CellStore, manifest: str) -> list[Path]:
+    """The summary figures, drawn only when what they show changed.
+
+    The figures are a function of the sweep (its manifest: axes, seeds, spec, code version)
+    and of the table assembled from the store (``results.csv``): their SHA-256 is kept in
+    ``figures.json`` beside the files, and a rerun that finds the same digest and every file
+    in place keeps them (a fully stored rerun costs reading the store, not drawing).
+    """
+    record = store.folder / FIGURES_RECORD
+    drawn = sha256_of_text(manifest + (store.folder / "results.csv").read_text(
+        encoding="utf-8"))
+    try:
+        kept = json.loads(record.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        kept = {}
+    files = [store.folder / f for f in kept.get("files", [])] if isinstance(kept, dict) else []
+    if kept and kept.get("digest") == drawn and all(f.is_file() for f in files):
+        return files
+    paths = write_figures(spec, store, store.folder)
+    atomic_write_text(record, json.dumps({"digest": drawn, "files": [p.name for p in paths]},
+                                         indent=1) + "\n")
+    return paths

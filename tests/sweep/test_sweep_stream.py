@@ -1,0 +1,74 @@
+"""Sweeps stream their runs: a cell's record does not depend on how many start-ups are
+marched beside it or where the memory bound cuts the chunks, and a fully stored rerun keeps
+its figures when what they show has not changed."""
+
+import dataclasses
+import json
+
+import numpy as np
+import pytest
+
+import nfs.experiment
+from nfs.experiment import iter_simulate_runs, simulate_run
+from nfs.config.scenario import load_scenario
+from nfs.sweep import LocalExecutor, cell_batches, cell_tasks, load_sweep, run_cell, run_cells, \
+    run_sweep
+from nfs.sweep.run import FIGURES_RECORD
+from thermal.march import _ACCUMULATE_UP_TO
+
+
+def _sweep(tmp_path, short_scenario, seeds):
+    p = tmp_path / "sweep.toml"
+    p.write_text(f'scenario = "{short_scenario.name}"\nseeds = {seeds}\nspec_deg = 0.03\n'
+                 "[axes]\nlatitude_deg = [20.0]\n", encoding="utf-8")
+    return load_sweep(p)
+
+
+def test_a_cell_has_its_record_beside_many_start_ups(tmp_path, short_scenario):
+    # Oracle: run_cell, the cell alone (its two start-ups marched together); a batch of nine
+    # cells marches eighteen start-ups at once (the march's block additions, above
+    # _ACCUMULATE_UP_TO), and a memory bound of three start-ups cuts the chunks inside cells.
+    spec = _sweep(tmp_path, short_scenario, list(range(9)))
+    tasks = list(cell_tasks(spec))
+    assert 2 * len(tasks) > _ACCUMULATE_UP_TO
+    alone = [json.dumps(run_cell(t), sort_keys=True) for t in tasks]
+    (batch,) = list(cell_batches(tasks))
+    assert [json.dumps(r, sort_keys=True) for r in run_cells(batch)] == alone
+    per_run = 8 * 2 * 7 * 2400
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(nfs.experiment, "STACK_BYTES", 3 * per_run)
+        assert [json.dumps(r, sort_keys=True) for r in run_cells(batch)] == alone
+
+
+def test_streamed_runs_are_the_single_runs(short_scenario):
+    # Oracle: simulate_run of each start-up alone, bit for bit, for the streamed runs of
+    # three seeds whose chunks (a bound of two start-ups) split the seeds' runs.
+    base = load_scenario(str(short_scenario))
+    conds = [c for seed in (1, 2, 3) for c in
+             dataclasses.replace(base, seed=seed).conditions()]
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(nfs.experiment, "STACK_BYTES", 2 * 8 * 2 * 7 * 2400)
+        streamed = list(iter_simulate_runs(base.instrument, conds))
+    for cond, sim in zip(conds, streamed, strict=True):
+        one = simulate_run(base.instrument, cond)
+        assert np.array_equal(one.thermal.temperature_c, sim.thermal.temperature_c)
+        for col, v in one.run.columns.items():
+            assert np.array_equal(v, sim.run.columns[col], equal_nan=True), col
+
+
+def test_a_stored_rerun_keeps_its_figures(tmp_path, short_scenario):
+    # Oracle: the figures' files are not rewritten when the sweep and its table are the
+    # same (their modification times stay), and are drawn again when one is missing.
+    spec = _sweep(tmp_path, short_scenario, [1])
+    out = tmp_path / "out"
+    first = run_sweep(spec, out, executor=LocalExecutor(1), quiet=True)
+    figures = [p for p in first.paths if p.suffix == ".png"]
+    assert figures and (out / FIGURES_RECORD).is_file()
+    stamps = [p.stat().st_mtime_ns for p in figures]
+    again = run_sweep(spec, out, executor=LocalExecutor(1), quiet=True)
+    assert again.n_computed == 0
+    assert [p for p in again.paths if p.suffix == ".png"] == figures
+    assert [p.stat().st_mtime_ns for p in figures] == stamps
+    figures[0].unlink()
+    run_sweep(spec, out, executor=LocalExecutor(1), quiet=True)
+    assert figures[0].is_file()
