@@ -19,8 +19,10 @@ Protocol (the FOG start-up paper, done on equal terms):
    Holm-adjusted (:mod:`nfs.scoring.intervals`).
 
 The features of the test runs and their separated drift are computed once and shared by
-every method; the trainings (methods x tuner seeds) run in parallel on ``n_jobs`` workers,
-each seeded on its own, so the table does not depend on ``n_jobs``.
+every method; the trainings (methods x tuner seeds) run in parallel on ``n_jobs`` worker
+threads, each seeded on its own, so the table does not depend on ``n_jobs``; on several
+workers they start as soon as the training set is made, while the test start-ups are
+simulated.
 """
 
 from __future__ import annotations
@@ -50,7 +52,7 @@ from ..scoring.heading_table import TableRow, pooled_rmse
 from .scenario_runs import (northfind_runs, run_scenario, run_stage_errors, stage_names,
                             uncompensated_table)
 
-__all__ = ["train_scenario", "train_and_predict", "ticker", "training_pool", "MethodResult",
+__all__ = ["train_scenario", "train_method", "train_and_predict", "ticker", "training_pool", "MethodResult",
            "SeedResult", "CompensationStudy", "run_study", "test_scenario", "DriftRow",
            "errors_by_temperature", "table_provenance"]
 
@@ -86,6 +88,8 @@ class SeedResult:
     startup_errors_deg: tuple = ()
     """Start-up heading errors of its compensated test runs [deg], by start temperature,
     one array per run."""
+    fit_time_s: float = float("nan")
+    """Wall time of the training [s] (one thread: the tuner's evaluations and the refit)."""
 
     @property
     def mean_deg(self) -> float:
@@ -343,47 +347,50 @@ def run_study(scenario, settings: CompensationSettings | None = None, *,
     tick = ticker(progress, 3 + len(jobs))
 
     train_sc = train_scenario(scenario, s)
-    if test is None:
-        scenario = test_scenario(scenario, s)
-        tick("simulating the test start-ups")
-        test = run_scenario(scenario)
-    else:
-        tick(None)
     tick("simulating the training start-ups")
     train_runs = tuple(r.run for r in simulate_runs(train_sc.instrument,
                                                     train_sc.conditions()))
     data = drift_dataset(train_runs, list(s.features), decimate_s=s.decimate_s,
                          cutoff_period_s=s.cutoff_period_s,
                          features_mode=check_features_mode(s.features_mode))
-    test_runs = [sim.run for sim in test.simulations]
-    drifts = _test_drift(test_runs, s.cutoff_period_s, scenario.northfind.startup_end_s)
-    # the features of every test run, once for every method (they share features and mode)
-    plans = [prediction_plan(r, data.feature_names, features_mode=data.features_mode,
-                             rate_window_s=data.rate_window_s,
-                             stride_s=min(10.0, s.decimate_s)) for r in test_runs]
-    study = CompensationStudy(
-        settings=s, test=test, train_runs=train_runs, dataset=data,
-        uncompensated_drift=DriftRow("denoised (no compensation)", float("nan"),
-                                     _pooled_within_std([np.asarray(d.drift_dph)[m]
-                                                         for d, m in drifts])),
-        test_separations=tuple(d for d, _ in drifts))
     # costliest trainings first, so that the workers finish together
     order = sorted(range(len(jobs)), key=lambda j: -jobs[j][0].cost)
     done: dict[int, SeedResult] = {}
     fitted: dict[int, tuple] = {}
     with training_pool(s.n_jobs) as parallel:
-        out = parallel(delayed(train_and_predict)(j, jobs[j][0].key, data, s, jobs[j][1],
-                                                   plans) for j in order)
-        for j, comp, preds in out:
+        # on several workers the trainings start now, and the test start-ups are simulated,
+        # separated and featured meanwhile (with one, each training when its turn comes)
+        trained = parallel(delayed(train_method)(j, jobs[j][0].key, data, s, jobs[j][1])
+                           for j in order)
+        if test is None:
+            scenario = test_scenario(scenario, s)
+            tick("simulating the test start-ups")
+            test = run_scenario(scenario)
+        else:
+            tick(None)
+        test_runs = [sim.run for sim in test.simulations]
+        drifts = _test_drift(test_runs, s.cutoff_period_s, scenario.northfind.startup_end_s)
+        # the features of every test run, once for every method (they share features, mode)
+        plans = [prediction_plan(r, data.feature_names, features_mode=data.features_mode,
+                                 rate_window_s=data.rate_window_s,
+                                 stride_s=min(10.0, s.decimate_s)) for r in test_runs]
+        study = CompensationStudy(
+            settings=s, test=test, train_runs=train_runs, dataset=data,
+            uncompensated_drift=DriftRow("denoised (no compensation)", float("nan"),
+                                         _pooled_within_std([np.asarray(d.drift_dph)[m]
+                                                             for d, m in drifts])),
+            test_separations=tuple(d for d, _ in drifts))
+        for j, comp in trained:
             spec, seed = jobs[j]
             tick(f"trained {spec.name}" + (f" (seed {seed})" if spec.seeded else ""))
+            preds = [comp.predict_drift(plan=p) for p in plans]
             nf = northfind_runs([comp.compensate(r, drift_dph=p)
                                  for r, p in zip(test_runs, preds)], scenario.northfind)
             errs = errors_by_temperature(test, nf)
             rmse = tuple(pooled_rmse(e) for e in errs)
             params, bound = _tuned(comp.estimator)
             done[j] = SeedResult(seed, rmse, params, bound,
-                                 tuple(tuple(e) for e in errs))
+                                 tuple(tuple(e) for e in errs), comp.fit_time_s)
             fitted[j] = (comp, nf, preds)
     tick("intervals")
     for spec in specs:
@@ -405,12 +412,23 @@ def run_study(scenario, settings: CompensationSettings | None = None, *,
 
 @contextmanager
 def training_pool(n_jobs: int | None):
-    """The joblib pool the trainings of a study run in (results as they finish), with one
-    BLAS thread: the trainings' matrices are small, and a BLAS thread pool beside joblib's
-    workers (or in the one process of ``n_jobs=1``) spins more than it computes (``nfs table
-    seed003_ramp_calibration --n-jobs 1``: 155 s with it, 54 s without, the same table)."""
-    with threadpool_limits(limits=1), \
-            Parallel(n_jobs=n_jobs, return_as="generator_unordered") as parallel:
+    """The joblib pool the trainings of a study run in (results as they finish): threads of
+    this process, with one BLAS thread each and the capped iterations' ConvergenceWarning
+    ignored (RVR's evidence sweeps, BP's epochs: part of the recipes).
+
+    Threads, not processes: LIBSVM's SMO, LAPACK and NumPy's array operations release the
+    GIL, and a thread needs no start-up (a loky worker imports NumPy, SciPy, scikit-learn and
+    the package first) nor copies of the training set and of the fitted searches (the default
+    table on a loaded 2-core machine: 101 s against 124 s, the same table).  One BLAS thread:
+    the trainings' matrices are small, and a BLAS thread pool beside the workers (or in the
+    one thread of ``n_jobs=1``) spins more than it computes (``nfs table
+    seed003_ramp_calibration --n-jobs 1``: 155 s with it, 54 s without, the same table).  The
+    warning filter is set here, once for every thread: ``warnings.catch_warnings`` in each
+    thread would race on the process's one list of filters."""
+    with threadpool_limits(limits=1), warnings.catch_warnings(), \
+            Parallel(n_jobs=n_jobs, prefer="threads",
+                     return_as="generator_unordered") as parallel:
+        warnings.simplefilter("ignore", ConvergenceWarning)
         yield parallel
 
 
@@ -434,17 +452,19 @@ def _seeds(spec: MethodSpec, s: CompensationSettings) -> list[int]:
     return [s.random_state + k for k in range(n)]
 
 
+def train_method(j: int, key: str, data: DriftDataset, s: CompensationSettings, seed: int):
+    """Train method ``key`` with ``seed`` on one worker (the tuner's own evaluations are
+    serial): (j, compensator), ``j`` passed through to tell the jobs apart.  Run in
+    :func:`training_pool`, which ignores the ConvergenceWarning of the capped iterations."""
+    return j, train_compensator(key, data, budget=s.budget, random_state=seed, n_jobs=1)
+
+
 def train_and_predict(j: int, key: str, data: DriftDataset, s: CompensationSettings,
-                       seed: int, plans: list[PredictionPlan]):
-    """Train method ``key`` with ``seed`` (one worker: the tuner's own evaluations are
-    serial) and predict the drift of every test run from its plan; (j, compensator,
-    predictions), ``j`` passed through to tell the jobs apart."""
-    with warnings.catch_warnings():
-        # capped iterations (RVR's evidence sweeps, BP's epochs) are part of the recipes
-        warnings.simplefilter("ignore", ConvergenceWarning)
-        comp = train_compensator(key, data, budget=s.budget, random_state=seed, n_jobs=1)
-        preds = [comp.predict_drift(plan=p) for p in plans]
-    return j, comp, preds
+                      seed: int, plans: list[PredictionPlan]):
+    """:func:`train_method`, then the drift of every test run predicted from its plan:
+    (j, compensator, predictions)."""
+    _, comp = train_method(j, key, data, s, seed)
+    return j, comp, [comp.predict_drift(plan=p) for p in plans]
 
 
 def _tuned(estimator) -> tuple[dict, tuple[str, ...]]:

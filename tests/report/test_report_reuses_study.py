@@ -1,0 +1,68 @@
+"""The report draws what the study computed: no second separation, prediction or training.
+
+Oracles: counts (the wavelet separation, a compensator's prediction and the tuned fits are
+never called while the report is written, for any file it writes) and equality (the drift
+figure's traces are the study's stored separation and predictions, array for array).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import nfs.denoise
+import nfs.report.compensation as report
+from nfs.compensate.compensator import DriftCompensator
+from nfs.compensate.settings import CompensationSettings
+from nfs.config.scenario import load_scenario
+from nfs.studies.startup_study import run_study
+
+SMALL = """name = "small"
+seed = 5
+start_temperatures_c = [-20.0, 40.0]
+duration_s = 2600.0
+[schedule]
+positions_deg = [0.0, 90.0, 180.0, 270.0]
+dwell_s = 150.0
+move_s = 10.0
+"""
+
+
+@pytest.fixture(scope="module")
+def study(tmp_path_factory):
+    p = tmp_path_factory.mktemp("reuse") / "small.toml"
+    p.write_text(SMALL)
+    return run_study(load_scenario(p), CompensationSettings(methods=("ls", "stepwise"),
+                                                            train_seed=9, test_repeats=1,
+                                                            n_jobs=1))
+
+
+def test_write_study_separates_and_predicts_nothing_again(study, tmp_path, monkeypatch):
+    calls = []
+
+    def refuse(name):
+        def f(*args, **kwargs):
+            calls.append(name)
+            raise AssertionError(f"the report called {name}")
+        return f
+
+    monkeypatch.setattr(report, "separate_drift", refuse("separate_drift"))
+    monkeypatch.setattr(nfs.denoise, "separate_drift", refuse("nfs.denoise.separate_drift"))
+    monkeypatch.setattr(DriftCompensator, "predict_drift", refuse("predict_drift"))
+    table = study.heading_table()
+    paths = report.write_study(study, tmp_path, table=table)
+    assert calls == []
+    assert (tmp_path / "drift_vs_compensated.png").stat().st_size > 0
+    assert all(p.exists() for p in paths)
+
+
+def test_drift_figure_draws_the_stored_arrays(study):
+    fig = report.plot_drift_vs_compensated(study, methods=("LS",))
+    k = int(np.argmin([s.conditions.start_temperature_c for s in study.test.simulations]))
+    top = fig.axes[0].get_lines()
+    drawn = {line.get_label(): np.asarray(line.get_ydata()) for line in top}
+    sep = study.test_separations[k]
+    assert np.array_equal(drawn["thermal drift\n(wavelet-separated) [deg/h]"],
+                          np.asarray(sep.drift_dph))
+    assert np.array_equal(drawn["LS: predicted drift"],
+                          study.results["LS"].predicted_drift_dph[k], equal_nan=True)
