@@ -347,6 +347,8 @@ def run_study(scenario, settings: CompensationSettings | None = None, *,
     tick = ticker(progress, 3 + len(jobs))
 
     train_sc = train_scenario(scenario, s)
+    if test is None:
+        scenario = test_scenario(scenario, s)       # checked before any training starts
     tick("simulating the training start-ups")
     train_runs = tuple(r.run for r in simulate_runs(train_sc.instrument,
                                                     train_sc.conditions()))
@@ -363,7 +365,6 @@ def run_study(scenario, settings: CompensationSettings | None = None, *,
         trained = parallel(delayed(train_method)(j, jobs[j][0].key, data, s, jobs[j][1])
                            for j in order)
         if test is None:
-            scenario = test_scenario(scenario, s)
             tick("simulating the test start-ups")
             test = run_scenario(scenario)
         else:
