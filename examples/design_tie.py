@@ -14,9 +14,12 @@ put to all the runs.  From the command line::
     # ... run design/scenario.toml in the chamber, add the run to runs/ ...
     nfs fit runs/ --model model.toml -o fitted2.toml --start soaked
     nfs diagnose runs/ --model fitted2.toml --start soaked --rivals turn_on_transient \\
-        "a rate term on every node" heat_source:coil_inner
+        "a rate term on every node"
 
-(``--start soaked``: these simulated runs are soaked exactly at T0.)  Run as
+(the rivals the tie left standing: the runs taken already rule out heat inside the coil
+and the model as it is).
+
+``--start soaked``: these simulated runs are soaked exactly at T0.  Run as
 ``python examples/design_tie.py [OUT_DIR]`` (about two minutes on two cores).
 """
 

@@ -106,21 +106,21 @@ class Decision:
         """The decision in one sentence."""
         e = self.evidence
         _, p_wrong = decision_rates(self.separation_sigma)
-        payer = (self.a if e.llr >= 0.0 and e.price > 0.0 else
-                 self.b if e.llr < 0.0 and e.price < 0.0 else None)
-        price = (f" less {abs(e.price):g} for the numbers {payer} fits beyond the other"
-                 if payer else "")
-        said = (f"likelihood ratio e^{abs(e.llr):.1f}{price}, Vuong's Z {abs(e.z):.1f} with "
-                f"the model error along the runs counted")
+        lean = self.a if e.llr >= 0.0 else self.b
+        paid = e.price if e.llr >= 0.0 else -e.price
+        price = (f", e^{abs(e.adjusted):.1f} after the price of the {paid:g} numbers it "
+                 "fits beyond the other" if paid > 0 else "")
+        said = (f"likelihood ratio e^{abs(e.llr):.1f} for {_words(lean)}{price}; Vuong's Z "
+                f"{abs(e.z):.1f} with the model error along the runs counted")
         if self.winner is None:
-            return (f"the runs cannot decide between {self.a} and {self.b} ({said}; their "
-                    f"predictions {self.separation_sigma:.1f} noise standard deviations "
-                    f"apart; a decision needs e^{LAMBDA_NAME:g} and Z {Z_NAME:.3g}): "
-                    "nfs design")
+            return (f"the runs cannot decide between {_words(self.a)} and {_words(self.b)} "
+                    f"({said}; their predictions {self.separation_sigma:.1f} noise standard "
+                    f"deviations apart; a decision needs e^{LAMBDA_NAME:g} and Z "
+                    f"{Z_NAME:.3g}): nfs design")
         loser = self.b if self.winner == self.a else self.a
-        return (f"the runs favour {self.winner} over {loser} ({said}; the predictions "
-                f"{self.separation_sigma:.1f} noise standard deviations apart, where this "
-                f"rule names the wrong one with probability {p_wrong:.2g})")
+        return (f"the runs favour {_words(self.winner)} over {_words(loser)} ({said}; the "
+                f"predictions {self.separation_sigma:.1f} noise standard deviations apart, "
+                f"where this rule names the wrong one with probability {p_wrong:.2g})")
 
     def to_dict(self) -> dict:
         e = self.evidence
@@ -259,20 +259,26 @@ def settle_tie(diagnosis: dict, inst: Instrument, runs: Sequence[Run], *,
     standing = [r.label for r in rivals if r.label not in beaten] or put
     weakest = min((d for d in decisions if d.a in standing and d.b in standing),
                   key=lambda x: abs(x.evidence.z), default=decisions[0])
+    out = [r.label for r in rivals if r.label in beaten]
     head = (answer.get("text", "").split("; a run that would")[0]
             if answer.get("kind") == "tie" and set(standing) == set(labels) else
-            "these runs cannot tell apart: " + ", ".join(
-                "the model as it is" if x == MODEL else x for x in standing))
+            "these runs cannot tell apart: " + " and ".join(_words(x) for x in standing)
+            + (f" ({', '.join(_words(x) for x in out)}: ruled out, another fits the runs "
+               "better)" if out else ""))
     text = head + f"; put to the runs, {weakest.text}"
     return Settlement(Answer("tie", tuple(standing), text), tuple(decisions), tuple(rivals))
+
+
+def _words(label: str) -> str:
+    """A rival's label as the sentence says it."""
+    return "the model as it is" if label == MODEL else label
 
 
 def _settled(r: Rival, rivals: Sequence[Rival], decisions: Sequence[Decision],
              diagnosis: dict) -> Settlement:
     """The settlement won by ``r``: its answer, in words."""
     win = r.label
-    others = ", ".join("the model as it is" if x.label == MODEL else x.label
-                       for x in rivals if x.label != win)
+    others = ", ".join(_words(x.label) for x in rivals if x.label != win)
     mine = [d for d in decisions if win in (d.a, d.b)]
     weakest = min(mine, key=lambda x: abs(x.evidence.z))
     why = (f"the runs decide between it and {others} (weakest: likelihood ratio "

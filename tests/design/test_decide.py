@@ -91,8 +91,9 @@ def test_winner_needs_both_the_ratio_and_z():
     assert d(-1.2, price=-5.0).winner is None
     assert d(-9.0, price=-5.0).evidence.adjusted == pytest.approx(-4.0, rel=1e-12)
     assert d(-9.0, price=-5.0).winner == "b"
-    assert "less 5 for the numbers b fits" in d(-9.0, price=-5.0).text
-    assert "less" not in d(5.0, price=-3.5).text
+    assert ("e^9.0 for b, e^4.0 after the price of the 5 numbers it fits"
+            in d(-9.0, price=-5.0).text), d(-9.0, price=-5.0).text
+    assert "price" not in d(5.0, price=-3.5).text
     assert "favour a" in d(5.0).text and "cannot decide" in d(0.3).text
     assert d(5.0, var=4.0).evidence.z == pytest.approx(2.5, rel=1e-12)
 
