@@ -47,8 +47,8 @@ from .replay import replay_runs_taken
 from .rivals import MODEL, RATE_ALTERNATIVE, Rival, rival_models, rivals_from_diagnosis
 from .separation import RivalPrediction, separation
 
-__all__ = ["Decision", "Settlement", "decide", "decision_rates", "settle_tie", "LAMBDA_NAME",
-           "Z_NAME"]
+__all__ = ["Decision", "Settlement", "decide", "decision_rates", "settle_tie", "settlement",
+           "LAMBDA_NAME", "Z_NAME"]
 
 #: Lambda_adj a decision needs (module docstring).
 LAMBDA_NAME = 2.0
@@ -249,14 +249,23 @@ def settle_tie(diagnosis: dict, inst: Instrument, runs: Sequence[Run], *,
     labels = list(labels)
     put = labels + ([] if MODEL in labels else [MODEL])
     rivals = rival_models(inst, runs, put, **fit_kw)
-    decisions = decide(rivals, runs)
+    return settlement(rivals, decide(rivals, runs), diagnosis, labels)
+
+
+def settlement(rivals: Sequence[Rival], decisions: Sequence[Decision],
+               diagnosis: dict | None = None,
+               labels: Sequence[str] | None = None) -> Settlement:
+    """The one answer of the ``decisions`` between ``rivals`` (:func:`settle_tie`);
+    ``labels``: the explanations asked about (the diagnosis's tie), for the words."""
+    answer = (diagnosis or {}).get("answer") or {}
+    labels = [r.label for r in rivals if r.label != MODEL] if labels is None else list(labels)
     # the rival that wins every pair it is in
     wins = [r for r in rivals
             if all(d.winner == r.label for d in decisions if r.label in (d.a, d.b))]
     if wins:
-        return _settled(wins[0], rivals, decisions, diagnosis)
+        return _settled(wins[0], rivals, decisions, diagnosis or {})
     beaten = {d.b if d.winner == d.a else d.a for d in decisions if d.winner is not None}
-    standing = [r.label for r in rivals if r.label not in beaten] or put
+    standing = [r.label for r in rivals if r.label not in beaten] or [r.label for r in rivals]
     weakest = min((d for d in decisions if d.a in standing and d.b in standing),
                   key=lambda x: abs(x.evidence.z), default=decisions[0])
     out = [r.label for r in rivals if r.label in beaten]

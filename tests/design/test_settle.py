@@ -1,0 +1,85 @@
+"""nfs.design.decide.settlement: one answer from the decisions between rivals.
+
+Oracle: the rule of the module docstring, on decisions made by hand (Evidence with chosen
+Lambda and variance, so that each pair's winner is known): a rival that wins every pair it
+is in is the answer (``add`` an effect, ``nothing`` for the model as it is,
+``unexplained`` for a change of structure); otherwise a tie of the rivals no other beats,
+and those are the rivals a run is designed for.
+"""
+
+from __future__ import annotations
+
+from itertools import combinations
+
+import pytest
+
+from nfs.design.decide import Decision, settlement
+from nfs.design.evidence import Evidence
+from nfs.design.rivals import MODEL, RATE_ALTERNATIVE, Rival
+from nfs.instrument import load_instrument
+
+TRANSIENT = "turn_on_transient"
+
+
+@pytest.fixture(scope="module")
+def rivals():
+    inst = load_instrument("default")          # has a turn-on transient among its effects
+    assert any(e.label == TRANSIENT for e in inst.effects)
+    return [Rival(TRANSIENT, "adds the transient", inst, None, 2),
+            Rival(RATE_ALTERNATIVE, "a rate term on every node", inst, None, 7),
+            Rival(MODEL, "the model as given", inst, None, 0)]
+
+
+def _decisions(rivals, beats: dict[tuple[str, str], str | None]):
+    """Every pair decided as ``beats`` says (winner label or None): Lambda +-50 with
+    variance 1 for a winner, 0 for a tie; no price."""
+    out = []
+    for a, b in combinations([r.label for r in rivals], 2):
+        w = beats.get((a, b), beats.get((b, a)))
+        llr = 0.0 if w is None else (50.0 if w == a else -50.0)
+        out.append(Decision(a, b, Evidence(llr, 4.0, 0.0, 1.0, {}), 2.0, {}))
+    return out
+
+
+def test_an_effect_that_wins_every_pair_is_added(rivals):
+    s = settlement(rivals, _decisions(rivals, {(TRANSIENT, RATE_ALTERNATIVE): TRANSIENT,
+                                               (TRANSIENT, MODEL): TRANSIENT,
+                                               (RATE_ALTERNATIVE, MODEL): RATE_ALTERNATIVE}))
+    assert s.answer.kind == "add" and s.answer.labels == (TRANSIENT,)
+    assert s.answer.text.startswith(f"add {TRANSIENT}")
+    assert [r.label for r in s.standing] == [TRANSIENT]
+
+
+def test_the_model_that_wins_every_pair_keeps_the_model(rivals):
+    s = settlement(rivals, _decisions(rivals, {(TRANSIENT, MODEL): MODEL,
+                                               (RATE_ALTERNATIVE, MODEL): MODEL}))
+    assert s.answer.kind == "nothing" and s.answer.labels == ()
+    assert s.answer.text.startswith("keep the model as it is")
+
+
+def test_a_structure_that_wins_is_no_single_effect(rivals):
+    s = settlement(rivals, _decisions(rivals, {(TRANSIENT, RATE_ALTERNATIVE): RATE_ALTERNATIVE,
+                                               (TRANSIENT, MODEL): TRANSIENT,
+                                               (RATE_ALTERNATIVE, MODEL): RATE_ALTERNATIVE}))
+    assert s.answer.kind == "unexplained" and s.answer.labels == (RATE_ALTERNATIVE,)
+    assert "no single effect" in s.answer.text and "revise the model's structure" in \
+        s.answer.text
+
+
+def test_a_tie_keeps_the_rivals_no_other_beats(rivals):
+    # transient and rate term tied, both beat the model
+    s = settlement(rivals, _decisions(rivals, {(TRANSIENT, MODEL): TRANSIENT,
+                                               (RATE_ALTERNATIVE, MODEL): RATE_ALTERNATIVE}))
+    assert s.answer.kind == "tie"
+    assert s.answer.labels == (TRANSIENT, RATE_ALTERNATIVE)
+    assert [r.label for r in s.standing] == [TRANSIENT, RATE_ALTERNATIVE]
+    assert "the model as it is: ruled out" in s.answer.text
+    # nothing beats the model: it stands beside the effect
+    s = settlement(rivals, _decisions(rivals, {(TRANSIENT, RATE_ALTERNATIVE): TRANSIENT}))
+    assert s.answer.kind == "tie" and s.answer.labels == (TRANSIENT, MODEL)
+    assert "the model as it is" in s.answer.text
+    # a cycle beats everyone: every rival stands
+    s = settlement(rivals, _decisions(rivals, {(TRANSIENT, RATE_ALTERNATIVE): TRANSIENT,
+                                               (RATE_ALTERNATIVE, MODEL): RATE_ALTERNATIVE,
+                                               (TRANSIENT, MODEL): MODEL}))
+    assert s.answer.kind == "tie" and set(s.answer.labels) == {r.label for r in rivals}
