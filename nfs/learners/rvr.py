@@ -140,11 +140,15 @@ class RVRRegressor(KernelRegressor):
         when the factorisation fails)."""
         H = beta * PtP
         H[np.diag_indices_from(H)] += alpha
-        c, info = scipy.linalg.lapack.dpotrf(H, lower=True, clean=True)
+        # H is exactly symmetric (Phi^T Phi by one symmetric product): its transpose is the
+        # same matrix in Fortran order, which LAPACK factorises and inverts in place
+        c, info = scipy.linalg.lapack.dpotrf(H.T, lower=True, clean=True, overwrite_a=True)
         if info == 0:
-            Li, info = scipy.linalg.lapack.dtrtri(c, lower=True)
+            Li, info = scipy.linalg.lapack.dtrtri(c, lower=True, overwrite_c=True)
         if info == 0:
             return beta * (Li.T @ (Li @ Ptt)), np.einsum("ki,ki->i", Li, Li)
+        H = beta * PtP                                  # spent by the factorisation
+        H[np.diag_indices_from(H)] += alpha
         w, V = np.linalg.eigh(H)
         w = np.maximum(w, np.finfo(float).eps * max(w.max(), np.finfo(float).tiny))
         return beta * (V @ ((V.T @ Ptt) / w)), np.einsum("ik,ik->i", V / w, V)
