@@ -20,7 +20,8 @@ def _tec(index_of_electronics):
 
 @pytest.mark.parametrize("hold", ["zero-order", "first-order"])
 def test_stacked_runs_match_single_runs(hold):
-    # Oracle: simulate() run by run, bit for bit (the same products and sums per run).
+    # Oracle: simulate() run by run, bit for bit (the same elementwise products and sums, in
+    # the same order, per run).
     net = seven_nodes()
     t = np.arange(0.0, 3600.0, 1.0)
     starts = np.array([-32.0, 5.0, 54.0])
@@ -40,8 +41,8 @@ def test_stacked_runs_match_single_runs(hold):
 
 
 def test_a_run_has_the_same_bits_in_any_batch():
-    # Oracle: each run's products are its own (one gemv per run); max_bytes splits the runs
-    # into batches of one here.
+    # Oracle: each run's arithmetic is its own (thermal/march.py: elementwise, fixed order);
+    # max_bytes splits the runs into batches of one here.
     net = seven_nodes()
     t = np.arange(0.0, 900.0, 1.0)
     starts = np.array([-32.0, 0.0, 17.0, 40.0, 54.0, 60.0])
