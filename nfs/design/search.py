@@ -25,6 +25,7 @@ from typing import Callable, Sequence
 
 import numpy as np
 
+from ..errors import NfsError
 from ..experiment import RunConditions
 from ..ranges import TEMPERATURE_RANGE_C
 from ..run import Run
@@ -239,6 +240,10 @@ def design_experiment(rivals: Sequence[Rival], runs: Sequence[Run], base: RunCon
     rate of the proposed run (those of the runs taken)."""
     t_start = time.perf_counter()
     rivals = list(rivals)
+    if len(rivals) < 2:
+        raise NfsError("a design needs at least two rivals, got "
+                       + (", ".join(r.label for r in rivals) or "none")
+                       + " (the runs taken decide already: nothing to design)")
     ref = rivals[0].instrument
     if progress is not None:
         progress("the runs taken: each rival's replay and the noise they show")

@@ -50,7 +50,9 @@ def _designed_and_after(model, truth, runs, seed):
     fr = fit_model(model, runs, start_state=None)
     d = diagnose(fr.instrument, runs, start_state=None)
     before = settle_tie(d.to_dict(), fr.instrument, runs, start_state=None)
-    design = design_experiment(before.standing, runs, base_conditions(runs), default_space(runs),
+    # the run designed for the diagnosis's tie (nfs design --rivals, its labels)
+    tied = [r for r in before.rivals if r.label in d.answer.labels]
+    design = design_experiment(tied, runs, base_conditions(runs), default_space(runs),
                                seed=seed)
     cond = dataclasses.replace(design.experiment.conditions(base_conditions(runs)),
                                seed=(seed, 99))
