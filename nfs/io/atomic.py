@@ -84,10 +84,11 @@ class _Pending:
             self.tmp.unlink(missing_ok=True)
             raise
 
-    def flush(self) -> None:
-        """Flush and fsync the temporary file, then close it."""
+    def flush(self, sync: bool = True) -> None:
+        """Flush and (``sync``) fsync the temporary file, then close it."""
         self.file.flush()
-        os.fsync(self.file.fileno())
+        if sync:
+            os.fsync(self.file.fileno())
         self.file.close()
 
     def commit(self) -> None:
@@ -155,12 +156,15 @@ def atomic_write_text(path: str | os.PathLike, text: str, *, encoding: str = "ut
 
 def atomic_write_files(contents: Mapping[str | os.PathLike, bytes | str], *,
                        encoding: str = "utf-8") -> None:
-    """Write several files that belong together (e.g. ``NAME.csv`` and ``NAME.toml``).
+    """Write several files that belong together (e.g. ``NAME.csv`` and ``NAME.toml``, or a
+    batch of a sweep's cell records).
 
-    All temporary files are written and fsync'ed first; only when every one succeeded are
-    they renamed over their destinations, one after the other. A failure while writing
+    All temporary files are written and made durable first; only when every one succeeded
+    are they renamed over their destinations, one after the other. A failure while writing
     leaves every destination as it was. (The renames themselves are not one transaction, but
-    a rename does not fail for lack of space and takes microseconds.)
+    a rename does not fail for lack of space and takes microseconds.)  Many files are made
+    durable by one ``os.sync`` where the platform has it (one flush of the disks instead of
+    an fsync per file, which costs milliseconds each), else by an fsync each.
 
     Parameters
     ----------
@@ -168,12 +172,15 @@ def atomic_write_files(contents: Mapping[str | os.PathLike, bytes | str], *,
         Destination path -> bytes, or str (encoded with *encoding*).
     """
     pendings: list[_Pending] = []
+    once = len(contents) > 2 and hasattr(os, "sync")
     try:
         for path, data in contents.items():
             pending = _Pending(path, "wb", encoding, None)
             pendings.append(pending)
             pending.file.write(data.encode(encoding) if isinstance(data, str) else data)
-            pending.flush()
+            pending.flush(sync=not once)
+        if once:
+            os.sync()
         for pending in pendings:
             pending.commit()
     except BaseException:

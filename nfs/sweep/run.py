@@ -70,7 +70,8 @@ def run_sweep(spec: SweepSpec, output: str | Path, *, executor=None, quiet: bool
     quiet : bool
         No progress output.
     on_cell : callable, optional
-        Called with each record right after it is stored (in this process).
+        Called with each record right after its batch of cells is stored (in this process;
+        a batch's records are written and made durable together).
     figures : bool
         Write the summary figures.
     log : callable, optional
@@ -92,8 +93,8 @@ def run_sweep(spec: SweepSpec, output: str | Path, *, executor=None, quiet: bool
     try:
         if n_missing:
             for records in executor.map_unordered(run_cells, cell_batches(missing)):
+                store.write_many(records)
                 for record in records:
-                    store.write(record)
                     n_done += 1
                     progress.update()
                     if on_cell is not None:
