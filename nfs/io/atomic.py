@@ -2,8 +2,8 @@
 
 Every output file of the package (CSV, JSON, PNG, TOML) goes through this module. The data
 go to a temporary file in the destination's folder (same file system, so the final rename is
-atomic), are flushed and fsync'ed, and the temporary file is then renamed over the
-destination with :func:`os.replace`. If anything fails before the rename, the temporary file
+atomic), are flushed and fsync'ed (a batch of many files: one ``os.sync`` for all), and the
+temporary file is then renamed over the destination with :func:`os.replace`. If anything fails before the rename, the temporary file
 is removed and the destination keeps its previous content (or stays absent).
 
 Text is written as UTF-8 without newline translation, so the bytes on disk are the same on
