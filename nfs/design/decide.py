@@ -26,7 +26,9 @@ Z_NAME)) (:func:`decision_rates`; at s = 3: 0.44 and 0.0012, at s = 5: 0.81 and 
 measured on simulated runs in tests/design/test_decide.py).
 
 Every decision of a tie (:func:`settle_tie`) puts the model as it is beside the tied
-explanations: an explanation is added only when it beats the model too.
+explanations: an explanation is added only when it beats the model too.  Two rivals of
+which only one refits the thermal stage are compared on the dwell channels alone
+(:func:`pair_channels`).
 """
 
 from __future__ import annotations
@@ -39,6 +41,7 @@ import numpy as np
 from scipy.stats import norm
 
 from ..diagnose.result import Answer
+from ..effects.thermometer import THERMOMETERS
 from ..instrument import Instrument
 from ..run import Run
 from .evidence import Evidence, evidence
@@ -131,16 +134,36 @@ class Decision:
                 "text": self.text}
 
 
+#: The channels read at the turntable's dwells (the gyro's drift, the accelerometers).
+DWELL_CHANNELS = tuple(c for c in CHANNELS if c not in THERMOMETERS.values())
+
+
+def pair_channels(a: Rival, b: Rival) -> tuple[str, ...]:
+    """The channels a decision between ``a`` and ``b`` reads: every channel when both
+    refit the thermal stage or neither does; the dwell channels alone when only one does.
+    A free number in a refitted thermal stage (a heat source's power) takes up on the
+    thermometers whatever heat the model lacks, a thermal misfit that the other rival's
+    fixed thermal stage keeps: a gain that says nothing about the question put (seen on
+    units the model does not describe: a 3 W heat source in the coil beat a turn-on
+    transient by e^301 on the thermometers and lost by e^6 on the drift).  The
+    thermometers' own question, whether the thermal structure is right, is the
+    diagnosis's (:mod:`nfs.diagnose.adequacy`)."""
+    return CHANNELS if a.thermal_refit == b.thermal_refit else DWELL_CHANNELS
+
+
 def decide(rivals: Sequence[Rival], runs: Sequence[Run]) -> list[Decision]:
-    """The decision between every pair of ``rivals`` on ``runs`` (module docstring)."""
+    """The decision between every pair of ``rivals`` on ``runs`` (module docstring), each
+    on the channels :func:`pair_channels` gives."""
     taken = replay_runs_taken(rivals, list(runs))
     preds = [p.mean for p in taken.predictions]
     measured, sigma, factors = taken.measured, taken.sigma, taken.factors
     out = []
     for i, j in combinations(range(len(rivals)), 2):
-        ev = evidence(measured, preds[i], preds[j], sigma, CHANNELS,
+        chans = pair_channels(rivals[i], rivals[j])
+        ev = evidence(measured, preds[i], preds[j], sigma, chans,
                       price=rivals[i].n_added - rivals[j].n_added)
-        sep = separation(RivalPrediction(preds[i]), RivalPrediction(preds[j]), sigma)
+        sep = separation(RivalPrediction(preds[i]), RivalPrediction(preds[j]), sigma,
+                         channels=chans)
         out.append(Decision(rivals[i].label, rivals[j].label, ev, sep.sigma, factors))
     return out
 

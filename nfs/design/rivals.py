@@ -39,7 +39,7 @@ from ..instrument import Instrument
 from ..run import Run
 from ..diagnose import (apply_candidate, default_free, fit_model, set_params,
                         structural_alternatives, thermal_adequacy)
-from ..diagnose.candidates import targets
+from ..diagnose.candidates import FAST_KINDS, targets
 from ..diagnose.columns import model_drift_paths
 from ..diagnose.fit_result import FitResult
 from ..diagnose.result import RATE_ALTERNATIVE
@@ -68,6 +68,9 @@ class Rival:
     """How many numbers it fits beyond the model as given (the new effect's coefficients,
     the rate term's one per node, the structural alternative's new numbers): the price a
     decision charges it (:mod:`nfs.design.evidence`)."""
+    thermal_refit: bool = False
+    """Whether its fit refits the thermal stage (a thermal or thermometer effect, a
+    structural alternative) rather than the drift stage alone."""
 
     def draws(self, n: int, rng: np.random.Generator) -> list[Instrument]:
         """``n`` instruments with parameters drawn from the fit's linearised posterior
@@ -152,7 +155,7 @@ def _structure_rival(inst: Instrument, runs: Sequence[Run], label: str, alt,
     scored = next((a for a in ad.alternatives if a.name == label), None)
     changed = scored.instrument if scored is not None else alt.build(alt.start)
     fr = fit_model(changed, runs, free=default_free(changed), **fit_kw)
-    return Rival(label, alt.description, fr.instrument, fr, len(alt.free))
+    return Rival(label, alt.description, fr.instrument, fr, len(alt.free), True)
 
 
 def check_label(inst: Instrument, runs: Sequence[Run], label: str) -> None:
@@ -213,7 +216,8 @@ def rival_model(inst: Instrument, runs: Sequence[Run], label: str, **fit_kw) -> 
     new, fr, _ = apply_candidate(inst, runs, name, target or None, **_apply_kw(fit_kw))
     own = f"effects.{label}."
     return Rival(label, f"adds the effect {label}, refitted", new, fr,
-                 sum(1 for p in fr.params if p.startswith(own)))
+                 sum(1 for p in fr.params if p.startswith(own)),
+                 get_effect(name).kind not in FAST_KINDS)
 
 
 def _apply_kw(fit_kw: dict) -> dict:

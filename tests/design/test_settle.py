@@ -9,12 +9,14 @@ and those are the rivals a run is designed for.
 
 from __future__ import annotations
 
+from dataclasses import replace
 from itertools import combinations
 
 import pytest
 
-from nfs.design.decide import Decision, settlement
+from nfs.design.decide import DWELL_CHANNELS, Decision, pair_channels, settlement
 from nfs.design.evidence import Evidence
+from nfs.design.predict import CHANNELS
 from nfs.design.rivals import MODEL, RATE_ALTERNATIVE, Rival
 from nfs.instrument import load_instrument
 
@@ -83,3 +85,17 @@ def test_a_tie_keeps_the_rivals_no_other_beats(rivals):
                                                (RATE_ALTERNATIVE, MODEL): RATE_ALTERNATIVE,
                                                (TRANSIENT, MODEL): MODEL}))
     assert s.answer.kind == "tie" and set(s.answer.labels) == {r.label for r in rivals}
+
+
+def test_thermometers_only_between_rivals_that_treat_the_thermal_stage_alike(rivals):
+    """pair_channels: every channel when both rivals refit the thermal stage or neither
+    does; the dwell channels alone when one does (its free thermal numbers would take up
+    the thermometers' misfit)."""
+    transient, rate, model = rivals
+    heat = replace(transient, label="heat_source:coil_inner", thermal_refit=True)
+    split = replace(rate, label="split housing", thermal_refit=True)
+    assert pair_channels(transient, model) == CHANNELS
+    assert pair_channels(heat, split) == CHANNELS
+    assert pair_channels(heat, transient) == DWELL_CHANNELS
+    assert pair_channels(model, split) == DWELL_CHANNELS
+    assert set(DWELL_CHANNELS) == {"drift_dph", "acc_x_g", "acc_y_g"}
