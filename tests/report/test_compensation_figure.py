@@ -13,25 +13,11 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 
 from nfs.studies.startup_study import run_study
 from nfs.compensate.settings import CompensationSettings
-from nfs.config.scenario import load_scenario
 from nfs.report.compensation import plot_drift_vs_compensated
 
-SMALL = """name = "small"
-seed = 5
-start_temperatures_c = [-20.0, 40.0]
-duration_s = 2600.0
-[schedule]
-positions_deg = [0.0, 90.0, 180.0, 270.0]
-dwell_s = 150.0
-move_s = 10.0
-"""
-
-
 @pytest.fixture(scope="module")
-def study(tmp_path_factory):
-    p = tmp_path_factory.mktemp("fig") / "small.toml"
-    p.write_text(SMALL)
-    return run_study(load_scenario(p), CompensationSettings(methods=("ls",), train_seed=9,
+def study(small_scenario):
+    return run_study(small_scenario, CompensationSettings(methods=("ls",), train_seed=9,
                                                             test_repeats=1, n_jobs=1))
 
 

@@ -14,25 +14,11 @@ import nfs.denoise
 import nfs.report.compensation as report
 from nfs.compensate.compensator import DriftCompensator
 from nfs.compensate.settings import CompensationSettings
-from nfs.config.scenario import load_scenario
 from nfs.studies.startup_study import run_study
 
-SMALL = """name = "small"
-seed = 5
-start_temperatures_c = [-20.0, 40.0]
-duration_s = 2600.0
-[schedule]
-positions_deg = [0.0, 90.0, 180.0, 270.0]
-dwell_s = 150.0
-move_s = 10.0
-"""
-
-
 @pytest.fixture(scope="module")
-def study(tmp_path_factory):
-    p = tmp_path_factory.mktemp("reuse") / "small.toml"
-    p.write_text(SMALL)
-    return run_study(load_scenario(p), CompensationSettings(methods=("ls", "stepwise"),
+def study(small_scenario):
+    return run_study(small_scenario, CompensationSettings(methods=("ls", "stepwise"),
                                                             train_seed=9, test_repeats=1,
                                                             n_jobs=1))
 
