@@ -33,6 +33,7 @@ which only one refits the thermal stage are compared on the dwell channels alone
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from itertools import combinations
 from typing import Sequence
@@ -48,7 +49,6 @@ from .evidence import Evidence, evidence
 from .predict import CHANNELS
 from .replay import replay_runs_taken
 from .rivals import MODEL, RATE_ALTERNATIVE, Rival, rival_models, rivals_from_diagnosis
-from .separation import RivalPrediction, separation
 
 __all__ = ["Decision", "Settlement", "decide", "decision_rates", "settle_tie", "settlement",
            "LAMBDA_NAME", "Z_NAME"]
@@ -79,10 +79,14 @@ class Decision:
     """The second rival's label."""
     evidence: Evidence
     """Lambda, its price, its variance and Z (:mod:`nfs.design.evidence`)."""
-    separation_sigma: float
-    """s = sqrt(D) of the two fitted rivals' predictions of the runs."""
     noise_factors: dict[str, float]
     """The factors the sensor noise was raised by, per channel."""
+
+    @property
+    def separation_sigma(self) -> float:
+        """s = sqrt(D) of the two fitted rivals' predictions of the numbers the decision
+        read."""
+        return math.sqrt(self.evidence.d2)
 
     @property
     def llr(self) -> float:
@@ -162,9 +166,7 @@ def decide(rivals: Sequence[Rival], runs: Sequence[Run]) -> list[Decision]:
         chans = pair_channels(rivals[i], rivals[j])
         ev = evidence(measured, preds[i], preds[j], sigma, chans,
                       price=rivals[i].n_added - rivals[j].n_added)
-        sep = separation(RivalPrediction(preds[i]), RivalPrediction(preds[j]), sigma,
-                         channels=chans)
-        out.append(Decision(rivals[i].label, rivals[j].label, ev, sep.sigma, factors))
+        out.append(Decision(rivals[i].label, rivals[j].label, ev, factors))
     return out
 
 

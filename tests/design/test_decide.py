@@ -77,7 +77,7 @@ def test_rates_monotonicity():
 
 def test_winner_needs_both_the_ratio_and_z():
     def d(llr, var=1.0, price=0.0):
-        return Decision("a", "b", Evidence(llr, 9.0, price, var, {}), 3.0, {})
+        return Decision("a", "b", Evidence(llr, 9.0, price, var, {}), {})
     assert d(LAMBDA_NAME).winner == "a"                          # z = 2 >= 1.645
     assert d(LAMBDA_NAME - 1e-9).winner is None
     assert d(-LAMBDA_NAME).winner == "b"
@@ -196,7 +196,7 @@ def test_monte_carlo_rates_of_the_rule():
                     for c in CHANS}) for b, sg in zip(pb, sigma)]
         ev = _lam(y, pa, pb, sigma)
         lam[k] = ev.llr
-        named.append(Decision("a", "b", ev, s, {}).winner)
+        named.append(Decision("a", "b", ev, {}).winner)
     named_a = named.count("a") / n          # b is the truth: a is wrong
     named_b = named.count("b") / n
     assert named_a <= wrong + 3.0 * math.sqrt(max(wrong, 1.0 / n) / n)
@@ -239,7 +239,7 @@ def test_neither_rival_the_unit_false_alarm_rate():
         y = [_pred({c: _ar1(rng, n, 0.95, 1.0) for c in CHANS}) for _ in range(n_runs)]
         f = excess_factors(y, [RivalPrediction(pa), RivalPrediction(pb)], sigma)
         ev = _lam(y, pa, pb, [scaled(sg, f) for sg in sigma])
-        new += Decision("a", "b", ev, math.sqrt(ev.d2), {}).winner is not None
+        new += Decision("a", "b", ev, {}).winner is not None
         old += abs(ev.llr) >= LAMBDA_NAME
     assert new / draws <= 0.10, new / draws
     assert old / draws >= 2.0 * new / draws + 0.1, (old / draws, new / draws)
@@ -264,9 +264,9 @@ def test_price_keeps_a_rival_fitted_to_noise_out():
         pa = [_pred({"drift_dph": fit})]
         ev = evidence(y, pa, zero, sigma, ("drift_dph",), price=k)
         assert ev.llr == pytest.approx(0.5 * float(fit @ fit), rel=1e-9)
-        with_price += Decision("a", "b", ev, 1.0, {}).winner == "a"
+        with_price += Decision("a", "b", ev, {}).winner == "a"
         bare = evidence(y, pa, zero, sigma, ("drift_dph",))
-        without += Decision("a", "b", bare, 1.0, {}).winner == "a"
+        without += Decision("a", "b", bare, {}).winner == "a"
     assert with_price / draws <= 0.003
     assert without / draws >= 0.02
 

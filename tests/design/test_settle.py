@@ -39,7 +39,7 @@ def _decisions(rivals, beats: dict[tuple[str, str], str | None]):
     for a, b in combinations([r.label for r in rivals], 2):
         w = beats.get((a, b), beats.get((b, a)))
         llr = 0.0 if w is None else (50.0 if w == a else -50.0)
-        out.append(Decision(a, b, Evidence(llr, 4.0, 0.0, 1.0, {}), 2.0, {}))
+        out.append(Decision(a, b, Evidence(llr, 4.0, 0.0, 1.0, {}), {}))
     return out
 
 
