@@ -386,22 +386,19 @@ def simulate(network: Network, time_s: np.ndarray, *,
 
     inputs = np.empty((n_t, 1 + n))     # u_k = [T_amb,k, P_1,k, ..., P_n,k], equation (2)
     inputs[:, 0] = amb
-    if law is None and n_t > 1:
+    if law is None:
         inputs[:, 1:] = network.node_power_w + (0.0 if extra is None else extra)
-        temp = _closed_form(mats, cls, network.capacity_j_per_k, t0, inputs, slope, linear)
-    elif law is None:
-        inputs[:, 1:] = network.node_power_w + (0.0 if extra is None else extra)
-        temp = t0[None, :].copy()
+        temp = (_closed_form(mats, cls, network.capacity_j_per_k, t0, inputs, slope, linear)
+                if n_t > 1 else t0[None, :].copy())
     else:
         # the march of thermal/march.py with one run: a run's bits are those it gets in a
         # batch of any size (thermal.simulate_many)
         state = march(step_maps(mats, network.node_power_w), cls, t, t0[:, None],
-                      amb[:, None], slope[:, None] if linear else None, extra, law,
+                      amb[:, None], slope[:, None] if linear else None, None, law,
                       stacked=False)
         temp = np.ascontiguousarray(state[:, :n, 0])
         power = state[:, n:, 0]
-        if law is not None:
-            _check_power_array(power, t, names, "power_w(t_s, temperature_c)")
+        _check_power_array(power, t, names, "power_w(t_s, temperature_c)")
         inputs[:, 1:] = network.node_power_w + power
 
     return _result(network, a, b, mats, steps, cls, t, amb, slope, linear, temp, inputs,
