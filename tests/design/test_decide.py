@@ -121,7 +121,8 @@ def test_long_run_variance_of_an_ar1():
     assert got == pytest.approx(want, rel=0.06)
     # lag 0 alone is the plain sum of squares; a white series needs no lags
     assert long_run_variance(x, 0) == pytest.approx(float(x @ x), rel=1e-12)
-    assert long_run_variance(np.array([1.0, -1.0, 1.0]), 2) >= 0.0
+    # by hand: 3 + 2 (2/3)(-2) + 2 (1/3)(1) = 1
+    assert long_run_variance(np.array([1.0, -1.0, 1.0]), 2) == pytest.approx(1.0, rel=1e-12)
 
 
 def _model(rng, target_s=3.0):
@@ -276,7 +277,7 @@ def test_channels_sharing_times_count_common_error_once():
     variance (4x one channel's); on different grids they count as independent (2x)."""
     rng = np.random.default_rng(3)
     n = 60
-    err = rng.standard_normal(n)
+    err = 3.0 * rng.standard_normal(n)     # 3x the noise: the long-run variance ~9 D
     dif = np.linspace(1.0, -1.0, n) ** 2
     chans = ("temp_fog_c", "temp_acc_x_c")
 
@@ -293,6 +294,6 @@ def test_channels_sharing_times_count_common_error_once():
     assert shared.llr == pytest.approx(2 * one.llr, rel=1e-12)
     assert apart.llr == pytest.approx(2 * one.llr, rel=1e-12)
     assert shared.variance >= apart.variance
-    if one.variance > one.d2:        # the long-run variance, not the floor D, counted
-        assert shared.variance == pytest.approx(4 * one.variance, rel=1e-9)
-        assert apart.variance == pytest.approx(2 * one.variance, rel=1e-9)
+    assert one.variance > one.d2     # the long-run variance counted, not the floor D
+    assert shared.variance == pytest.approx(4 * one.variance, rel=1e-9)
+    assert apart.variance == pytest.approx(2 * one.variance, rel=1e-9)
