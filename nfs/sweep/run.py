@@ -125,8 +125,10 @@ def _figures(spec: SweepSpec, store: CellStore, manifest: str) -> list[Path]:
         kept = json.loads(record.read_text(encoding="utf-8"))
     except (OSError, ValueError):
         kept = {}
-    files = [store.folder / f for f in kept.get("files", [])] if isinstance(kept, dict) else []
-    if kept and kept.get("digest") == drawn and all(f.is_file() for f in files):
+    if not isinstance(kept, dict):      # a record not of ours: draw again
+        kept = {}
+    files = [store.folder / str(f) for f in kept.get("files", [])]
+    if kept.get("digest") == drawn and all(f.is_file() for f in files):
         return files
     paths = write_figures(spec, store, store.folder)
     atomic_write_text(record, json.dumps({"digest": drawn, "files": [p.name for p in paths]},
