@@ -201,21 +201,29 @@ def cmd_effects(args) -> int:
 
 
 def cmd_sweep(args) -> int:
-    from .. import load_sweep, run_sweep
-    from ..sweep import CellStore, DaskExecutor, LocalExecutor
-    spec = load_sweep(args.sweep)                   # the whole sweep checked before any work
-    CellStore(args.output).prepare()
+    # a fully stored sweep imports the definition, the store and the table only: the
+    # simulator, the executors and matplotlib are imported when a cell or a figure is missing
+    from ..sweep.definition import load_sweep
+    from ..sweep.plan import stored_sweep
     if args.dask_local is not None and args.scheduler is not None:
         raise NfsError("give --dask-local N or --scheduler ADDRESS, not both")
-    if args.dask_local is not None or args.scheduler is not None:
-        executor = DaskExecutor(workers=args.dask_local, address=args.scheduler)
-    else:
-        executor = LocalExecutor(args.jobs)
+    spec = load_sweep(args.sweep)                   # the whole sweep checked before any work
     log = None if args.quiet else (lambda msg: print(f"sweep: {msg}", file=sys.stderr))
-    try:
-        res = run_sweep(spec, args.output, executor=executor, quiet=args.quiet, log=log)
-    finally:
-        executor.close()
+    res = stored_sweep(spec, args.output)
+    if res is not None:
+        if log is not None:
+            log(f"{spec.n_cells} cells, every one stored, figures current: nothing to compute")
+    else:
+        from ..sweep.executors import DaskExecutor, LocalExecutor
+        from ..sweep.run import run_sweep
+        if args.dask_local is not None or args.scheduler is not None:
+            executor = DaskExecutor(workers=args.dask_local, address=args.scheduler)
+        else:
+            executor = LocalExecutor(args.jobs)
+        try:
+            res = run_sweep(spec, args.output, executor=executor, quiet=args.quiet, log=log)
+        finally:
+            executor.close()
     print(f"{res.n_cells} cells ({res.n_computed} computed, {res.n_cells - res.n_computed} "
           f"from the store), {res.n_rows} rows")
     for p in res.paths:

@@ -26,7 +26,7 @@ from matplotlib.figure import Figure
 
 from ..io.atomic import atomic_output
 from ..northfind.time_to_spec import median_time_s
-from .cells import STAGES
+from .keys import STAGES
 from .definition import SweepSpec
 from .store import CellStore
 from .results_table import iter_rows

@@ -38,7 +38,7 @@ from typing import Any, Iterator
 from ..io.atomic import atomic_output
 from ..northfind.time_to_spec import run_time_to_spec_s
 from ..scoring.heading_table import NOT_APPLICABLE
-from .cells import STAGES, cell_tasks
+from .keys import STAGES, cell_tasks
 from .definition import SweepSpec
 from .store import CellStore
 

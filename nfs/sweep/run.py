@@ -3,53 +3,17 @@ and the figures assembled from the store."""
 
 from __future__ import annotations
 
-import json
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable
 
-import nfs
-
-from ..io.atomic import atomic_write_text
-from ..io.provenance import sha256_of_text
-from .cells import canonical, cell_batches, cell_tasks, run_cells, scenario_digest
+from .cells import cell_batches, run_cells
 from .executors import LocalExecutor, SweepProgress
 from .figures import write_figures
 from .definition import SweepSpec
-from .store import CellStore
-from .results_table import write_csv, write_parquet
+from .plan import (FIGURES_RECORD, SweepResult, kept_figures, plan_sweep, record_figures,
+                   write_tables)
 
 __all__ = ["SweepResult", "run_sweep", "FIGURES_RECORD"]
-
-#: The digest of what the figures show and their file names (:func:`run_sweep`).
-FIGURES_RECORD = "figures.json"
-
-
-@dataclass(frozen=True)
-class SweepResult:
-    """What a sweep did."""
-
-    n_cells: int
-    """Cells of the sweep."""
-    n_computed: int
-    """Cells computed by this call (the others were in the store)."""
-    n_rows: int
-    """Rows of the table."""
-    paths: tuple[Path, ...]
-    """Files written: results.csv, results.parquet (with pyarrow), figures."""
-
-
-def _manifest(spec: SweepSpec, base: str) -> str:
-    axes = [{"key": a.key, "target": a.target,
-             **({"values": list(a.values)} if not a.drawn else
-                {"low": a.low, "high": a.high, "log": a.log})} for a in spec.axes]
-    return json.dumps({
-        "sweep": None if spec.path is None else str(spec.path),
-        "scenario": "default" if spec.scenario_path is None else str(spec.scenario_path),
-        "scenario_digest": base, "version": nfs.__version__, "axes": axes,
-        "draws": canonical(spec.draws), "seeds": list(spec.seeds), "method": spec.method,
-        "spec_deg": spec.spec_deg, "rmse_window_cycles": spec.rmse_window_cycles,
-        "n_cells": spec.n_cells}, indent=1) + "\n"
 
 
 def run_sweep(spec: SweepSpec, output: str | Path, *, executor=None, quiet: bool = False,
@@ -57,7 +21,7 @@ def run_sweep(spec: SweepSpec, output: str | Path, *, executor=None, quiet: bool
               figures: bool = True, log: Callable[[str], None] | None = None) -> SweepResult:
     """Compute the cells of ``spec`` missing from ``output/cells``, then write
     ``output/results.csv`` (and ``results.parquet`` when pyarrow is importable) and the
-    summary figures.
+    summary figures (drawn only when what they show changed: :func:`~nfs.sweep.plan.kept_figures`).
 
     Parameters
     ----------
@@ -77,12 +41,8 @@ def run_sweep(spec: SweepSpec, output: str | Path, *, executor=None, quiet: bool
     log : callable, optional
         Receives one-line messages (default: nothing).
     """
-    store = CellStore(output)
-    store.prepare()
-    base = scenario_digest(spec)
-    manifest = _manifest(spec, base)
-    atomic_write_text(store.folder / "sweep.json", manifest)
-    missing = [t for t in cell_tasks(spec, base) if not store.has(t.key)]
+    plan = plan_sweep(spec, output)
+    store, missing = plan.store, plan.missing
     n_missing = len(missing)
     executor = executor or LocalExecutor()
     if log is not None:
@@ -101,36 +61,11 @@ def run_sweep(spec: SweepSpec, output: str | Path, *, executor=None, quiet: bool
                         on_cell(record)
     finally:
         progress.close()
-    paths = [store.folder / "results.csv"]
-    n_rows = write_csv(spec, store, paths[0])
-    if write_parquet(spec, store, store.folder / "results.parquet"):
-        paths.append(store.folder / "results.parquet")
+    n_rows, paths = write_tables(plan)
     if figures:
-        paths += _figures(spec, store, manifest)
+        kept = kept_figures(plan)
+        if kept is None:
+            kept = write_figures(spec, store, store.folder)
+            record_figures(plan, kept)
+        paths += kept
     return SweepResult(spec.n_cells, n_done, n_rows, tuple(paths))
-
-
-def _figures(spec: SweepSpec, store: CellStore, manifest: str) -> list[Path]:
-    """The summary figures, drawn only when what they show changed.
-
-    The figures are a function of the sweep (its manifest: axes, seeds, spec, code version)
-    and of the table assembled from the store (``results.csv``): their SHA-256 is kept in
-    ``figures.json`` beside the files, and a rerun that finds the same digest and every file
-    in place keeps them (a fully stored rerun costs reading the store, not drawing).
-    """
-    record = store.folder / FIGURES_RECORD
-    drawn = sha256_of_text(manifest + (store.folder / "results.csv").read_text(
-        encoding="utf-8"))
-    try:
-        kept = json.loads(record.read_text(encoding="utf-8"))
-    except (OSError, ValueError):
-        kept = {}
-    if not isinstance(kept, dict):      # a record not of ours: draw again
-        kept = {}
-    files = [store.folder / str(f) for f in kept.get("files", [])]
-    if kept.get("digest") == drawn and all(f.is_file() for f in files):
-        return files
-    paths = write_figures(spec, store, store.folder)
-    atomic_write_text(record, json.dumps({"digest": drawn, "files": [p.name for p in paths]},
-                                         indent=1) + "\n")
-    return paths

@@ -4,6 +4,8 @@ its figures when what they show has not changed."""
 
 import dataclasses
 import json
+import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -72,3 +74,24 @@ def test_a_stored_rerun_keeps_its_figures(tmp_path, short_scenario):
     figures[0].unlink()
     run_sweep(spec, out, executor=LocalExecutor(1), quiet=True)
     assert figures[0].is_file()
+
+
+def test_a_fully_stored_rerun_computes_and_draws_nothing(tmp_path, short_scenario):
+    # Oracle: what a process imports.  `nfs sweep` rerun on a sweep whose every cell is
+    # stored and whose figures are current reads the store and writes the table: it loads
+    # neither the cells' computation, the executors nor matplotlib (a fresh interpreter,
+    # so nothing was imported before), and it names the same files as the first run.
+    _sweep(tmp_path, short_scenario, [1])
+    out = tmp_path / "out"
+    argv = ["sweep", str(tmp_path / "sweep.toml"), "-o", str(out), "--jobs", "1", "-q"]
+    probe = ("import sys\nfrom nfs.cli import main\nassert main(sys.argv[1:]) == 0\n"
+             "print(sorted(m for m in sys.modules if m.startswith(('matplotlib', "
+             "'nfs.sweep.cells', 'nfs.sweep.executors', 'nfs.sweep.figures', 'dask'))))\n")
+    first = subprocess.run([sys.executable, "-c", probe, *argv], check=True,
+                           capture_output=True, text=True).stdout.splitlines()
+    again = subprocess.run([sys.executable, "-c", probe, *argv], check=True,
+                           capture_output=True, text=True).stdout.splitlines()
+    assert first[0].startswith("1 cells (1 computed") and "matplotlib" in first[-1]
+    assert again[0].startswith("1 cells (0 computed, 1 from the store)")
+    assert again[1:-1] == first[1:-1]                  # results.csv and the figures
+    assert again[-1] == "[]"
