@@ -23,7 +23,7 @@ from .effects import EffectContext, Geometry, apply_geometry, check_geometry
 from .effects.thermometer import THERMOMETERS
 from .errors import EffectError
 # the heat input lives in nfs.heat; these names stay importable from here for its callers
-from .heat import fixed_thermal_power, thermal_effects, thermal_power  # noqa: F401
+from .heat import HeatLaw, fixed_thermal_power, thermal_effects, thermal_power  # noqa: F401
 from .instrument import Instrument
 from .power import POWERED_COLUMN, off_spans_s, powered_mask, since_power_on_s
 from .run import Run, RunMeta
@@ -331,13 +331,27 @@ def simulate_run(inst: Instrument, cond: RunConditions) -> SimulationResult:
     prep = _prepare(inst, cond)
     th = thermal.simulate(prep.inst.network, cond.time_s, ambient_c=prep.ambient,
                           initial_c=prep.initial, power_w=prep.power,
-                          ambient_hold="first-order")
+                          ambient_hold="first-order", heated_nodes=_heated(prep))
     return _finish(prep, th)
 
 
+def _heated(prep: _Prepared) -> tuple[int, ...] | None:
+    """The nodes the run's heat law can heat (None: no law, the power is an array)."""
+    return prep.power.heated_nodes if isinstance(prep.power, HeatLaw) else None
+
+
 #: Memory the stacked thermal march of :func:`iter_simulate_runs` may take [bytes]: the
-#: marched states of 128 start-ups of 2.5 h at 1 Hz on 7 nodes.
+#: marched states of 128 start-ups of 2.5 h at 1 Hz on 7 nodes with every node heated
+#: (224 with one node heated, as in the default instrument).
 STACK_BYTES = 128 * 2 ** 20
+
+
+def _state_bytes(prep: _Prepared) -> int:
+    """Bytes of the run's marched states: 8 x (n_nodes + heated nodes) x n_samples
+    (thermal/march.py)."""
+    n = len(prep.inst.network.node_names)
+    heated = _heated(prep)
+    return 8 * (n + (n if heated is None else len(heated))) * prep.cond.time_s.size
 
 
 def _stack_key(prep: _Prepared):
@@ -364,7 +378,8 @@ def iter_simulate_runs(inst: Instrument, conds, *,
     """:func:`simulate_run` for many runs of ``inst``, yielded one at a time, in order.
 
     The runs are taken in consecutive chunks whose marched thermal states fit in
-    :data:`STACK_BYTES` (8 bytes x 2 n_nodes x n_samples per run, [T_k, p_k] of each sample):
+    :data:`STACK_BYTES` (8 bytes x (n_nodes + heated nodes) x n_samples per run, [T_k, p_k]
+    of each sample):
     a chunk is prepared, the runs of one unit on one time grid and schedule share the network
     and the heat input law and are solved together (:func:`thermal.iter_simulate_many`, one
     array operation per term of the step for all of them), and each run is finished
@@ -374,21 +389,23 @@ def iter_simulate_runs(inst: Instrument, conds, *,
     run's preparation.
     """
     conds = list(conds)
-    width = 2 * len(inst.network.node_names)          # [T_k, p_k] per sample
     shared: dict = {}
+    carried = None                      # a prepared run that did not fit in the last chunk
     i = 0
-    while i < len(conds):
-        chunk, used = [], 0
-        while i < len(conds) and (not chunk or used + 8 * width * conds[i].time_s.size
-                                  <= STACK_BYTES):
-            used += 8 * width * conds[i].time_s.size
-            chunk.append(i)
-            i += 1
-        preps = []
-        for j in chunk:
+    while i < len(conds) or carried is not None:
+        preps, used = [], 0
+        if carried is not None:
+            preps, used, carried = [carried], _state_bytes(carried), None
+        while i < len(conds):
             if progress is not None:
-                progress(j, len(conds), conds[j].name)
-            preps.append(_prepare(inst, conds[j], shared))
+                progress(i, len(conds), conds[i].name)
+            prep = _prepare(inst, conds[i], shared)
+            i += 1
+            if preps and used + _state_bytes(prep) > STACK_BYTES:
+                carried = prep
+                break
+            preps.append(prep)
+            used += _state_bytes(prep)
         yield from _solve_chunk(preps)
         shared = {k: v for k, v in shared.items() if k[0] == "unit"}
 
@@ -408,7 +425,7 @@ def _solve_chunk(preps: list[_Prepared]) -> Iterator[SimulationResult]:
         stream = zip(idx, thermal.iter_simulate_many(
             first.inst.network, first.cond.time_s,
             ambient_c=np.array([preps[k].ambient for k in idx]), initial_c=initial,
-            power_w=first.power, ambient_hold="first-order"))
+            power_w=first.power, ambient_hold="first-order", heated_nodes=_heated(first)))
         streams.update((k, stream) for k in idx)
     for k, p in enumerate(preps):
         for m, th in streams.pop(k) if k not in solutions else ():

@@ -15,7 +15,7 @@ import numpy as np
 from .effects import EffectInstance
 from .instrument import Instrument
 
-__all__ = ["thermal_effects", "fixed_thermal_power", "thermal_power"]
+__all__ = ["thermal_effects", "fixed_thermal_power", "thermal_power", "HeatLaw"]
 
 #: Stacked runs up to this many get the state-dependent heat law row by row.
 _ROW_BY_ROW = 4
@@ -66,6 +66,57 @@ def fixed_thermal_power(inst: Instrument, time_s: np.ndarray, moving: np.ndarray
     return fixed, terms, stateful
 
 
+class HeatLaw:
+    """The per-sample heat law P(t_k, T_k) [W] of a run's thermal effects, for
+    :func:`thermal.simulate` (one run: temperatures (n_nodes,) -> powers (n_nodes,)) and
+    :func:`thermal.simulate_many` (R stacked runs: (R, n_nodes) -> (R, n_nodes)).
+
+    At sample k it is the state-free part ``fixed[k]`` plus each state-dependent effect
+    evaluated on its node's temperature; while the unit is off, ``fixed[k]`` alone (which
+    then cancels the constant node powers, :func:`fixed_thermal_power`).  An effect gives
+    the same value for a float and an array element (the registry's contract for
+    state-dependent effects), so a run's bits do not depend on how many runs are stacked.
+    """
+
+    def __init__(self, fixed: np.ndarray, time_s: np.ndarray, moving: np.ndarray,
+                 on: np.ndarray | None, stateful) -> None:
+        self._fixed = fixed
+        self._index = {float(t): k for k, t in enumerate(time_s)}
+        self._moving = moving.tolist()
+        self._on = [True] * len(time_s) if on is None else on.tolist()
+        self._calls = [(e.spec.function, j, params) for e, j, params in stateful]
+        self.heated_nodes: tuple[int, ...] = tuple(sorted(
+            {j for _, j, _ in self._calls}
+            | set(np.flatnonzero(np.any(fixed != 0.0, axis=0)).tolist())))
+        """Indices of the nodes whose power the law can make non-zero (the others' is 0 at
+        every sample): what :func:`thermal.simulate`'s ``heated_nodes`` takes."""
+
+    def __call__(self, t_s: float, temperature_c: np.ndarray) -> np.ndarray:
+        """The extra node powers [W] at sample time ``t_s`` [s] (one of the run's samples)
+        from the node temperatures ``temperature_c`` [degC], (n,) or (R, n)."""
+        k = self._index[t_s]
+        fixed = self._fixed[k]
+        if not self._on[k]:
+            return (fixed.copy() if temperature_c.ndim == 1 else
+                    np.repeat(fixed[None, :], temperature_c.shape[0], axis=0))
+        if temperature_c.ndim == 1:
+            p = fixed.copy()
+            for f, j, params in self._calls:
+                p[j] += f(t_s, float(temperature_c[j]), self._moving[k], **params)
+            return p
+        # runs stacked: a few row by row (float arithmetic, cheaper than ufuncs on tiny
+        # arrays), more at once
+        p = np.repeat(fixed[None, :], temperature_c.shape[0], axis=0)
+        m = self._moving[k]
+        if temperature_c.shape[0] <= _ROW_BY_ROW:
+            for f, j, params in self._calls:
+                p[:, j] += [f(t_s, v, m, **params) for v in temperature_c[:, j].tolist()]
+            return p
+        for f, j, params in self._calls:
+            p[:, j] += f(t_s, temperature_c[:, j], m, **params)
+        return p
+
+
 def thermal_power(inst: Instrument, time_s: np.ndarray, moving: np.ndarray,
                   powered: np.ndarray | None = None):
     """The heat input of the thermal effects: (power, terms, stateful).
@@ -75,7 +126,7 @@ def thermal_power(inst: Instrument, time_s: np.ndarray, moving: np.ndarray,
     -P_j) and every thermal effect releases nothing.
 
     ``power`` is an array (n_samples, n_nodes) when no effect depends on the state, else a
-    per-sample law ``power(t_s, temperature_c)`` for :func:`thermal.simulate` (or, with
+    :class:`HeatLaw` ``power(t_s, temperature_c)`` for :func:`thermal.simulate` (or, with
     temperatures (R, n_nodes) of R stacked runs, for :func:`thermal.simulate_many`: a
     state-dependent effect then gets an array of the runs' node temperatures); ``terms``
     holds each state-free effect's power by label; ``stateful`` lists the state-dependent
@@ -84,36 +135,5 @@ def thermal_power(inst: Instrument, time_s: np.ndarray, moving: np.ndarray,
     fixed, terms, stateful = fixed_thermal_power(inst, time_s, moving, powered)
     if not stateful:
         return fixed, terms, stateful
-    off = None if powered is None else ~np.asarray(powered, dtype=bool)
-    # The per-sample law: the state-dependent sources from the current node temperature,
-    # held over the sample interval by the exact solver.
-    index = {float(t): k for k, t in enumerate(time_s)}
-    moving_list = moving.tolist()
-    on_list = [True] * len(time_s) if off is None else (~off).tolist()
-    calls = [(e.spec.function, j, params) for e, j, params in stateful]
-
-    def law(t_s: float, temperature_c: np.ndarray) -> np.ndarray:
-        k = index[t_s]
-        if not on_list[k]:
-            return (fixed[k].copy() if temperature_c.ndim == 1 else
-                    np.repeat(fixed[k][None, :], temperature_c.shape[0], axis=0))
-        if temperature_c.ndim == 1:
-            p = fixed[k].copy()
-            for f, j, params in calls:
-                p[j] += f(t_s, float(temperature_c[j]), moving_list[k], **params)
-            return p
-        # runs stacked (thermal.simulate_many): the law gets every run's node temperature;
-        # a few runs row by row (float arithmetic, cheaper than ufuncs on tiny arrays), more
-        # at once.  An effect gives the same value for a float and an array element (the
-        # registry's contract for state-dependent effects), so the bits do not depend on R.
-        p = np.repeat(fixed[k][None, :], temperature_c.shape[0], axis=0)
-        if temperature_c.shape[0] <= _ROW_BY_ROW:
-            m = moving_list[k]
-            for f, j, params in calls:
-                p[:, j] += [f(t_s, v, m, **params) for v in temperature_c[:, j].tolist()]
-            return p
-        for f, j, params in calls:
-            p[:, j] += f(t_s, temperature_c[:, j], moving_list[k], **params)
-        return p
-
-    return law, terms, stateful
+    on = None if powered is None else np.asarray(powered, dtype=bool)
+    return HeatLaw(fixed, time_s, moving, on, stateful), terms, stateful

@@ -14,27 +14,34 @@ from collections.abc import Iterator
 import numpy as np
 
 from thermal.errors import ThermalError
-from thermal.march import march, step_maps
+from thermal.march import heated_rows, march, step_maps
 from thermal.network import Network
 from thermal.solve import (AMBIENT_HOLDS, PowerLaw, ThermalResult, _as_ambient, _as_time,
-                           _check_power_array, _result, _step_classes, simulate,
-                           step_matrices)
+                           _result, _step_classes, fill_inputs, simulate, step_matrices)
 
 __all__ = ["simulate_many", "iter_simulate_many", "runs_per_batch"]
 
+#: The marched states are read out this many runs at a time: one pass that gathers their
+#: columns of the (n_t, n + m, R) array into contiguous per-run records (reading a run's
+#: column alone would stream the whole array through the cache for each run).
+_READ_RUNS = 16
 
-def runs_per_batch(n_nodes: int, n_samples: int, max_bytes: int | None) -> int | None:
-    """Runs whose marched states [T_k, p_k] (8 bytes x 2 n_nodes x n_samples each) fit in
-    ``max_bytes`` (at least one); None without a bound."""
+
+def runs_per_batch(n_nodes: int, n_samples: int, max_bytes: int | None,
+                   n_heated: int | None = None) -> int | None:
+    """Runs whose marched states [T_k, p_k] (8 bytes x (n_nodes + n_heated) x n_samples
+    each; ``n_heated`` the nodes a law heats, default every node) fit in ``max_bytes`` (at
+    least one); None without a bound."""
     if max_bytes is None:
         return None
-    return max(1, int(max_bytes) // (8 * 2 * n_nodes * max(n_samples, 1)))
+    rows = n_nodes + (n_nodes if n_heated is None else n_heated)
+    return max(1, int(max_bytes) // (8 * rows * max(n_samples, 1)))
 
 
 def simulate_many(network: Network, time_s: np.ndarray, *, ambient_c, initial_c,
                   power_w: PowerLaw | np.ndarray | None = None,
                   ambient_hold: str = "zero-order",
-                  max_bytes: int | None = None) -> list[ThermalResult]:
+                  max_bytes: int | None = None, heated_nodes=None) -> list[ThermalResult]:
     """:func:`simulate` for R runs of one network on one time grid, solved together.
 
     Many start-ups of one instrument differ only in where they start and what the chamber
@@ -59,6 +66,8 @@ def simulate_many(network: Network, time_s: np.ndarray, *, ambient_c, initial_c,
         The marched states of at most this many bytes at once (:func:`runs_per_batch`):
         the runs are taken in as many batches as that needs (a run's bits do not depend on
         its batch).
+    heated_nodes : sequence of int, optional
+        As :func:`simulate`: the nodes a callable ``power_w`` can heat (None: every node).
 
     Returns
     -------
@@ -67,13 +76,14 @@ def simulate_many(network: Network, time_s: np.ndarray, *, ambient_c, initial_c,
     """
     return list(iter_simulate_many(network, time_s, ambient_c=ambient_c, initial_c=initial_c,
                                    power_w=power_w, ambient_hold=ambient_hold,
-                                   max_bytes=max_bytes))
+                                   max_bytes=max_bytes, heated_nodes=heated_nodes))
 
 
 def iter_simulate_many(network: Network, time_s: np.ndarray, *, ambient_c, initial_c,
                        power_w: PowerLaw | np.ndarray | None = None,
                        ambient_hold: str = "zero-order",
-                       max_bytes: int | None = None) -> Iterator[ThermalResult]:
+                       max_bytes: int | None = None,
+                       heated_nodes=None) -> Iterator[ThermalResult]:
     """:func:`simulate_many`, its results yielded one at a time, in order: at most one
     batch of marched states (``max_bytes``) and the result being read are held at once."""
     t = _as_time(time_s)
@@ -108,7 +118,8 @@ def iter_simulate_many(network: Network, time_s: np.ndarray, *, ambient_c, initi
     steps, cls = _step_classes(t)
     mats = [step_matrices(a, b, h, slope=linear) for h in steps]
     maps = step_maps(mats, network.node_power_w)
-    per = runs_per_batch(n, n_t, max_bytes) or r
+    nodes = heated_rows(n, heated_nodes)
+    per = runs_per_batch(n, n_t, max_bytes, nodes.size) or r
     for b0 in range(0, r, per):
         batch = range(b0, min(r, b0 + per))
         ambs = np.array([_as_ambient(amb_all[i], t) for i in batch])      # (R, n_t)
@@ -118,13 +129,16 @@ def iter_simulate_many(network: Network, time_s: np.ndarray, *, ambient_c, initi
         state = march(maps, cls, t, t0_all[batch.start:batch.stop].T,
                       np.ascontiguousarray(ambs.T),
                       np.ascontiguousarray(slopes.T) if linear else None, None, law,
-                      stacked=True)
-        for k in range(len(batch)):
-            power = state[:, n:, k]
-            _check_power_array(power, t, names, "power_w(t_s, temperature_c)")
-            inputs = np.empty((n_t, 1 + n))
-            inputs[:, 0] = ambs[k]
-            inputs[:, 1:] = network.node_power_w + power
-            yield _result(network, a, b, mats, steps, cls, t, ambs[k], slopes[k], linear,
-                          np.ascontiguousarray(state[:, :n, k]), inputs, ambient_hold)
+                      stacked=True, heated=nodes)
+        for s0 in range(0, len(batch), _READ_RUNS):
+            part = slice(s0, min(len(batch), s0 + _READ_RUNS))
+            temps = np.ascontiguousarray(state[:, :n, part].transpose(2, 0, 1))
+            powers = np.ascontiguousarray(state[:, n:, part].transpose(2, 0, 1))
+            for q, k in enumerate(range(part.start, part.stop)):
+                inputs = np.empty((n_t, 1 + n))
+                inputs[:, 0] = ambs[k]
+                fill_inputs(inputs, network.node_power_w, nodes, powers[q], t, names)
+                yield _result(network, a, b, mats, steps, cls, t, ambs[k], slopes[k], linear,
+                              temps[q], inputs, ambient_hold)
+            del temps, powers
         del state

@@ -18,14 +18,17 @@ that run's own numbers (NumPy's elementwise ``multiply`` and ``add``, which roun
 result and never fuse a multiply and an add).  Every run of a batch goes through the same
 sequence of correctly rounded operations on its own operands, so its bits are those it gets
 alone: no BLAS product, whose summation order may follow the shape of the batch, is
-involved.  The states of R runs lie side by side in the last axis, ``state[k]`` of shape
-(2n, R), so each operation serves every run at once; the sum is one
-``np.add.accumulate`` over j for a few runs (documented as the running sum r_j = r_{j-1} +
-a_j, the same order) and a loop of 2n - 1 additions over whole (n, R) blocks for many.
+involved.  The powers of nodes that are never heated (given as ``heated``) are left out of
+the sum and of the state: their terms M_j 0 are exact zeros, whose addition changes no
+non-zero sum, and the other terms keep their order.  The states of R runs lie side by side
+in the last axis, ``state[k]`` of shape (n + m, R) (m heated nodes), so each operation
+serves every run at once; the sum is one ``np.add.accumulate`` over j for a few runs
+(documented as the running sum r_j = r_{j-1} + a_j, the same order) and a loop of n + m - 1
+additions over whole (n, R) blocks for many.
 
 The drive d_k depends on no state; it is computed elementwise, in the order written in
-(9), into the slot of T_{k+1}: for every sample at once for a few runs, at each step for
-many (no array of the record's size beside the states).
+(9), into the slot of T_{k+1}: for every sample at once for a few runs, for blocks of
+:data:`_DRIVE_BLOCK` samples for many (no array of the record's size beside the states).
 """
 
 from __future__ import annotations
@@ -37,11 +40,14 @@ import numpy as np
 
 from thermal.errors import ThermalError
 
-__all__ = ["StepMaps", "step_maps", "march"]
+__all__ = ["StepMaps", "step_maps", "march", "heated_rows"]
 
 #: Up to this many runs the sum (9) is one ``np.add.accumulate`` (fewer calls); above it a
 #: loop of block additions (less memory traffic).  The two give the same bits.
 _ACCUMULATE_UP_TO = 16
+#: Above _ACCUMULATE_UP_TO runs the drive d_k is computed for this many samples at once
+#: (elementwise, the order of (9)) into the slots of T_{k+1}: few calls, small temporaries.
+_DRIVE_BLOCK = 256
 
 
 @dataclass(frozen=True)
@@ -85,11 +91,22 @@ def _drive(maps: StepMaps, cls: np.ndarray, ambient_c: np.ndarray,
         out += maps.slope[cls][:, :, None] * slope_c_per_s[:-1, None, :]
 
 
+def heated_rows(n: int, heated) -> np.ndarray:
+    """Rows of M^T (and of the state) the march carries: the n temperatures, then the powers
+    of the ``heated`` nodes (every node when None), in increasing node order."""
+    nodes = np.arange(n) if heated is None else np.unique(np.asarray(heated, dtype=int))
+    if nodes.size and (nodes[0] < 0 or nodes[-1] >= n):
+        raise ThermalError(f"heated_nodes must be node indices in 0..{n - 1}, got "
+                           f"{list(np.asarray(heated).tolist())}")
+    return nodes
+
+
 def march(maps: StepMaps, cls: np.ndarray, time_s: np.ndarray, initial_c: np.ndarray,
           ambient_c: np.ndarray, slope_c_per_s: np.ndarray | None,
           extra_w: np.ndarray | None, law: Callable | None, *,
-          stacked: bool) -> np.ndarray:
-    """The states [T_k, p_k] of R runs at every sample by (9), shape (n_t, 2n, R).
+          stacked: bool, heated=None) -> np.ndarray:
+    """The states [T_k, p_k] of R runs at every sample by (9), shape (n_t, n + m, R): the n
+    node temperatures [degC], then the extra powers [W] of the m ``heated`` nodes.
 
     Parameters
     ----------
@@ -107,35 +124,38 @@ def march(maps: StepMaps, cls: np.ndarray, time_s: np.ndarray, initial_c: np.nda
         p_k = law(t_k, T_k), called once per sample for every run: with ``stacked`` the
         temperatures of the runs (R, n) -> (R, n), else (one run) (n,) -> (n,).  It gets a
         read-only view of T_k, which is never changed after.
+    heated : sequence of int, optional
+        The nodes whose extra power can be non-zero (the others' entries of ``extra_w`` or
+        of the law's value are zero at every sample, which the caller guarantees); None:
+        every node (m = n).  A node left out contributes M_j 0 = 0 to the sum (9), so
+        carrying only the heated ones drops exact zeros from it and keeps every other term
+        in its order: the same bits, fewer operations and a smaller state.
     """
     n, r = initial_c.shape
     n_t = time_s.size
-    state = np.empty((n_t, 2 * n, r))
+    nodes = heated_rows(n, heated)
+    m = nodes.size
+    rows_used = np.concatenate([np.arange(n), n + nodes])
+    every = m == n
+    state = np.empty((n_t, n + m, r))
     temp, power = state[:, :n], state[:, n:]
     temp[0] = initial_c
     if law is None:
-        power[...] = 0.0 if extra_w is None else extra_w[:, :, None]
+        power[...] = 0.0 if extra_w is None else extra_w[:, nodes, None]
     frozen = state.view()
     frozen.flags.writeable = False
     seen = list(frozen[:, :n].transpose(0, 2, 1)) if stacked else list(frozen[:, :n, 0])
     want = (r, n) if stacked else (n,)
-    columns = maps.columns
+    columns = [np.ascontiguousarray(col[rows_used]) for col in maps.columns]
     classes = cls.tolist()
     few = r <= _ACCUMULATE_UP_TO
-    prod = np.empty((2 * n, n, r))
-    acc = np.empty((2 * n, n, r)) if few else np.empty((n, r))
-    pairs = range(2, 2 * n)
+    prod = np.empty((n + m, n, r))
+    acc = np.empty((n + m, n, r)) if few else np.empty((n, r))
+    pairs = range(2, n + m)
     times = time_s.tolist()
     if few:
         _drive(maps, cls, ambient_c, slope_c_per_s, temp[1:])
     rows, temps, new_temps = list(state), list(temp[:-1]), list(temp[1:])
-    ambients = list(ambient_c[:, None, :])
-    slopes = (None if maps.slope is None or slope_c_per_s is None else
-              list(slope_c_per_s[:, None, :]))
-    g_amb = [m[:, None] for m in maps.ambient]
-    g_const = [m[:, None] for m in maps.constant]
-    g_slope = None if slopes is None else [m[:, None] for m in maps.slope]
-    lam_v = np.empty((n, r))
     powers = list(power.transpose(0, 2, 1)) if stacked else list(power[:, :, 0])
     for k, t_s in enumerate(times):
         if law is not None:
@@ -144,23 +164,24 @@ def march(maps: StepMaps, cls: np.ndarray, time_s: np.ndarray, initial_c: np.nda
                 raise ThermalError(f"power_w(t_s, temperature_c) must return shape {want}"
                                    f"{f' for {r} runs' if stacked else ''}, got shape "
                                    f"{p.shape}")
-            powers[k][...] = p
+            powers[k][...] = p if every else p[..., nodes]
         if k == n_t - 1:
             break
-        c = classes[k]
+        if not few and k % _DRIVE_BLOCK == 0:   # d_k of the next block, in the order of (9)
+            stop = min(k + _DRIVE_BLOCK, n_t - 1)
+            _drive(maps, cls[k:stop], ambient_c[k:stop + 1],
+                   None if slope_c_per_s is None else slope_c_per_s[k:stop + 1],
+                   temp[k + 1:stop + 1])
         new = new_temps[k]
-        if not few:                         # d_k, in the order of (9)
-            np.multiply(g_amb[c], ambients[k], out=new)
-            new += g_const[c]
-            if slopes is not None:
-                np.multiply(g_slope[c], slopes[k], out=lam_v)
-                new += lam_v
-        np.multiply(columns[c], rows[k][:, None, :], out=prod)
+        np.multiply(columns[classes[k]], rows[k][:, None, :], out=prod)
         if few:
             np.add.accumulate(prod, axis=0, out=acc)
             new += acc[-1]
         else:
-            np.add(prod[0], prod[1], out=acc)
+            if n + m == 1:
+                acc[...] = prod[0]
+            else:
+                np.add(prod[0], prod[1], out=acc)
             for j in pairs:
                 acc += prod[j]
             new += acc

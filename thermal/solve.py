@@ -61,7 +61,7 @@ from scipy.linalg import expm, eigh
 from scipy.signal import lfilter
 
 from thermal.errors import ThermalError
-from thermal.march import march, step_maps
+from thermal.march import heated_rows, march, step_maps
 from thermal.network import Network, index_of
 
 __all__ = ["ThermalResult", "simulate", "step_matrices", "StepMatrices", "AMBIENT_HOLDS"]
@@ -312,7 +312,7 @@ def simulate(network: Network, time_s: np.ndarray, *,
              ambient_c: float | np.ndarray | Callable[[float], float],
              initial_c: float | np.ndarray,
              power_w: PowerLaw | np.ndarray | None = None,
-             ambient_hold: str = "zero-order") -> ThermalResult:
+             ambient_hold: str = "zero-order", heated_nodes=None) -> ThermalResult:
     """Node temperatures of ``network`` at the sample times, exact for held inputs (3)-(5).
 
     Parameters
@@ -344,6 +344,11 @@ def simulate(network: Network, time_s: np.ndarray, *,
         With a callable the march (thermal/march.py, equation (9)) is a Python loop over
         the samples, a few microseconds per step plus the callable, in the same arithmetic
         as a run of :func:`thermal.simulate_many`; without one it is vectorised.
+    heated_nodes : sequence of int, optional
+        With a callable ``power_w``: the indices of the nodes whose extra power it can make
+        non-zero (its other entries are 0 at every sample, which the caller guarantees); the
+        march then carries only these (thermal/march.py: the same bits, less work).  None:
+        every node.
 
     Returns
     -------
@@ -395,14 +400,29 @@ def simulate(network: Network, time_s: np.ndarray, *,
         # batch of any size (thermal.simulate_many)
         state = march(step_maps(mats, network.node_power_w), cls, t, t0[:, None],
                       amb[:, None], slope[:, None] if linear else None, None, law,
-                      stacked=False)
+                      stacked=False, heated=heated_nodes)
         temp = np.ascontiguousarray(state[:, :n, 0])
-        power = state[:, n:, 0]
-        _check_power_array(power, t, names, "power_w(t_s, temperature_c)")
-        inputs[:, 1:] = network.node_power_w + power
+        fill_inputs(inputs, network.node_power_w, heated_rows(n, heated_nodes),
+                    state[:, n:, 0], t, names)
 
     return _result(network, a, b, mats, steps, cls, t, amb, slope, linear, temp, inputs,
                    ambient_hold)
+
+
+def fill_inputs(inputs: np.ndarray, node_power_w: np.ndarray, nodes: np.ndarray,
+                power_w: np.ndarray, time_s: np.ndarray, names: tuple[str, ...]) -> None:
+    """inputs[:, 1:] = P_const + p_k [W]: the constant node powers plus the law's powers
+    ``power_w`` (n_t, m) of the heated ``nodes`` (the other nodes' are zero), after a
+    :class:`ThermalError` locating the first non-finite power."""
+    if not np.all(np.isfinite(power_w)):
+        full = np.zeros((time_s.size, node_power_w.size))
+        full[:, nodes] = power_w
+        _check_power_array(full, time_s, names, "power_w(t_s, temperature_c)")
+    inputs[:, 1:] = node_power_w
+    if nodes.size == node_power_w.size:
+        inputs[:, 1:] += power_w
+    else:
+        inputs[:, 1 + nodes] += power_w
 
 
 def _result(network, a, b, mats, steps, cls, t, amb, slope, linear, temp, inputs,

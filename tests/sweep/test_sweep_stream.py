@@ -36,7 +36,7 @@ def test_a_cell_has_its_record_beside_many_start_ups(tmp_path, short_scenario):
     alone = [json.dumps(run_cell(t), sort_keys=True) for t in tasks]
     (batch,) = list(cell_batches(tasks))
     assert [json.dumps(r, sort_keys=True) for r in run_cells(batch)] == alone
-    per_run = 8 * 2 * 7 * 2400
+    per_run = 8 * (7 + 1) * 2400           # 7 temperatures and the TEC's node's power
     with pytest.MonkeyPatch.context() as mp:
         mp.setattr(nfs.experiment, "STACK_BYTES", 3 * per_run)
         assert [json.dumps(r, sort_keys=True) for r in run_cells(batch)] == alone
@@ -49,7 +49,7 @@ def test_streamed_runs_are_the_single_runs(short_scenario):
     conds = [c for seed in (1, 2, 3) for c in
              dataclasses.replace(base, seed=seed).conditions()]
     with pytest.MonkeyPatch.context() as mp:
-        mp.setattr(nfs.experiment, "STACK_BYTES", 2 * 8 * 2 * 7 * 2400)
+        mp.setattr(nfs.experiment, "STACK_BYTES", 2 * 8 * (7 + 1) * 2400)
         streamed = list(iter_simulate_runs(base.instrument, conds))
     for cond, sim in zip(conds, streamed, strict=True):
         one = simulate_run(base.instrument, cond)

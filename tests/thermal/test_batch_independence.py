@@ -11,7 +11,8 @@ block additions (many).
 import numpy as np
 import pytest
 
-from thermal import iter_simulate_many, simulate, simulate_many
+from thermal import ThermalError, iter_simulate_many, simulate, simulate_many
+from thermal.batch import runs_per_batch
 from thermal.march import _ACCUMULATE_UP_TO
 from thermal_networks import seven_nodes
 
@@ -113,3 +114,39 @@ def test_uneven_steps_keep_batch_independence(case):
         one = simulate(net, t, ambient_c=ambient[i], initial_c=starts[i], power_w=law,
                        ambient_hold="first-order")
         _same(one, many[i])
+
+
+@pytest.mark.parametrize("hold", ["zero-order", "first-order"])
+def test_carrying_only_the_heated_nodes_changes_no_bit(case, hold):
+    """The law heats one node: marched with ``heated_nodes`` naming it (the other powers'
+    exact-zero terms left out of the sum (9)), every run has the bits of the march over every
+    node, alone and in batches on either side of _ACCUMULATE_UP_TO."""
+    net, t, ambient, initial, law = case
+    j = net.node_names.index("electronics")
+    every = simulate_many(net, t, ambient_c=ambient, initial_c=initial, power_w=law,
+                          ambient_hold=hold)
+    heated = simulate_many(net, t, ambient_c=ambient, initial_c=initial, power_w=law,
+                           ambient_hold=hold, heated_nodes=[j])
+    for a, b in zip(heated, every, strict=True):
+        _same(a, b)
+    for size in (1, 5):
+        part = simulate_many(net, t, ambient_c=ambient[:size], initial_c=initial[:size],
+                             power_w=law, ambient_hold=hold, heated_nodes=(j,))
+        for a, b in zip(part, every[:size], strict=True):
+            _same(a, b)
+    one = simulate(net, t, ambient_c=ambient[3], initial_c=initial[3], power_w=law,
+                   ambient_hold=hold, heated_nodes=[j])
+    _same(one, every[3])
+    # a node outside the network is refused
+    with pytest.raises(ThermalError, match="heated_nodes"):
+        simulate(net, t, ambient_c=ambient[3], initial_c=initial[3], power_w=law,
+                 heated_nodes=[len(net.node_names)])
+
+
+def test_a_batch_by_memory_counts_only_the_heated_nodes(case):
+    """runs_per_batch: a run's states are (n + m) rows of n_t samples, 8 bytes each."""
+    net, t, _, _, _ = case
+    n = len(net.node_names)
+    assert runs_per_batch(n, t.size, 8 * (n + 1) * t.size * 5, 1) == 5
+    assert runs_per_batch(n, t.size, 8 * 2 * n * t.size * 5) == 5
+    assert runs_per_batch(n, t.size, None) is None
