@@ -9,6 +9,8 @@ with its parameter uncertainty (:class:`Rival`).  Explanations, by label:
 ``EFFECT`` or ``EFFECT:TARGET``
     a registered effect added and refitted (:func:`nfs.diagnose.apply_candidate`: the drift
     stage for a gyro or accelerometer effect, both stages for a thermal or thermometer one);
+    heat at a node no thermometer reads (``heat_source:coil_inner``) is fitted where it shows,
+    :func:`unseen_heat_rival`;
 ``a rate term on every node``
     the discretised Shupe integral, ``shupe_rate`` on every node of the network with its
     own coefficient, the drift stage refitted (:mod:`nfs.diagnose.drift_structure`);
@@ -46,10 +48,16 @@ from ..diagnose.result import RATE_ALTERNATIVE
 from ..diagnose.thermal_residual import DEFAULT_START
 
 __all__ = ["Rival", "MODEL", "RATE_ALTERNATIVE", "check_label", "rival_model", "rival_models",
-           "rivals_from_diagnosis"]
+           "rivals_from_diagnosis", "unseen_nodes", "unseen_heat_rival"]
 
 #: The label of the model as given.
 MODEL = "model"
+#: Thermal effects whose one power heats one node, fitted as :func:`unseen_heat_rival` when
+#: no thermometer reads their node.
+HEAT_EFFECTS = ("heat_source", "motor_heat")
+#: Start of an unseen heat's power [W]: inside the few tenths of a W to a few W of heat a
+#: coil or a motor releases (docs/physics.md section 2); the drift stage moves it.
+UNSEEN_HEAT_START_W = 0.5
 
 
 @dataclass(frozen=True)
@@ -158,6 +166,58 @@ def _structure_rival(inst: Instrument, runs: Sequence[Run], label: str, alt,
     return Rival(label, alt.description, fr.instrument, fr, len(alt.free), True)
 
 
+def unseen_nodes(inst: Instrument) -> tuple[str, ...]:
+    """The nodes of ``inst`` that no thermometer reads (weight 0 in every one): where heat
+    shows only through what it does to the gyro."""
+    read = {n for th in inst.thermometers.values() for n, w in th.nodes.items() if w != 0.0}
+    return tuple(n for n in inst.network.node_names if n not in read)
+
+
+def unseen_heat_rival(inst: Instrument, runs: Sequence[Run], label: str, **fit_kw) -> Rival:
+    """Heat ``label`` (``heat_source:NODE`` or ``motor_heat:NODE``) at a node no thermometer
+    reads, its numbers fitted where they show.
+
+    Such heat changes the thermometers only through the node's neighbours, so a thermal
+    stage fitted on the thermometers sets its power P [W] by whatever misfit the network
+    leaves there (seen on units the model does not describe: -4 W at the inner coil, and the
+    coil's capacity pushed to its bound), and the node's capacity C [J/K], which fixes how
+    fast the heat's gradient rises after power-on, is as unseen as the heat.  Both are fitted
+    on the drift instead, the thermometers keeping their say on the rest of the network:
+
+    1. the drift stage with P, C and the model's drift coefficients free (the network
+       replayed at each step), from P = :data:`UNSEEN_HEAT_START_W`;
+    2. both stages of the model with P and C held (the thermometers refit the network
+       around the heat: the power the fit had put elsewhere moves);
+    3. step 1 again from there.
+
+    A heat source is a source: when the drift wants P < 0 the explanation is held at
+    P = 0 (the drift stage refitted without it).  Its price is two numbers, P and C, as a
+    turn-on transient's amplitude and time constant; it refits the thermal stage
+    (``thermal_refit``), so a decision against a rival that does not reads the dwell
+    channels (:func:`nfs.design.decide.pair_channels`).  The uncertainty is step 3's.
+    """
+    name, _, node = label.partition(":")
+    e = make_effect(name, {"node": node, "power": UNSEEN_HEAT_START_W})
+    current = inst.with_effects(list(inst.effects) + [e])
+    own = [f"effects.{e.label}.power", f"thermal.nodes.{node}.capacity_j_per_k"]
+    kw = dict(fit_kw)
+
+    def drift_step(model: Instrument) -> FitResult:
+        fr = fit_model(model, runs, free=model_drift_paths(model) + own, stages=("drift",),
+                       **kw)
+        if fr.params[own[0]] >= 0.0:
+            return fr
+        held = set_params(model, {own[0]: 0.0})
+        return fit_model(held, runs, free=model_drift_paths(held), stages=("drift",), **kw)
+
+    fr = drift_step(current)
+    around = fit_model(fr.instrument, runs,
+                       free=[p for p in default_free(fr.instrument) if p not in own], **kw)
+    fr = drift_step(around.instrument)
+    return Rival(label, f"adds {name} at {node}, where no thermometer sits: its power and "
+                 f"the node's capacity fitted on the drift", fr.instrument, fr, len(own), True)
+
+
 def check_label(inst: Instrument, runs: Sequence[Run], label: str) -> None:
     """Raise :class:`~nfs.errors.NfsError` naming what ``label`` can be, before any fit,
     when it is no explanation of ``inst`` on ``runs`` (module docstring)."""
@@ -213,6 +273,8 @@ def rival_model(inst: Instrument, runs: Sequence[Run], label: str, **fit_kw) -> 
             f"rival '{label}' is no explanation nfs design knows: give '{MODEL}', an effect "
             f"as EFFECT or EFFECT:TARGET, '{RATE_ALTERNATIVE}', or a structural alternative "
             f"of this model ({', '.join(sorted(alts))})") from None
+    if name in HEAT_EFFECTS and target in unseen_nodes(inst):
+        return unseen_heat_rival(inst, runs, label, **fit_kw)
     new, fr, _ = apply_candidate(inst, runs, name, target or None, **_apply_kw(fit_kw))
     own = f"effects.{label}."
     return Rival(label, f"adds the effect {label}, refitted", new, fr,
