@@ -109,6 +109,39 @@ def _dwell_means(values: np.ndarray, idx: np.ndarray, owner: np.ndarray, n: int)
         return np.where(count > 0, total / np.maximum(count, 1), np.nan)
 
 
+#: The last segmentation of :func:`north_find`, (inputs, (cycles, idx, owner)): the runs of
+#: a batch (a sweep's cells, a study's start-ups) share their time base and turntable
+#: motion, so a batch is segmented once.  The inputs are kept as copies and compared in full
+#: (a run with another motion is segmented anew); the cycles are frozen, the index arrays
+#: read-only, so the runs share them safely.
+_LAST_SEGMENTS: list = [None]
+
+
+def _segments(time_s: np.ndarray, position_deg: np.ndarray, moving: np.ndarray,
+              positions_deg, dwell_s, settle_s: float, position_tol_deg: float):
+    """(cycles, idx, owner) of a run: :func:`segment_cycles` and the dwells' samples
+    (:func:`dwell_samples`), remembered for the next run with the same motion
+    (:data:`_LAST_SEGMENTS`)."""
+    key = (None if positions_deg is None else tuple(positions_deg), dwell_s, settle_s,
+           position_tol_deg)
+    last = _LAST_SEGMENTS[0]
+    if last is not None:
+        (k, t, p, m), found = last
+        if (k == key and t.shape == time_s.shape and np.array_equal(t, time_s)
+                and np.array_equal(p, position_deg, equal_nan=True)
+                and np.array_equal(m, moving, equal_nan=True)):
+            return found
+    cycles = tuple(segment_cycles(time_s, position_deg, moving, positions_deg,
+                                  dwell_s=dwell_s, settle_s=settle_s,
+                                  position_tol_deg=position_tol_deg))
+    dwells = [d for c in cycles for d in c.dwells]
+    idx, owner = dwell_samples([d.start for d in dwells], [d.stop for d in dwells])
+    idx.flags.writeable = owner.flags.writeable = False
+    found = (cycles, idx, owner)
+    _LAST_SEGMENTS[0] = ((key, time_s.copy(), position_deg.copy(), moving.copy()), found)
+    return found
+
+
 def north_find(run: Run, *, tilt_correction: bool = True, settle_s: float = 0.0,
                gyro_column: str = "gyro_dph", heading_hint_deg: float | None = None,
                position_tol_deg: float = POSITION_TOL_DEG) -> NorthFindResult:
@@ -161,9 +194,9 @@ def north_find(run: Run, *, tilt_correction: bool = True, settle_s: float = 0.0,
     meta = run.meta
     time_s = _column(run, "time_s")
     gyro = _column(run, gyro_column)
-    cycles = segment_cycles(time_s, _column(run, "position_deg"), _column(run, "moving"),
-                            meta.positions_deg, dwell_s=meta.dwell_s, settle_s=settle_s,
-                            position_tol_deg=position_tol_deg)
+    cycles, idx, owner = _segments(time_s, _column(run, "position_deg"),
+                                   _column(run, "moving"), meta.positions_deg, meta.dwell_s,
+                                   settle_s, position_tol_deg)
     if not cycles:
         n_dwells = len(find_dwells(time_s, run.columns["position_deg"], run.columns["moving"],
                                    dwell_s=meta.dwell_s, settle_s=settle_s,
@@ -173,7 +206,6 @@ def north_find(run: Run, *, tilt_correction: bool = True, settle_s: float = 0.0,
                                f"({n_dwells} dwells found, schedule {sched})", file=run.path)
     n_cyc, n_pos = len(cycles), len(cycles[0].dwells)
     dwells = [d for c in cycles for d in c.dwells]
-    idx, owner = dwell_samples([d.start for d in dwells], [d.stop for d in dwells])
     shape = (n_cyc, n_pos)
     theta = np.array([d.theta_deg for d in dwells]).reshape(shape)
     rate = _dwell_means(gyro, idx, owner, len(dwells)).reshape(shape)

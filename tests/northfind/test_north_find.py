@@ -12,6 +12,7 @@ import pytest
 
 from nfs.constants import OMEGA_IE_DPH
 from nfs.errors import MeasurementError, NfsError
+import nfs.northfind.heading as heading
 from nfs.run import Run
 from nfs.northfind import (east_tilt_error_deg, heading_rmse, linear_drift_error_deg,
                            north_find, synthetic_run, white_noise_floor_deg, wrap_deg_180)
@@ -206,3 +207,25 @@ def test_two_position_run_uses_the_known_horizontal_rate():
     assert not res.ambiguous and np.all(np.abs(res.error_deg) < 1e-9)
     res = north_find(run)
     assert res.ambiguous and np.allclose(res.heading_deg, 70.0)
+
+
+def test_runs_that_share_their_motion_are_segmented_once_with_the_same_results():
+    # Oracle: north_find of each run with its segmentation forgotten before (the runs alone),
+    # field by field, for runs met in turn that share their motion (two headings: the same
+    # time base and turntable angles), then a run of another schedule and one with a settle
+    # time (segmented anew), then the first run again.
+    sched4, sched3 = (0.0, 90.0, 180.0, 270.0), (0.0, 120.0, 240.0)
+    runs = [synthetic_run(heading_deg=h, latitude_deg=40.0, positions_deg=sched4,
+                          n_cycles=2, bias_dph=0.5) for h in (10.0, 200.0)]
+    runs.append(synthetic_run(heading_deg=10.0, latitude_deg=40.0, positions_deg=sched3,
+                              n_cycles=2))
+    calls = [(r, 0.0) for r in runs] + [(runs[0], 5.0), (runs[1], 0.0)]
+    fields = ("heading_deg", "error_deg", "rate_dph", "theta_deg", "t_start_s", "t_end_s")
+    for run, settle in calls:
+        met = north_find(run, settle_s=settle)
+        heading._LAST_SEGMENTS[0] = None
+        alone = north_find(run, settle_s=settle)
+        assert met.cycles == alone.cycles
+        for f in fields:
+            assert np.array_equal(getattr(met, f), getattr(alone, f)), f
+    assert north_find(runs[0], settle_s=5.0).t_start_s[0] > north_find(runs[0]).t_start_s[0]
