@@ -241,9 +241,10 @@ class RVRRegressor(KernelRegressor):
         tiny = np.finfo(float).tiny
         eps = np.finfo(float).eps
 
-        # the kept bases: their indices (column 0 is the bias), precisions and blocks of
-        # Phi^T Phi and Phi^T t, cut down only when a basis is pruned
+        # the kept bases: their indices (column 0 is the bias), precisions, columns of Phi
+        # and blocks of Phi^T Phi and Phi^T t, cut down only when a basis is pruned
         keep = np.arange(n + 1)
+        Phi_kept = Phi
         alpha = np.full(n + 1, 1.0 / n**2)
         beta = 100.0 / max(float(np.var(t)), eps)
         n_iter, converged = 0, False
@@ -252,7 +253,7 @@ class RVRRegressor(KernelRegressor):
             g = np.clip(1.0 - alpha * diag, eps, 1.0)
             with np.errstate(divide="ignore"):
                 alpha_new = g / (mu * mu)
-            rss = float(np.sum((t - Phi[:, keep] @ mu) ** 2))
+            rss = float(np.sum((t - Phi_kept @ mu) ** 2))
             beta = max(n - float(g.sum()), eps * n) / max(rss, tiny)
             beta = min(beta, 1.0 / (eps * max(float(np.var(t)), eps)))  # noise >= 1e-8 std
             finite = np.isfinite(alpha_new)
@@ -263,6 +264,7 @@ class RVRRegressor(KernelRegressor):
             if not kept.all():
                 keep, alpha, Ptt = keep[kept], alpha[kept], Ptt[kept]
                 PtP = PtP[np.ix_(kept, kept)]
+                Phi_kept = Phi_kept[:, kept]
             if keep.size == 0 or (change < tol and np.all(finite)):
                 converged = True
                 break

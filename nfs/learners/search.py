@@ -135,22 +135,21 @@ class Integer:
         return 2.0 * (v - a) / (b - a) - 1.0
 
 
-def _fit_and_score(estimator, X, y, train, test, scorer, sq_distances=None
-                   ) -> tuple[float, float]:
-    """Fit ``estimator`` on the ``train`` rows, score it on the ``test`` rows: (score, fit
-    time [s]); ``sq_distances`` of the training rows go to a kernel regressor's fit."""
+def _fit_and_score(estimator, fold, scorer, sq_distances=None) -> tuple[float, float]:
+    """Fit ``estimator`` on a fold's training rows, score it on its held-out rows: (score,
+    fit time [s]); ``fold`` is (X_train, y_train, X_test, y_test), indexed once for every
+    candidate; ``sq_distances`` of the training rows go to a kernel regressor's fit."""
+    X_train, y_train, X_test, y_test = fold
     fit_params = {} if sq_distances is None else {"sq_distances": sq_distances}
     t0 = time.perf_counter()
-    y_train = None if y is None else _safe_indexing(y, train)
-    y_test = None if y is None else _safe_indexing(y, test)
     with warnings.catch_warnings():
         # A candidate that does not converge is scored as it is: the tuner is asking what
         # these hyperparameters give, and a warning per fold per candidate (in every joblib
         # worker) would bury the progress output.
         warnings.simplefilter("ignore", ConvergenceWarning)
-        estimator.fit(_safe_indexing(X, train), y_train, **fit_params)
+        estimator.fit(X_train, y_train, **fit_params)
     fit_time = time.perf_counter() - t0
-    score = scorer(estimator, _safe_indexing(X, test), y_test)
+    score = scorer(estimator, X_test, y_test)
     return float(score), fit_time
 
 
@@ -318,9 +317,13 @@ class MetaheuristicSearchCV(MetaEstimatorMixin, BaseEstimator):
                               f"(LeaveOneGroupOut needs at least 2 distinct groups)")
         scorer = check_scoring(self.estimator, scoring=self.scoring)
         base = clone(self.estimator)
+        # each fold's rows (X_train, y_train, X_test, y_test), indexed once for every candidate
+        folds = [tuple(None if a is None else _safe_indexing(a, rows)
+                       for a, rows in ((X, train), (y, train), (X, test), (y, test)))
+                 for train, test in splits]
         # each fold's squared distances, once for every candidate (None: not a kernel model)
         if _takes_sq_distances(base) and "standardize" not in names:
-            sq = [base.training_sq_distances(_safe_indexing(X, train)) for train, _ in splits]
+            sq = [base.training_sq_distances(fold[0]) for fold in folds]
         else:
             sq = [None] * n_splits
 
@@ -340,9 +343,9 @@ class MetaheuristicSearchCV(MetaEstimatorMixin, BaseEstimator):
                 params = [decode(u) for u in U]
                 keys = [tuple(sorted(p.items())) for p in params]
                 todo = list(dict.fromkeys(k for k in keys if k not in memo))
-                out = parallel(delayed(_fit_and_score)(clone(base).set_params(**dict(k)), X,
-                                                       y, train, test, scorer, d2)
-                               for k in todo for (train, test), d2 in zip(splits, sq))
+                out = parallel(delayed(_fit_and_score)(clone(base).set_params(**dict(k)),
+                                                       fold, scorer, d2)
+                               for k in todo for fold, d2 in zip(folds, sq))
                 out = np.asarray(out, dtype=float).reshape(len(todo), n_splits, 2)
                 memo.update(zip(todo, out))
                 out = np.stack([memo[k] for k in keys])
