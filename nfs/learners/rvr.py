@@ -42,13 +42,13 @@ def _cholesky(PtP: np.ndarray, alpha: np.ndarray, beta: float) -> np.ndarray | N
     scale = None
     for load in LOADINGS:
         H = beta * PtP
-        diag = np.diag_indices_from(H)
-        H[diag] += alpha
+        diag = H.reshape(-1)[::n + 1]           # a view of H's diagonal
+        diag += alpha
         if load:
             if scale is None:
-                scale = n * np.finfo(float).eps * max(float(np.max(H[diag])),
+                scale = n * np.finfo(float).eps * max(float(np.max(diag)),
                                                       np.finfo(float).tiny)
-            H[diag] += load * scale
+            diag += load * scale
         # H is exactly symmetric (Phi^T Phi by one symmetric product): its transpose is the
         # same matrix in Fortran order, which LAPACK factorises in place
         c, info = scipy.linalg.lapack.dpotrf(H.T, lower=True, clean=True, overwrite_a=True)
@@ -246,7 +246,9 @@ class RVRRegressor(KernelRegressor):
         keep = np.arange(n + 1)
         Phi_kept = Phi
         alpha = np.full(n + 1, 1.0 / n**2)
-        beta = 100.0 / max(float(np.var(t)), eps)
+        var_t = max(float(np.var(t)), eps)
+        beta = 100.0 / var_t
+        beta_max = 1.0 / (eps * var_t)                # noise >= 1e-8 of the target's STD
         n_iter, converged = 0, False
         for n_iter in range(1, max_iter + 1):
             mu, diag = self._posterior_diag(PtP, Ptt, alpha, beta)
@@ -255,7 +257,7 @@ class RVRRegressor(KernelRegressor):
                 alpha_new = g / (mu * mu)
             rss = float(np.sum((t - Phi_kept @ mu) ** 2))
             beta = max(n - float(g.sum()), eps * n) / max(rss, tiny)
-            beta = min(beta, 1.0 / (eps * max(float(np.var(t)), eps)))  # noise >= 1e-8 std
+            beta = min(beta, beta_max)
             finite = np.isfinite(alpha_new)
             dlog = np.log(alpha_new[finite]) - np.log(alpha[finite])
             change = float(np.max(np.abs(dlog), initial=0.0))
