@@ -11,7 +11,7 @@ The whole experiment (simulate -> north-find -> compensate -> table) is :class:`
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any, Callable, Iterator
 
 import numpy as np
@@ -258,6 +258,44 @@ class _Prepared:
     ambient: np.ndarray     # chamber at the run's samples
     soak: tuple[float, float] | None = None   # (soak_from_c, soak_h) of an unfinished soak
     powered: np.ndarray | None = None         # power state at the samples (None: always on)
+    earth: np.ndarray | None = None           # Earth rate along the gyro axis [deg/h]
+    gravity: dict | None = None               # sin(elevation) of the x and y axes [g]
+
+
+def _pointing(inst: Instrument, cond: RunConditions, t: np.ndarray, rng, shared: dict):
+    """(theta, moving, geometry, axes, earth rate [deg/h], {axis: sin elevation [g]}) of a
+    run: the turntable's motion, where the sensors point, and what Earth rate and gravity
+    they sense.
+
+    Without a geometry effect and a replayed motion these depend only on the schedule, the
+    time grid, the heading, the tilt and the latitude, so the runs of one call that share
+    them share one computation (``shared``), each with its own turntable stream in its
+    :class:`Geometry` (which no effect then draws from).
+    """
+    tilt = inst.turntable
+    key = None
+    if cond.motion is None and not any(e.spec.kind == "geometry" for e in inst.effects):
+        key = ("pointing", cond.schedule, t.size, float(t[0]), float(t[-1]),
+               cond.true_heading_deg, tilt.tilt_north_deg, tilt.tilt_east_deg,
+               cond.latitude_deg)
+        if key in shared:
+            theta, moving, geom, axes, earth, gravity = shared[key]
+            return theta, moving, replace(geom, rng=rng), axes, earth, gravity
+    theta, moving = cond.turntable(t)
+    geom = apply_geometry(Geometry(
+        time_s=t, position_deg=theta, moving=moving, positions_deg=cond.schedule.positions_deg,
+        heading_deg=cond.true_heading_deg, rng=rng, theta_deg=theta,
+        tilt_north_deg=tilt.tilt_north_deg, tilt_east_deg=tilt.tilt_east_deg), inst.effects)
+    axes = geom.azimuth_elevation()
+    azimuth, elev_gyro = axes["gyro"]
+    earth = earth_rate_along_axis_dph(azimuth, elev_gyro, cond.latitude_deg)
+    gravity = {axis: np.sin(np.radians(axes[axis][1])) for axis in ("x", "y")}
+    if key is not None:
+        for a in (theta, moving, earth, *gravity.values(),
+                  *(v for pair in axes.values() for v in pair)):
+            a.flags.writeable = False       # shared by the runs: read-only
+        shared[key] = (theta, moving, geom, axes, earth, gravity)
+    return theta, moving, geom, axes, earth, gravity
 
 
 def _prepare(inst: Instrument, cond: RunConditions, shared: dict | None = None) -> _Prepared:
@@ -281,13 +319,8 @@ def _prepare(inst: Instrument, cond: RunConditions, shared: dict | None = None) 
         if key not in shared:
             shared[key] = unit_instrument(inst, var, cond.unit)
         inst = shared[key]
-    theta, moving = cond.turntable(t)
-    tilt = inst.turntable
-    geom = apply_geometry(Geometry(
-        time_s=t, position_deg=theta, moving=moving, positions_deg=cond.schedule.positions_deg,
-        heading_deg=cond.true_heading_deg, rng=rngs["turntable"], theta_deg=theta,
-        tilt_north_deg=tilt.tilt_north_deg, tilt_east_deg=tilt.tilt_east_deg), inst.effects)
-    axes = geom.azimuth_elevation()
+    theta, moving, geom, axes, earth, gravity = _pointing(inst, cond, t, rngs["turntable"],
+                                                          shared)
 
     # 1. thermal network: the unpowered soak of a chamber program, then the run
     powered = cond.powered(t)
@@ -314,7 +347,8 @@ def _prepare(inst: Instrument, cond: RunConditions, shared: dict | None = None) 
     soak = (drawn_soak(var, cond.seed) if var is not None and cond.initial_c is None
             and not n_pre else None)
     return _Prepared(inst, cond, rngs, theta, moving, geom, axes, power, thermal_terms,
-                     stateful, initial, np.asarray(ambient, dtype=float), soak, powered)
+                     stateful, initial, np.asarray(ambient, dtype=float), soak, powered,
+                     earth, gravity)
 
 
 def simulate_run(inst: Instrument, cond: RunConditions) -> SimulationResult:
@@ -341,9 +375,11 @@ def _heated(prep: _Prepared) -> tuple[int, ...] | None:
 
 
 #: Memory the stacked thermal march of :func:`iter_simulate_runs` may take [bytes]: the
-#: marched states of 128 start-ups of 2.5 h at 1 Hz on 7 nodes with every node heated
-#: (224 with one node heated, as in the default instrument).
-STACK_BYTES = 128 * 2 ** 20
+#: marched states of 262 start-ups of 2.5 h at 1 Hz on 7 nodes with one node heated (the
+#: default instrument: 8 rows of 9000 samples, 576 kB each), so that a sweep's batch of
+#: :data:`nfs.sweep.BATCH_CELLS` = 256 single start-ups is one march; 147 with every
+#: node heated.
+STACK_BYTES = 144 * 2 ** 20
 
 
 def _state_bytes(prep: _Prepared) -> int:
@@ -441,8 +477,7 @@ def _finish(prep: _Prepared, th) -> SimulationResult:
     inst, cond, rngs, moving = prep.inst, prep.cond, prep.rngs, prep.moving
     t, fs, theta, geom = cond.time_s, cond.sample_rate_hz, prep.theta, prep.geom
     ambient, thermal_terms = prep.ambient, prep.thermal_terms
-    (_, elev_x), (_, elev_y), (azimuth, elev_gyro) = (prep.axes["x"], prep.axes["y"],
-                                                      prep.axes["gyro"])
+    azimuth = prep.axes["gyro"][0]
     for e, j, params in prep.stateful:
         p = np.array(e.spec.function(t, th.temperature_c[:, j], moving, **params),
                      dtype=float)
@@ -452,7 +487,7 @@ def _finish(prep: _Prepared, th) -> SimulationResult:
 
     # 2. aux channels and the effect context
     aux = _aux_channels(inst, th, fs, rngs["aux"])
-    earth = earth_rate_along_axis_dph(azimuth, elev_gyro, cond.latitude_deg)
+    earth = prep.earth
     ctx = effect_context(inst, th, azimuth, earth, moving, aux, prep.powered)
 
     # 3. gyro: K0 * Earth rate + bias + effects + noise
@@ -476,8 +511,8 @@ def _finish(prep: _Prepared, th) -> SimulationResult:
     # 4. accelerometers: sin(elevation) + bias + effects + noise
     a = inst.accelerometers
     acc = {}
-    for axis, elev, bias in (("x", elev_x, a.bias_x_g), ("y", elev_y, a.bias_y_g)):
-        f = np.sin(np.radians(elev)) + bias
+    for axis, bias in (("x", a.bias_x_g), ("y", a.bias_y_g)):
+        f = prep.gravity[axis] + bias
         for e in inst.effects:
             if e.spec.kind == "accelerometer" and e.params.get("axis") == axis:
                 f = f + acc_terms[e.label]

@@ -54,7 +54,8 @@ so heat_in = stored + lost, with heat_in = sum_k h_k sum_j P_j,k, lost = sum_k s
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 from scipy.linalg import expm, eigh
@@ -104,15 +105,27 @@ class ThermalResult:
     """Chamber temperature T_amb,k [degC] at t_k, shape (n_t,): held over [t_k, t_k+1), or
     linear to T_amb,k+1 (:attr:`ambient_hold`)."""
 
-    heat_in_j: np.ndarray
-    """Cumulative energy injected by all node powers from t_0 to t_k [J], shape (n_t,)."""
-
-    heat_lost_j: np.ndarray
-    """Cumulative energy lost to the chamber from t_0 to t_k [J], shape (n_t,), exact (4)
-    or (7)."""
-
     ambient_hold: str = "zero-order"
     """How T_amb went between samples: "zero-order" (held) or "first-order" (linear)."""
+
+    _ledger: tuple = field(default=(), repr=False, compare=False)
+    """(network, step matrices, steps, step classes, first-order hold?) of the solve: what
+    the heat bookkeeping is computed from when first read (a sweep reads none of it)."""
+
+    @cached_property
+    def _heat(self) -> tuple[np.ndarray, np.ndarray]:
+        return _heat_ledger(self)
+
+    @property
+    def heat_in_j(self) -> np.ndarray:
+        """Cumulative energy injected by all node powers from t_0 to t_k [J], shape (n_t,)."""
+        return self._heat[0]
+
+    @property
+    def heat_lost_j(self) -> np.ndarray:
+        """Cumulative energy lost to the chamber from t_0 to t_k [J], shape (n_t,), exact
+        (4) or (7)."""
+        return self._heat[1]
 
     @property
     def stored_j(self) -> np.ndarray:
@@ -427,16 +440,36 @@ def fill_inputs(inputs: np.ndarray, node_power_w: np.ndarray, nodes: np.ndarray,
 
 def _result(network, a, b, mats, steps, cls, t, amb, slope, linear, temp, inputs,
             ambient_hold) -> ThermalResult:
-    """Rates, heat bookkeeping (6) and the read-only :class:`ThermalResult` of one run."""
-    n = len(network.node_names)
-    names = network.node_names
+    """The read-only :class:`ThermalResult` of one run: its rates now, its heat bookkeeping
+    (6) when first read (:func:`_heat_ledger`; ``slope`` is recomputed then from the
+    chamber, as it was made)."""
     rate = temp @ a.T + inputs @ b.T
+    arrays = dict(time_s=t, capacity_j_per_k=network.capacity_j_per_k,
+                  temperature_c=np.ascontiguousarray(temp), rate_c_per_s=rate,
+                  power_w=inputs[:, 1:].copy(), ambient_c=amb)
+    for value in arrays.values():
+        value.flags.writeable = False
+    return ThermalResult(node_names=network.node_names, ambient_hold=ambient_hold,
+                         _ledger=(network, mats, steps, cls, linear), **arrays)
+
+
+def _heat_ledger(result: ThermalResult) -> tuple[np.ndarray, np.ndarray]:
+    """(heat_in_j, heat_lost_j) of ``result`` by (4) or (7) and (6): the energy injected by
+    the node powers and lost to the chamber from t_0 to each t_k [J]."""
+    network, mats, steps, cls, linear = result._ledger
+    t, amb, temp = result.time_s, result.ambient_c, result.temperature_c
+    n = len(network.node_names)
+    inputs = np.empty((t.size, 1 + n))  # u_k = [T_amb,k, P_1,k, ..., P_n,k], equation (2)
+    inputs[:, 0] = amb
+    inputs[:, 1:] = result.power_w
     _, to_chamber = network.conductances()
     integral = (_per_interval([m.psi for m in mats], cls, temp[:-1], n)
                 + _per_interval([m.upsilon for m in mats], cls, inputs[:-1], n))
     h = steps[cls]
     amb_integral = h * amb[:-1]
     if linear:
+        slope = np.zeros(t.size)
+        slope[:-1] = np.diff(amb) / np.diff(t)
         integral += _per_interval([m.omega[:, None] for m in mats], cls,
                                   slope[:-1, None], n)
         amb_integral = h * 0.5 * (amb[:-1] + amb[1:])
@@ -444,12 +477,5 @@ def _result(network, a, b, mats, steps, cls, t, amb, slope, linear, temp, inputs
     gained = h * inputs[:-1, 1:].sum(axis=1)
     heat_in = np.concatenate([[0.0], np.cumsum(gained)])
     heat_lost = np.concatenate([[0.0], np.cumsum(lost)])
-
-    arrays = dict(time_s=t, capacity_j_per_k=network.capacity_j_per_k,
-                  temperature_c=np.ascontiguousarray(temp), rate_c_per_s=rate,
-                  power_w=inputs[:, 1:].copy(), ambient_c=amb, heat_in_j=heat_in,
-                  heat_lost_j=heat_lost)
-    for value in arrays.values():
-        value.flags.writeable = False
-    return ThermalResult(node_names=names, ambient_hold=ambient_hold, **arrays)
-
+    heat_in.flags.writeable = heat_lost.flags.writeable = False
+    return heat_in, heat_lost
