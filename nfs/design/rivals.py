@@ -30,7 +30,7 @@ standard error) is drawn from its prior when it has one, else held.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any, Sequence
 
 import numpy as np
@@ -39,7 +39,7 @@ from ..effects import get_effect, make_effect
 from ..errors import EffectError, NfsError
 from ..instrument import Instrument
 from ..run import Run
-from ..diagnose import (apply_candidate, default_free, fit_model, set_params,
+from ..diagnose import (apply_candidate, default_free, fit_model, get_param, set_params,
                         structural_alternatives, thermal_adequacy)
 from ..diagnose.candidates import FAST_KINDS, targets
 from ..diagnose.columns import model_drift_paths
@@ -173,33 +173,40 @@ def unseen_nodes(inst: Instrument) -> tuple[str, ...]:
     return tuple(n for n in inst.network.node_names if n not in read)
 
 
+def _joint_cost(fr: FitResult) -> float:
+    """The cost of a fit's two stages together (each chi-square-like with its prior rows,
+    :mod:`nfs.diagnose.stage`): what two fits of the same parameters are compared by."""
+    return float(sum(st.cost for st in fr.stages.values()))
+
+
 def unseen_heat_rival(inst: Instrument, runs: Sequence[Run], label: str, **fit_kw) -> Rival:
     """Heat ``label`` (``heat_source:NODE`` or ``motor_heat:NODE``) at a node no thermometer
-    reads, its power fitted where it shows.
+    reads, its power P [W] fitted on both the thermometers and the drift.
 
-    Such heat changes the thermometers only through the node's neighbours, so a thermal
-    stage fitted on the thermometers sets its power P [W] by whatever misfit the network
-    leaves there (seen on units the model does not describe: -4 W at the inner coil, the
-    coil's capacity pushed to a tenth).  P is fitted on the drift instead, which sees the
-    heat's rate P / C at power-on, the thermometers keeping their say on the rest of the
-    network:
+    Such heat reaches the thermometers only through the node's neighbours, while the drift
+    sees its rate P / C at power-on (C [J/K] the node's capacity).  Fitted as every thermal
+    effect is (:func:`nfs.diagnose.apply_candidate`: the thermal stage on the thermometers,
+    P among its numbers), P takes up whatever misfit the network leaves at the neighbours
+    (seen on units the model does not describe: -4 W at the inner coil, the coil's capacity
+    pushed to a tenth) and may never meet the drift.  So the two stages are also solved the
+    other way round, from the drift:
 
-    1. the drift stage with P and the model's drift coefficients free (the network
-       replayed at each step), from P = :data:`UNSEEN_HEAT_START_W`;
-    2. both stages of the model with P held (the thermometers refit the network around the
-       heat: the power the model's fit had put elsewhere moves);
-    3. step 1 again from there.
+    1. the drift stage with P and the model's drift coefficients free (the network replayed
+       at each step), from P = :data:`UNSEEN_HEAT_START_W`;
+    2. both stages with P held: the thermometers refit the network around the heat (the
+       power the model's fit had put elsewhere moves).  C stays the model's: the drift fixes
+       the heat's rate P / C far better than its time constant (on the package's own
+       instrument with 0.5 W at coil_inner, three 1 h runs gave P 0.25 +- 0.08 W and C
+       91 +- 19 J/K for 190 J/K with both free, P 0.45 +- 0.09 W with C held), and a
+       thermal refit with the heat in pushes C to its bound.
 
-    The node's capacity C [J/K] stays the model's through all three: the thermometers do
-    not read the node, and the drift fixes the heat's rate P / C far better than its time
-    constant (on the package's own instrument with 0.5 W at coil_inner, three 1 h runs gave
-    P 0.25 +- 0.08 W and C 91 +- 19 J/K for 190 J/K when both were free, P 0.45 +- 0.09 W
-    with C held), while a thermal refit with the heat in pushes C to its bound.
-
-    A heat source is a source: when the drift wants P < 0 the explanation is held at
-    P = 0 (the drift stage refitted without it).  Its price is one number, P; it refits the
-    thermal stage (``thermal_refit``), so a decision against a rival that does not reads the
-    dwell channels (:func:`nfs.design.decide.pair_channels`).  The uncertainty is step 3's.
+    The two fits have the same numbers; the one with the lower cost of both stages together
+    (:func:`_joint_cost`) is the rival, a second start of one joint fit.  A heat source is a
+    source: a fit with P < 0 is no such explanation and is not kept (the drift-first one is
+    then held at P = 0).  The drift-first fit's P carries the standard error of step 1 (its
+    draws hold P).  The price is one number; the thermal stage is refitted
+    (``thermal_refit``), so a decision against a rival that does not reads the dwell
+    channels (:func:`nfs.design.decide.pair_channels`).
     """
     name, _, node = label.partition(":")
     e = make_effect(name, {"node": node, "power": UNSEEN_HEAT_START_W})
@@ -207,20 +214,22 @@ def unseen_heat_rival(inst: Instrument, runs: Sequence[Run], label: str, **fit_k
     power = f"effects.{e.label}.power"
     held = (power, f"thermal.nodes.{node}.capacity_j_per_k")
 
-    def drift_step(model: Instrument) -> FitResult:
-        fr = fit_model(model, runs, free=model_drift_paths(model) + [power],
-                       stages=("drift",), **fit_kw)
-        if fr.params[power] >= 0.0:
-            return fr
-        zero = set_params(model, {power: 0.0})
-        return fit_model(zero, runs, free=model_drift_paths(zero), stages=("drift",), **fit_kw)
-
-    fr = drift_step(current)
-    around = fit_model(fr.instrument, runs,
-                       free=[p for p in default_free(fr.instrument) if p not in held], **fit_kw)
-    fr = drift_step(around.instrument)
+    first = fit_model(current, runs, free=model_drift_paths(current) + [power],
+                      stages=("drift",), **fit_kw)
+    p_se = float(first.stderr.get(power, math.inf))
+    start = first.instrument
+    if first.params[power] < 0.0:
+        start, p_se = set_params(current, {power: 0.0}), math.inf
+    around = fit_model(start, runs, free=[p for p in default_free(start) if p not in held],
+                       **fit_kw)
+    fits = [replace(around, params={**around.params, power: get_param(start, power)},
+                    stderr={**around.stderr, power: p_se})]
+    _, usual, _ = apply_candidate(inst, runs, name, node, **_apply_kw(fit_kw))
+    if usual.params[power] >= 0.0:
+        fits.append(usual)
+    fr = min(fits, key=_joint_cost)
     return Rival(label, f"adds {name} at {node}, where no thermometer sits: its power fitted "
-                 "on the drift", fr.instrument, fr, 1, True)
+                 "on the thermometers and the drift", fr.instrument, fr, 1, True)
 
 
 def check_label(inst: Instrument, runs: Sequence[Run], label: str) -> None:
