@@ -16,6 +16,7 @@ import pytest
 
 import nfs
 from nfs.design import MODEL, RATE_ALTERNATIVE, rival_model, rivals_from_diagnosis
+from nfs.design.rivals import unseen_nodes
 from nfs.effects import make_effect
 from nfs.errors import NfsError
 
@@ -41,6 +42,7 @@ def test_each_kind_of_rival_adds_its_explanation(world):
     # the truth within three of the fit's standard errors
     p = "effects.heat_source:coil_inner.power"
     assert abs(heat.fit.params[p] - 0.5) < 3.0 * heat.fit.stderr[p] < 0.6
+    assert heat.fit.params[p] >= 0.0 and heat.n_added == 1 and heat.thermal_refit
     rate = rival_model(model, runs, RATE_ALTERNATIVE, start_state=None)
     labels = {e.label for e in rate.instrument.effects}
     assert {f"shupe_rate:{n}" for n in model.network.node_names if n != "coil_inner"} <= labels \
@@ -49,6 +51,16 @@ def test_each_kind_of_rival_adds_its_explanation(world):
     assert len(node.instrument.network.node_names) == len(model.network.node_names) + 1
     same = rival_model(model, runs, MODEL, start_state=None)
     assert same.instrument is model and same.fit is not None
+
+
+def test_unseen_nodes_are_those_no_thermometer_reads():
+    model = nfs.load_instrument("default")
+    # fog reads electronics and coil_outer, each QFA thermometer its own QFA
+    assert unseen_nodes(model) == ("housing", "board", "coil_inner")
+    seen = dataclasses.replace(model, thermometers={
+        **model.thermometers,
+        "fog": dataclasses.replace(model.thermometers["fog"], nodes={"coil_inner": 1.0})})
+    assert "coil_inner" not in unseen_nodes(seen) and "coil_outer" in unseen_nodes(seen)
 
 
 def test_draws_follow_the_fit_s_covariance(world):
