@@ -14,7 +14,7 @@ from nfs.constants import OMEGA_IE_DPH
 from nfs.effects import Geometry, make_effect
 from nfs.effects.geometry import azimuth_elevation_deg, table_axes_ned, tilt_matrix
 from nfs.errors import EffectError
-from nfs.experiment import RunConditions, simulate_run
+from nfs.experiment import RunConditions, simulate_run, simulate_runs
 from nfs.instrument import load_instrument
 from nfs.northfind import (indexing_error_deg, north_find, tilt_model_error_deg,
                            wrap_deg_180)
@@ -264,3 +264,28 @@ def test_instrument_and_scenario_files_with_geometry_effects_load(tmp_path):
     assert [e.name for e in sc.instrument.effects][-3:] == labels[-3:]
     sim = simulate_run(sc.instrument, sc.conditions()[0])
     assert sim.geometry.exact_tilt and sim.geometry.gyro_axis_body != (1.0, 0.0, 0.0)
+
+
+def test_runs_stacked_share_their_pointing_only_without_a_geometry_effect(quiet):
+    # Oracle: simulate_run of each run alone, bit for bit.  Without a geometry effect the
+    # runs of one call with one schedule, heading and latitude share one turntable motion and
+    # pointing (read-only arrays), each keeping its own turntable stream; an indexing
+    # scatter draws from each run's stream, so there every run points its own way.
+    sched = Schedule(FOUR, dwell_s=60.0, move_s=5.0)
+    conds = [RunConditions(name=f"g{s}", start_temperature_c=20.0, latitude_deg=LAT,
+                           true_heading_deg=100.0, schedule=sched, duration_s=2 * sched.cycle_s,
+                           seed=s) for s in (1, 2, 3)]
+    scatter = quiet.with_effects([make_effect("indexing_error", {
+        "offsets_deg": [0.0] * 4, "sigma_deg": 0.01})])
+    for inst, shared in ((quiet, True), (scatter, False)):
+        sims = simulate_runs(inst, conds)
+        for cond, sim in zip(conds, sims, strict=True):
+            one = simulate_run(inst, cond)
+            np.testing.assert_array_equal(sim.geometry.theta_deg, one.geometry.theta_deg)
+            for col, v in one.run.columns.items():
+                np.testing.assert_array_equal(sim.run.columns[col], v, err_msg=col)
+        assert (sims[0].geometry.theta_deg is sims[1].geometry.theta_deg) == shared
+        assert sims[0].geometry.rng is not sims[1].geometry.rng
+        assert shared == (not sims[0].run.columns["position_deg"].flags.writeable)
+        if not shared:
+            assert not np.array_equal(sims[0].geometry.theta_deg, sims[1].geometry.theta_deg)
