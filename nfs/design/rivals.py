@@ -205,9 +205,9 @@ def unseen_heat_rival(inst: Instrument, runs: Sequence[Run], label: str, **fit_k
     (:func:`_drift_cost`) is the rival: it refits the thermal stage, so a decision against a
     rival that does not reads the dwell channels alone (:func:`nfs.design.decide.pair_channels`),
     and the fit kept is the one that explains them best, the thermometers having had their
-    say on the network in both.  Chosen by the cost of both stages together, the thermometers'
-    gain decided: on 2 of 7 units of the independent generator the fit kept then lost to the
-    model as it is on the drift by e^32 and e^127.  A heat source is a source: a fit with
+    say on the network in both.  (On 2 of 7 units of the independent generator with heat in
+    the coil both fits lose to the model as it is on the drift, by e^32 and e^127: the
+    model's two-node coil does not describe their heat.)  A heat source is a source: a fit with
     P < 0 is no such explanation and is not kept (the drift-first one is then held at
     P = 0).  The drift-first fit's P carries the standard error of step 1 (its
     draws hold P).  The price is one number.
