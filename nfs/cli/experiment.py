@@ -204,12 +204,13 @@ def cmd_sweep(args) -> int:
     # a fully stored sweep imports the definition, the store and the table only: the
     # simulator, the executors and matplotlib are imported when a cell or a figure is missing
     from ..sweep.definition import load_sweep
-    from ..sweep.plan import stored_sweep
+    from ..sweep.plan import plan_sweep, stored_sweep
     if args.dask_local is not None and args.scheduler is not None:
         raise NfsError("give --dask-local N or --scheduler ADDRESS, not both")
     spec = load_sweep(args.sweep)                   # the whole sweep checked before any work
     log = None if args.quiet else (lambda msg: print(f"sweep: {msg}", file=sys.stderr))
-    res = stored_sweep(spec, args.output)
+    plan = plan_sweep(spec, args.output)            # the store prepared, its cells listed once
+    res = stored_sweep(plan)
     if res is not None:
         if log is not None:
             log(f"{spec.n_cells} cells, every one stored, figures current: nothing to compute")
@@ -221,7 +222,8 @@ def cmd_sweep(args) -> int:
         else:
             executor = LocalExecutor(args.jobs)
         try:
-            res = run_sweep(spec, args.output, executor=executor, quiet=args.quiet, log=log)
+            res = run_sweep(spec, args.output, executor=executor, quiet=args.quiet, log=log,
+                            plan=plan)
         finally:
             executor.close()
     print(f"{res.n_cells} cells ({res.n_computed} computed, {res.n_cells - res.n_computed} "

@@ -128,12 +128,11 @@ def record_figures(plan: SweepPlan, paths: list[Path]) -> None:
                                   "files": [p.name for p in paths]}, indent=1) + "\n")
 
 
-def stored_sweep(spec: SweepSpec, output: str | Path, *,
-                 figures: bool = True) -> SweepResult | None:
-    """The sweep's result when every cell is stored and (with ``figures``) its figures are
-    current: the table written again from the store, nothing computed or drawn; None when
-    a cell is missing or a figure must be drawn (then :func:`nfs.sweep.run_sweep` does it)."""
-    plan = plan_sweep(spec, output)
+def stored_sweep(plan: SweepPlan, *, figures: bool = True) -> SweepResult | None:
+    """The result of the sweep ``plan`` prepared (:func:`plan_sweep`) when every cell is
+    stored and (with ``figures``) its figures are current: the table written again from the
+    store, nothing computed or drawn; None when a cell is missing or a figure must be drawn
+    (then :func:`nfs.sweep.run_sweep` does it, given the same plan)."""
     if plan.missing:
         return None
     n_rows, paths = write_tables(plan)
@@ -142,4 +141,4 @@ def stored_sweep(spec: SweepSpec, output: str | Path, *,
         if kept is None:
             return None
         paths += kept
-    return SweepResult(spec.n_cells, 0, n_rows, tuple(paths))
+    return SweepResult(plan.spec.n_cells, 0, n_rows, tuple(paths))

@@ -10,15 +10,16 @@ from .cells import cell_batches, run_cells
 from .executors import LocalExecutor, SweepProgress
 from .figures import write_figures
 from .definition import SweepSpec
-from .plan import (FIGURES_RECORD, SweepResult, kept_figures, plan_sweep, record_figures,
-                   write_tables)
+from .plan import (FIGURES_RECORD, SweepPlan, SweepResult, kept_figures, plan_sweep,
+                   record_figures, write_tables)
 
 __all__ = ["SweepResult", "run_sweep", "FIGURES_RECORD"]
 
 
 def run_sweep(spec: SweepSpec, output: str | Path, *, executor=None, quiet: bool = False,
               on_cell: Callable[[dict[str, Any]], None] | None = None,
-              figures: bool = True, log: Callable[[str], None] | None = None) -> SweepResult:
+              figures: bool = True, log: Callable[[str], None] | None = None,
+              plan: SweepPlan | None = None) -> SweepResult:
     """Compute the cells of ``spec`` missing from ``output/cells``, then write
     ``output/results.csv`` (and ``results.parquet`` when pyarrow is importable) and the
     summary figures (drawn only when what they show changed: :func:`~nfs.sweep.plan.kept_figures`).
@@ -40,8 +41,11 @@ def run_sweep(spec: SweepSpec, output: str | Path, *, executor=None, quiet: bool
         Write the summary figures.
     log : callable, optional
         Receives one-line messages (default: nothing).
+    plan : SweepPlan, optional
+        ``output`` already prepared for ``spec`` by :func:`~nfs.sweep.plan.plan_sweep` (as
+        ``nfs sweep`` does before it looks for a fully stored sweep): not planned again.
     """
-    plan = plan_sweep(spec, output)
+    plan = plan_sweep(spec, output) if plan is None else plan
     store, missing = plan.store, plan.missing
     n_missing = len(missing)
     executor = executor or LocalExecutor()
