@@ -7,7 +7,7 @@ with its parameter uncertainty (:class:`Rival`).  Explanations, by label:
     the model as given (fitted already: ``nfs fit``), its parameters' uncertainty from a
     refit of its drift stage;
 ``EFFECT`` or ``EFFECT:TARGET``
-    a registered effect added and refitted (:func:`nfs.diagnose.apply_candidate`: the drift
+    a registered effect added and refitted (:func:`nfs.diagnose.fit_candidate`: the drift
     stage for a gyro or accelerometer effect, both stages for a thermal or thermometer one);
     heat at a node no thermometer reads (``heat_source:coil_inner``) is fitted where it shows,
     :func:`unseen_heat_rival`;
@@ -39,7 +39,7 @@ from ..effects import get_effect, make_effect
 from ..errors import EffectError, NfsError
 from ..instrument import Instrument
 from ..run import Run
-from ..diagnose import (apply_candidate, default_free, fit_model, get_param, set_params,
+from ..diagnose import (default_free, fit_candidate, fit_model, get_param, set_params,
                         structural_alternatives, thermal_adequacy)
 from ..diagnose.candidates import FAST_KINDS, targets
 from ..diagnose.columns import model_drift_paths
@@ -186,7 +186,7 @@ def unseen_heat_rival(inst: Instrument, runs: Sequence[Run], label: str, **fit_k
 
     Such heat reaches the thermometers only through the node's neighbours, while the drift
     sees its rate P / C at power-on (C [J/K] the node's capacity).  Fitted as every thermal
-    effect is (:func:`nfs.diagnose.apply_candidate`: the thermal stage on the thermometers,
+    effect is (:func:`nfs.diagnose.fit_candidate`: the thermal stage on the thermometers,
     P among its numbers), P takes up whatever misfit the network leaves at the neighbours
     (seen on units the model does not describe: -4 W at the inner coil, the coil's capacity
     pushed to a tenth) and may never meet the drift.  So the two stages are also solved the
@@ -228,7 +228,7 @@ def unseen_heat_rival(inst: Instrument, runs: Sequence[Run], label: str, **fit_k
                        **fit_kw)
     fits = [replace(around, params={**around.params, power: get_param(start, power)},
                     stderr={**around.stderr, power: p_se})]
-    _, usual, _ = apply_candidate(inst, runs, name, node, **_apply_kw(fit_kw))
+    _, usual = fit_candidate(inst, runs, name, node, **_apply_kw(fit_kw))
     if usual.params[power] >= 0.0:
         fits.append(usual)
     fr = min(fits, key=_drift_cost)
@@ -293,7 +293,7 @@ def rival_model(inst: Instrument, runs: Sequence[Run], label: str, **fit_kw) -> 
             f"of this model ({', '.join(sorted(alts))})") from None
     if name in HEAT_EFFECTS and target in unseen_nodes(inst):
         return unseen_heat_rival(inst, runs, label, **fit_kw)
-    new, fr, _ = apply_candidate(inst, runs, name, target or None, **_apply_kw(fit_kw))
+    new, fr = fit_candidate(inst, runs, name, target or None, **_apply_kw(fit_kw))
     own = f"effects.{label}."
     return Rival(label, f"adds the effect {label}, refitted", new, fr,
                  sum(1 for p in fr.params if p.startswith(own)),

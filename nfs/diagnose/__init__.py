@@ -36,7 +36,7 @@
 """
 
 from .adequacy import ThermalAdequacy, thermal_adequacy
-from .apply import apply_candidate
+from .apply import apply_candidate, fit_candidate
 from .candidates import candidates
 from .compare_report import write_report
 from .comparison import Comparison, compare
@@ -51,7 +51,7 @@ from .result import Answer, Diagnosis, candidate_finding
 from .smoother import RunSmoothing, smooth_runs
 from .structure import structural_alternatives
 
-__all__ = ["Comparison", "compare", "write_report", "Diagnosis", "apply_candidate",
+__all__ = ["Comparison", "compare", "write_report", "Diagnosis", "apply_candidate", "fit_candidate",
            "candidates", "diagnose", "FitResult", "default_free", "fit_model",
            "write_fitted_model", "ParameterError", "default_bounds", "expand_paths",
            "get_param", "list_params", "set_params", "ThermalAdequacy", "thermal_adequacy",

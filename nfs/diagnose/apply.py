@@ -21,32 +21,22 @@ from .fit import DEFAULT_DECIMATE_S, fit_model
 from .fit_result import FitResult
 from .free_set import default_free
 
-__all__ = ["apply_candidate"]
+__all__ = ["apply_candidate", "fit_candidate"]
 
 #: Start value of a thermal effect's time constant [s] (the thermal fit refines it).
 _THERMAL_STARTS = {"tau": 20.0}
 
 
-def apply_candidate(inst: Instrument, runs: Sequence[Run], name: str,
-                    target: str | None = None, *, decimate_s: float = DEFAULT_DECIMATE_S,
-                    start_state: StartModel | None = DEFAULT_START
-                    ) -> tuple[Instrument, FitResult, dict[str, Any]]:
-    """Add effect ``name`` (on ``target``) to ``inst``, refit, and report before/after.
-
-    Gyro and accelerometer effects: the drift stage refits the model's drift coefficients and
-    the new effect's coefficients and shape parameters (shapes started at the best point of
-    :data:`SHAPE_GRID`).  Thermal and thermometer effects: both stages, default free set plus
-    the new effect's parameters.  Returns (new instrument, FitResult, report) where the report
-    holds ``rms_before``/``rms_after`` per channel (before = the model as given) and the
-    pooled start-up ``heading_rmse_before_deg``/``heading_rmse_after_deg``.  Each run's
-    start is estimated as :func:`fit_model` does (``start_state``).
-
-    Raises NfsError for an unknown effect or target (listing the valid ones) or an effect
-    the model already has on that target.
-    """
+def fit_candidate(inst: Instrument, runs: Sequence[Run], name: str,
+                  target: str | None = None, *, decimate_s: float = DEFAULT_DECIMATE_S,
+                  start_state: StartModel | None = DEFAULT_START
+                  ) -> tuple[Instrument, FitResult]:
+    """Add effect ``name`` (on ``target``) to ``inst`` and refit: (new instrument,
+    FitResult), as :func:`apply_candidate` does without its before/after report (what a
+    rival of :mod:`nfs.design` needs)."""
     runs = list(runs)
     if not runs:
-        raise NfsError("apply_candidate: no runs")
+        raise NfsError("a candidate needs runs to be fitted to: none given")
     spec = get_effect(name)  # EffectError (an NfsError) listing the valid names
     valid = targets(spec, inst, runs)
     if target not in valid:
@@ -75,7 +65,29 @@ def apply_candidate(inst: Instrument, runs: Sequence[Run], name: str,
         free = list(dict.fromkeys(default_free(new) + new_paths))
         result = fit_model(new, runs, free=free, stages=("thermal", "drift"),
                            decimate_s=decimate_s, start_state=start_state)
-    fitted = result.instrument
+    return result.instrument, result
+
+
+def apply_candidate(inst: Instrument, runs: Sequence[Run], name: str,
+                    target: str | None = None, *, decimate_s: float = DEFAULT_DECIMATE_S,
+                    start_state: StartModel | None = DEFAULT_START
+                    ) -> tuple[Instrument, FitResult, dict[str, Any]]:
+    """Add effect ``name`` (on ``target``) to ``inst``, refit, and report before/after.
+
+    Gyro and accelerometer effects: the drift stage refits the model's drift coefficients and
+    the new effect's coefficients and shape parameters (shapes started at the best point of
+    :data:`SHAPE_GRID`).  Thermal and thermometer effects: both stages, default free set plus
+    the new effect's parameters.  Returns (new instrument, FitResult, report) where the report
+    holds ``rms_before``/``rms_after`` per channel (before = the model as given) and the
+    pooled start-up ``heading_rmse_before_deg``/``heading_rmse_after_deg``.  Each run's
+    start is estimated as :func:`fit_model` does (``start_state``).
+
+    Raises NfsError for an unknown effect or target (listing the valid ones) or an effect
+    the model already has on that target.
+    """
+    runs = list(runs)
+    fitted, result = fit_candidate(inst, runs, name, target, decimate_s=decimate_s,
+                                   start_state=start_state)
     start_c = result.start_c or start_states(fitted, runs, decimate_s, start_state)
 
     def heading(model: Instrument) -> float:
