@@ -12,7 +12,7 @@ The whole experiment (simulate -> north-find -> compensate -> table) is :class:`
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
-from typing import Any, Callable, Iterator
+from typing import Any, Callable, Collection, Iterator
 
 import numpy as np
 
@@ -34,10 +34,16 @@ from .variability import (Variability, drawn_soak, start_up_state, unit_instrume
                           unpowered_network)
 
 __all__ = ["RunConditions", "SimulationResult", "simulate_run", "simulate_runs",
-           "iter_simulate_runs", "effect_context",
+           "iter_simulate_runs", "effect_context", "OPTIONAL_COLUMNS",
            "conditions_from_run", "chamber_assumption"]
 
 _UG = 1e-6
+
+#: The columns of a simulated run beyond time, turntable, gyro and accelerometers (and the
+#: power state of a run with power cycles): the thermometers, the chamber, and the
+#: instrument's aux channels (by their names); ``channels`` of :func:`iter_simulate_runs`
+#: chooses among them.
+OPTIONAL_COLUMNS = (*THERMOMETERS.values(), "temp_chamber_c")
 
 
 @dataclass(frozen=True)
@@ -400,16 +406,17 @@ def _stack_key(prep: _Prepared):
 
 
 def simulate_runs(inst: Instrument, conds, *,
-                  progress: Callable[[int, int, str], None] | None = None
-                  ) -> list[SimulationResult]:
+                  progress: Callable[[int, int, str], None] | None = None,
+                  channels: Collection[str] | None = None) -> list[SimulationResult]:
     """:func:`simulate_run` for many runs of ``inst``, their thermal states stacked
     (:func:`iter_simulate_runs`, every result kept).  Each result is :func:`simulate_run`'s,
     bit for bit, whatever else is simulated beside it."""
-    return list(iter_simulate_runs(inst, conds, progress=progress))
+    return list(iter_simulate_runs(inst, conds, progress=progress, channels=channels))
 
 
 def iter_simulate_runs(inst: Instrument, conds, *,
-                       progress: Callable[[int, int, str], None] | None = None
+                       progress: Callable[[int, int, str], None] | None = None,
+                       channels: Collection[str] | None = None
                        ) -> Iterator[SimulationResult]:
     """:func:`simulate_run` for many runs of ``inst``, yielded one at a time, in order.
 
@@ -423,6 +430,12 @@ def iter_simulate_runs(inst: Instrument, conds, *,
     whatever the number of runs.  Each result is :func:`simulate_run`'s, bit for bit,
     whatever else is simulated beside it.  ``progress(i, n, name)`` is called before each
     run's preparation.
+
+    ``channels``: the columns of :data:`OPTIONAL_COLUMNS` and aux channels to make (None:
+    every one, a run that can be written to file; ``()``: none, what north-finding and the
+    drift need, as a sweep's record).  The aux channels are made all together, when one is
+    asked for or an effect reads one (their draws share one stream).  Every sensor draws
+    from its own stream, so a column left out changes no bit of the others.
     """
     conds = list(conds)
     shared: dict = {}
@@ -442,11 +455,12 @@ def iter_simulate_runs(inst: Instrument, conds, *,
                 break
             preps.append(prep)
             used += _state_bytes(prep)
-        yield from _solve_chunk(preps)
+        yield from _solve_chunk(preps, channels)
         shared = {k: v for k, v in shared.items() if k[0] == "unit"}
 
 
-def _solve_chunk(preps: list[_Prepared]) -> Iterator[SimulationResult]:
+def _solve_chunk(preps: list[_Prepared], channels: Collection[str] | None = None
+                 ) -> Iterator[SimulationResult]:
     """The prepared runs solved (stacked by :func:`_stack_key`) and finished, in order."""
     groups: dict = {}
     for k, p in enumerate(preps):
@@ -468,12 +482,14 @@ def _solve_chunk(preps: list[_Prepared]) -> Iterator[SimulationResult]:
             solutions[m] = th           # the group's solutions, in order, up to run k
             if m == k:
                 break
-        yield _finish(p, solutions.pop(k))
+        yield _finish(p, solutions.pop(k), channels)
         preps[k] = None
 
 
-def _finish(prep: _Prepared, th) -> SimulationResult:
-    """The run from its thermal solution: effects, sensors, noise, the measurement file."""
+def _finish(prep: _Prepared, th, channels: Collection[str] | None = None
+            ) -> SimulationResult:
+    """The run from its thermal solution: effects, sensors, noise, the measurement file
+    (its optional columns those of ``channels``, :func:`iter_simulate_runs`)."""
     inst, cond, rngs, moving = prep.inst, prep.cond, prep.rngs, prep.moving
     t, fs, theta, geom = cond.time_s, cond.sample_rate_hz, prep.theta, prep.geom
     ambient, thermal_terms = prep.ambient, prep.thermal_terms
@@ -485,8 +501,11 @@ def _finish(prep: _Prepared, th) -> SimulationResult:
             p[~prep.powered] = 0.0
         thermal_terms[e.label] = p
 
-    # 2. aux channels and the effect context
-    aux = _aux_channels(inst, th, fs, rngs["aux"])
+    # 2. aux channels (when asked for, or read by an effect) and the effect context
+    wanted = (lambda column: True) if channels is None else channels.__contains__
+    aux = (_aux_channels(inst, th, fs, rngs["aux"])
+           if any(wanted(a.name) for a in inst.aux)
+           or any(isinstance(e.params.get("channel"), str) for e in inst.effects) else {})
     earth = prep.earth
     ctx = effect_context(inst, th, azimuth, earth, moving, aux, prep.powered)
 
@@ -522,6 +541,8 @@ def _finish(prep: _Prepared, th) -> SimulationResult:
     # 5. thermometers (with any thermometer effects applied after the built-in lag)
     temps = {}
     for name, column in THERMOMETERS.items():
+        if not wanted(column):
+            continue
         model = inst.thermometers[name]
         transforms = [
             (lambda y, e=e: e.spec.function(y, t, **e.params))
@@ -534,9 +555,11 @@ def _finish(prep: _Prepared, th) -> SimulationResult:
     columns = {
         "time_s": t, "position_deg": theta, "moving": moving.astype(float),
         "gyro_dph": gyro, "acc_x_g": acc["x"], "acc_y_g": acc["y"], **temps,
-        "temp_chamber_c": np.broadcast_to(np.asarray(ambient, dtype=float), t.shape).copy(),
-        **aux,
     }
+    if wanted("temp_chamber_c"):
+        columns["temp_chamber_c"] = np.broadcast_to(np.asarray(ambient, dtype=float),
+                                                    t.shape).copy()
+    columns.update(aux)
     if prep.powered is not None:
         # switched off, the unit records nothing but its power state (the chamber's own
         # thermometer and the table's encoder keep recording)

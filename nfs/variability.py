@@ -26,7 +26,7 @@ Initial node temperatures at power-on (the soak), node j:
     T_j(0) = S_j + d_soak + e_j,      d_soak ~ N(0, soak_offset_c^2),
                                       e_j ~ N(0, soak_node_c^2)                        [degC]
 
-S is the soak, solved exactly (:func:`thermal.simulate`): the unpowered network, from
+S is the soak, solved exactly (:func:`thermal.final_temperature`): the unpowered network, from
 ``soak_from_c`` (an unfinished soak: the unit brought from the laboratory) or from T0, left
 for t_soak (``soak_h``, scattered log-normally by ``soak_h_rel_std``) in the chamber air
 T0 + w(t) + cycling(t) for -t_soak <= t < 0, the same wander and cycling that go on after
@@ -421,10 +421,10 @@ def start_up_state(inst: Instrument, var: Variability, start_temperature_c: floa
         soak_t = t[0] - soak_s + SOAK_STEP_S * np.arange(n)
         both = chamber_terms(var, np.concatenate([soak_t, t]), entropy)
         terms = both[n:]
-        th = thermal.simulate(unpowered_network(net), np.append(soak_t, t[0]),
-                              ambient_c=t0 + both[:n + 1],
-                              initial_c=var.soak_from_c if var.unfinished_soak else t0)
-        out = th.temperature_c[-1].copy()
+        out = thermal.final_temperature(unpowered_network(net), np.append(soak_t, t[0]),
+                                        ambient_c=t0 + both[:n + 1],
+                                        initial_c=var.soak_from_c if var.unfinished_soak
+                                        else t0)
     out += var.soak_offset_c * common
     if var.soak_node_c:
         for j, name in enumerate(net.node_names):

@@ -23,12 +23,16 @@ the sum and of the state: their terms M_j 0 are exact zeros, whose addition chan
 non-zero sum, and the other terms keep their order.  The states of R runs lie side by side
 in the last axis, ``state[k]`` of shape (n + m, R) (m heated nodes), so each operation
 serves every run at once; the sum is one ``np.add.accumulate`` over j for a few runs
-(documented as the running sum r_j = r_{j-1} + a_j, the same order) and a loop of n + m - 1
-additions over whole (n, R) blocks for many.
+(documented as the running sum r_j = r_{j-1} + a_j, the same order) and one
+``np.add.reduce`` over j for many (over the first axis of a C-ordered (n + m, n, R) array
+NumPy adds whole (n, R) blocks one after the other, j = 0, 1, ...: the same running sum; its
+pairwise summation applies only along a contiguous reduced axis, which this is not;
+tests/thermal/test_batch_independence.py checks the bits against runs marched alone).
 
 The drive d_k depends on no state; it is computed elementwise, in the order written in
 (9), into the slot of T_{k+1}: for every sample at once for a few runs, for blocks of
-:data:`_DRIVE_BLOCK` samples for many (no array of the record's size beside the states).
+:data:`_DRIVE_BLOCK` samples for many (no array of the record's size beside the states; the
+slope's products in one scratch block kept over the march).
 """
 
 from __future__ import annotations
@@ -42,8 +46,8 @@ from thermal.errors import ThermalError
 
 __all__ = ["StepMaps", "step_maps", "march", "heated_rows"]
 
-#: Up to this many runs the sum (9) is one ``np.add.accumulate`` (fewer calls); above it a
-#: loop of block additions (less memory traffic).  The two give the same bits.
+#: Up to this many runs the sum (9) is one ``np.add.accumulate`` (fewer calls); above it
+#: one ``np.add.reduce`` of whole blocks (less memory traffic).  The two give the same bits.
 _ACCUMULATE_UP_TO = 16
 #: Above _ACCUMULATE_UP_TO runs the drive d_k is computed for this many samples at once
 #: (elementwise, the order of (9)) into the slots of T_{k+1}: few calls, small temporaries.
@@ -82,13 +86,17 @@ def step_maps(steps, node_power_w: np.ndarray) -> StepMaps:
 
 
 def _drive(maps: StepMaps, cls: np.ndarray, ambient_c: np.ndarray,
-           slope_c_per_s: np.ndarray | None, out: np.ndarray) -> None:
-    """d_k of (9) for every interval at once into ``out`` (n_t-1, n, R), elementwise in the
-    order of the march's own step (a few runs: the record's drive is small)."""
+           slope_c_per_s: np.ndarray | None, out: np.ndarray,
+           scratch: np.ndarray | None = None) -> None:
+    """d_k of (9) for the intervals ``cls`` into ``out`` (n_intervals, n, R), elementwise in
+    the order written in (9); ``scratch`` (at least as large as ``out``) holds the slope's
+    products (None: a temporary)."""
     np.multiply(maps.ambient[cls][:, :, None], ambient_c[:-1, None, :], out=out)
     out += maps.constant[cls][:, :, None]
     if maps.slope is not None and slope_c_per_s is not None:
-        out += maps.slope[cls][:, :, None] * slope_c_per_s[:-1, None, :]
+        part = (np.empty(out.shape) if scratch is None else scratch[:cls.size])
+        np.multiply(maps.slope[cls][:, :, None], slope_c_per_s[:-1, None, :], out=part)
+        out += part
 
 
 def heated_rows(n: int, heated) -> np.ndarray:
@@ -151,7 +159,7 @@ def march(maps: StepMaps, cls: np.ndarray, time_s: np.ndarray, initial_c: np.nda
     few = r <= _ACCUMULATE_UP_TO
     prod = np.empty((n + m, n, r))
     acc = np.empty((n + m, n, r)) if few else np.empty((n, r))
-    pairs = range(2, n + m)
+    scratch = None if few else np.empty((_DRIVE_BLOCK, n, r))
     times = time_s.tolist()
     if few:
         _drive(maps, cls, ambient_c, slope_c_per_s, temp[1:])
@@ -171,19 +179,14 @@ def march(maps: StepMaps, cls: np.ndarray, time_s: np.ndarray, initial_c: np.nda
             stop = min(k + _DRIVE_BLOCK, n_t - 1)
             _drive(maps, cls[k:stop], ambient_c[k:stop + 1],
                    None if slope_c_per_s is None else slope_c_per_s[k:stop + 1],
-                   temp[k + 1:stop + 1])
+                   temp[k + 1:stop + 1], scratch)
         new = new_temps[k]
         np.multiply(columns[classes[k]], rows[k][:, None, :], out=prod)
         if few:
             np.add.accumulate(prod, axis=0, out=acc)
             new += acc[-1]
         else:
-            if n + m == 1:
-                acc[...] = prod[0]
-            else:
-                np.add(prod[0], prod[1], out=acc)
-            for j in pairs:
-                acc += prod[j]
+            np.add.reduce(prod, axis=0, out=acc)
             new += acc
         new += temps[k]
     return state

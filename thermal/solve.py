@@ -225,8 +225,22 @@ def _per_interval(mats: list[np.ndarray], cls: np.ndarray, x: np.ndarray,
     return out
 
 
+def modal_form(phi_minus_i: np.ndarray, capacity: np.ndarray
+               ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(d, mu, Q) of one step: d = sqrt(C) [sqrt(J/K)], and D (Phi - I) D^-1 (D = diag(d),
+    symmetric: network.py) = Q diag(mu) Q^T, mu = lambda - 1 clipped to [-1, 0] (see
+    :func:`_modal_recursion`); a function of the step matrices alone, so it can be kept
+    beside them (thermal/final.py)."""
+    d = np.sqrt(capacity)
+    sym = d[:, None] * phi_minus_i / d[None, :]
+    mu, q = eigh(0.5 * (sym + sym.T))
+    # lambda = exp(eigenvalue of A times h) lies in (0, 1]: a step long against a fast mode
+    # gives lambda = 0 to rounding, and mu a hair below -1 would make log1p(mu) NaN.
+    return d, np.clip(mu, -1.0, 0.0), q
+
+
 def _modal_recursion(phi_minus_i: np.ndarray, capacity: np.ndarray, t0: np.ndarray,
-                     drive: np.ndarray) -> np.ndarray:
+                     drive: np.ndarray, modes=None) -> np.ndarray:
     """T_{k+1} = T_k + (Phi - I) T_k + drive_k for one step size, vectorised over k.
 
     D (Phi - I) D^-1 with D = diag(sqrt(C)) is symmetric (network.py), = Q diag(mu) Q^T with
@@ -237,14 +251,10 @@ def _modal_recursion(phi_minus_i: np.ndarray, capacity: np.ndarray, t0: np.ndarr
 
     the held-input part in closed form with lambda^k = exp(k log1p(mu)) (no accumulated
     rounding; (lambda^k - 1)/mu -> k for a mode with no path to the chamber), and y, zero
-    for constant inputs, by :func:`scipy.signal.lfilter`.
+    for constant inputs, by :func:`scipy.signal.lfilter`.  ``modes``: :func:`modal_form`
+    of the step when already known.
     """
-    d = np.sqrt(capacity)
-    sym = d[:, None] * phi_minus_i / d[None, :]
-    mu, q = eigh(0.5 * (sym + sym.T))
-    # lambda = exp(eigenvalue of A times h) lies in (0, 1]: a step long against a fast mode
-    # gives lambda = 0 to rounding, and mu a hair below -1 would make log1p(mu) NaN.
-    mu = np.clip(mu, -1.0, 0.0)
+    d, mu, q = modal_form(phi_minus_i, capacity) if modes is None else modes
     n_t = drive.shape[0] + 1
     w = (drive * d) @ q                                  # (n_t - 1, n)
     w0 = w[0] if n_t > 1 else np.zeros(mu.size)
@@ -254,20 +264,25 @@ def _modal_recursion(phi_minus_i: np.ndarray, capacity: np.ndarray, t0: np.ndarr
     floating = mu == 0.0
     geometric = np.where(floating, k, np.expm1(k_log_lam) / np.where(floating, 1.0, mu))
     z = np.exp(k_log_lam) * (q.T @ (d * t0)) + geometric * w0
-    varying = np.zeros((n_t, mu.size))
-    varying[1:] = w - w0
-    for i, mu_i in enumerate(mu):
-        z[:, i] += lfilter([1.0], [1.0, -(1.0 + mu_i)], varying[:, i])
+    if n_t <= 2:
+        # one step: w - w0 is zero, and the filter of zeros gives +0.0 at every sample
+        z += 0.0
+    else:
+        varying = np.zeros((n_t, mu.size))
+        varying[1:] = w - w0
+        for i, mu_i in enumerate(mu):
+            z[:, i] += lfilter([1.0], [1.0, -(1.0 + mu_i)], varying[:, i])
     return (z @ q.T) / d
 
 
 def _closed_form(mats: list[StepMatrices], cls: np.ndarray, capacity: np.ndarray,
                  t0: np.ndarray, inputs: np.ndarray, slope: np.ndarray,
-                 linear: bool) -> np.ndarray:
+                 linear: bool, modes=None) -> np.ndarray:
     """T_k at every sample for inputs known in advance: each stretch of equal steps (one
     step class) by :func:`_modal_recursion` from the temperatures where the previous
     stretch ended, so a grid of a few step sizes (a soak on a coarse grid, then one step to
-    the record) costs a few closed forms, not a loop over the samples."""
+    the record) costs a few closed forms, not a loop over the samples.  ``modes``: per step
+    class, its :func:`modal_form` when known (None: computed here)."""
     temp = np.empty((cls.size + 1, t0.size))
     temp[0] = t0
     edges = np.flatnonzero(np.diff(cls)) + 1
@@ -276,7 +291,8 @@ def _closed_form(mats: list[StepMatrices], cls: np.ndarray, capacity: np.ndarray
         drive = inputs[a:b] @ m.gamma.T
         if linear:
             drive += slope[a:b, None] * m.lam
-        temp[a:b + 1] = _modal_recursion(m.phi_minus_i, capacity, temp[a], drive)
+        temp[a:b + 1] = _modal_recursion(m.phi_minus_i, capacity, temp[a], drive,
+                                         None if modes is None else modes[cls[a]])
     return temp
 
 

@@ -28,7 +28,7 @@ def _sweep(tmp_path, short_scenario, seeds):
 
 def test_a_cell_has_its_record_beside_many_start_ups(tmp_path, short_scenario):
     # Oracle: run_cell, the cell alone (its two start-ups marched together); a batch of nine
-    # cells marches eighteen start-ups at once (the march's block additions, above
+    # cells marches eighteen start-ups at once (the march's block reduction, above
     # _ACCUMULATE_UP_TO), and a memory bound of three start-ups cuts the chunks inside cells.
     spec = _sweep(tmp_path, short_scenario, list(range(9)))
     tasks = list(cell_tasks(spec))
@@ -56,6 +56,27 @@ def test_streamed_runs_are_the_single_runs(short_scenario):
         assert np.array_equal(one.thermal.temperature_c, sim.thermal.temperature_c)
         for col, v in one.run.columns.items():
             assert np.array_equal(v, sim.run.columns[col], equal_nan=True), col
+
+
+def test_runs_without_the_optional_columns_keep_every_other_bit(short_scenario):
+    # Oracle: the runs with every column (simulate_run alone): with channels=() (what a
+    # sweep's record reads) the gyro, accelerometers, turntable and drift terms are the same
+    # bits, and no thermometer, chamber or aux column is made; with one thermometer asked
+    # for, that column is the full run's.
+    base = load_scenario(str(short_scenario))
+    conds = dataclasses.replace(base, seed=4).conditions()[:3]
+    full = [simulate_run(base.instrument, c) for c in conds]
+    bare = list(iter_simulate_runs(base.instrument, conds, channels=()))
+    one = list(iter_simulate_runs(base.instrument, conds, channels=("temp_fog_c",)))
+    optional = set(nfs.experiment.OPTIONAL_COLUMNS) | {a.name for a in base.instrument.aux}
+    for f, b, o in zip(full, bare, one, strict=True):
+        assert set(b.run.columns) == set(f.run.columns) - optional
+        for col, v in b.run.columns.items():
+            assert np.array_equal(v, f.run.columns[col], equal_nan=True), col
+        for label, v in f.gyro_terms_dph.items():
+            assert np.array_equal(v, b.gyro_terms_dph[label]), label
+        assert set(o.run.columns) == set(b.run.columns) | {"temp_fog_c"}
+        assert np.array_equal(o.run.columns["temp_fog_c"], f.run.columns["temp_fog_c"])
 
 
 def test_a_stored_rerun_keeps_its_figures(tmp_path, short_scenario):

@@ -5,7 +5,7 @@ elementwise operations on its own numbers, so each run's temperatures, powers, r
 heat bookkeeping are equal (np.array_equal, every bit) whether it is marched alone
 (thermal.simulate), in batches of 1, 2, 7 or all R runs, in any order, beside any
 neighbours, and whether the step's sum is taken by ``np.add.accumulate`` (few runs) or by
-block additions (many).
+one ``np.add.reduce`` of whole blocks (many).
 """
 
 import numpy as np
@@ -16,7 +16,7 @@ from thermal.batch import runs_per_batch
 from thermal.march import _ACCUMULATE_UP_TO
 from thermal_networks import seven_nodes
 
-R = 40          # above _ACCUMULATE_UP_TO: the block additions; batches of 1, 2, 7 accumulate
+R = 40          # above _ACCUMULATE_UP_TO: np.add.reduce; batches of 1, 2, 7 accumulate
 FIELDS = ("temperature_c", "power_w", "rate_c_per_s", "heat_in_j", "heat_lost_j")
 
 
