@@ -10,13 +10,15 @@ statistics against the fit's own standard errors and correlations (2000 draws).
 from __future__ import annotations
 
 import dataclasses
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
 
 import nfs
 from nfs.design import MODEL, RATE_ALTERNATIVE, rival_model, rivals_from_diagnosis
-from nfs.design.rivals import unseen_nodes
+from nfs.design.rivals import _drift_cost, unseen_nodes
+from nfs.diagnose.stage import StageReport
 from nfs.effects import make_effect
 from nfs.errors import NfsError
 
@@ -90,3 +92,18 @@ def test_rivals_from_a_diagnosis():
     assert rivals_from_diagnosis({"answer": {"kind": "add", "labels": ["m"]}}) == [MODEL, "m"]
     with pytest.raises(NfsError, match="no tie"):
         rivals_from_diagnosis({"answer": {"kind": "nothing", "labels": [], "text": "quiet"}})
+
+
+def test_drift_cost_is_compared_in_the_stated_noise():
+    """Closed form: a drift stage that rescaled its data rows by s reports (data / s^2) +
+    prior; the comparison puts the data back on the stated scale, data + prior."""
+    def fit(cost, prior, s):
+        rep = StageReport(name="drift", free=("gyro.bias_dph",), converged=True, message="",
+                          nfev=1, cost_start=cost, cost=cost, n_residuals=100, time_s=0.0,
+                          cost_prior=prior, noise_scale=s)
+        return SimpleNamespace(stages={"drift": rep})
+
+    assert _drift_cost(fit(3546.8, 0.0, 1.0)) == pytest.approx(3546.8)
+    # 4562 in the stated noise reported as 4562 / 1.54 + 2 once rescaled by s = sqrt(1.54)
+    assert _drift_cost(fit(4562.0 / 1.54 + 2.0, 2.0, 1.54 ** 0.5)) == pytest.approx(4564.0)
+    assert _drift_cost(fit(2963.0, 0.0, 1.54 ** 0.5)) > _drift_cost(fit(3546.8, 0.0, 1.0))
