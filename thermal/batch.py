@@ -25,6 +25,23 @@ __all__ = ["simulate_many", "iter_simulate_many", "runs_per_batch"]
 #: columns of the (n_t, n + m, R) array into contiguous per-run records (reading a run's
 #: column alone would stream the whole array through the cache for each run).
 _READ_RUNS = 16
+#: ... and this many samples at a time (:func:`_read_out`).
+_READ_SAMPLES = 512
+
+
+def _read_out(state: np.ndarray, part: slice, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """The temperatures (R', n_t, n) and powers (R', n_t, m) of the runs ``part`` of the
+    marched states (n_t, n + m, R), each run's record contiguous: copied
+    :data:`_READ_SAMPLES` samples at a time (a block's source and destination stay in the
+    cache; a copy of the whole record at once walks the destination a page per run)."""
+    n_t, rows, _ = state.shape
+    r = len(range(*part.indices(state.shape[2])))
+    temps, powers = np.empty((r, n_t, n)), np.empty((r, n_t, rows - n))
+    for k0 in range(0, n_t, _READ_SAMPLES):
+        block = state[k0:k0 + _READ_SAMPLES, :, part].transpose(2, 0, 1)
+        temps[:, k0:k0 + _READ_SAMPLES] = block[:, :, :n]
+        powers[:, k0:k0 + _READ_SAMPLES] = block[:, :, n:]
+    return temps, powers
 
 
 def runs_per_batch(n_nodes: int, n_samples: int, max_bytes: int | None,
@@ -132,8 +149,7 @@ def iter_simulate_many(network: Network, time_s: np.ndarray, *, ambient_c, initi
                       stacked=True, heated=nodes)
         for s0 in range(0, len(batch), _READ_RUNS):
             part = slice(s0, min(len(batch), s0 + _READ_RUNS))
-            temps = np.ascontiguousarray(state[:, :n, part].transpose(2, 0, 1))
-            powers = np.ascontiguousarray(state[:, n:, part].transpose(2, 0, 1))
+            temps, powers = _read_out(state, part, n)
             for q, k in enumerate(range(part.start, part.stop)):
                 inputs = np.empty((n_t, 1 + n))
                 inputs[:, 0] = ambs[k]

@@ -74,12 +74,25 @@ def run_cell(task: CellTask) -> dict[str, Any]:
         return _compute(task)
 
 
+#: The scenario of the last point this process loaded, with its (base scenario digest,
+#: point): a worker's consecutive batches of one point (a sweep of many seeds) read and check
+#: the files once, not once per batch (70 ms of a 256-cell batch's 2 s).  Scenarios are
+#: frozen, so the batches share it.
+_LAST_POINT: list = [None]
+
+
 def _point_scenario(task: CellTask):
     """The base scenario with the task's point applied (its seed not yet)."""
+    key = (task.base_digest, _point(task)) if task.base_digest else None
+    last = _LAST_POINT[0]
+    if key is not None and last is not None and last[0] == key:
+        return last[1]
     sc = load_scenario(task.scenario_path, dict(task.scenario_values))
     if task.instrument_values:
         sc = dataclasses.replace(sc, instrument=set_params(sc.instrument,
                                                            dict(task.instrument_values)))
+    if key is not None:
+        _LAST_POINT[0] = (key, sc)
     return sc
 
 

@@ -104,6 +104,9 @@ class CellTask:
     """The scenario's seed in this cell."""
     method: str | None
     """Compensation method key, or None."""
+    base_digest: str = ""
+    """:func:`scenario_digest` of the sweep's base scenario as the sweep loaded it ('': not
+    known), so a worker can tell that consecutive batches share their base."""
 
     @property
     def values(self) -> dict[str, Any]:
@@ -128,5 +131,5 @@ def cell_tasks(spec: SweepSpec, base_digest: str | None = None) -> Iterator[Cell
         inst_vals = tuple((k, float(v)) for k, v in point.items() if targets[k] == "instrument")
         for seed in spec.seeds:
             yield CellTask(index, cell_key(base_digest, point, seed, spec.method), path,
-                           sc_vals, inst_vals, seed, spec.method)
+                           sc_vals, inst_vals, seed, spec.method, base_digest)
             index += 1
