@@ -87,3 +87,65 @@ def test_blocked_triangular_inverse_is_the_inverse(n):
     assert info == 0
     assert np.array_equal(Li, np.tril(Li))
     np.testing.assert_allclose(Li @ L, np.eye(n), atol=1e-12)
+
+
+def _one_input(n=120, seed=5):
+    rng = np.random.default_rng(seed)
+    x = np.sort(rng.uniform(-2.0, 2.0, n))[:, None]
+    return x, np.sin(2.0 * x[:, 0]) + 0.05 * rng.standard_normal(n)
+
+
+def test_kernel_factor_reproduces_the_kernel_to_its_tolerance():
+    # Oracle: the pivoted Cholesky factor's residual K - B B^T is positive semi-definite
+    # with every entry at most RANK_TOL (a wide kernel of one input: rank far below n).
+    x, _ = _one_input()
+    K = np.exp(-(x - x.T) ** 2 / (2.0 * 1.5**2))
+    B = rvr._kernel_factor(K)
+    assert B.shape[1] < 20
+    resid = K - B @ B.T
+    assert np.abs(resid).max() <= rvr.RANK_TOL * 1.01
+    assert np.linalg.eigvalsh(resid).min() > -1e-13
+
+
+def test_low_rank_sweep_is_the_closed_form_posterior():
+    # Oracle: Sigma = (beta F F^T + diag(alpha))^-1 and mu = beta Sigma F c by numpy.linalg.inv
+    # for a seeded F of rank 6 < M = 30 (Phi^T Phi = F F^T, Phi^T t = F c); g_i = 1 - alpha_i
+    # Sigma_ii; and the full Sigma with the same mu.
+    rng = np.random.default_rng(7)
+    F, c = rng.standard_normal((30, 6)), rng.standard_normal(6)
+    alpha, beta = rng.uniform(0.1, 10.0, 30), 3.0
+    Sigma = np.linalg.inv(beta * F @ F.T + np.diag(alpha))
+    mu, g = rvr._low_rank_sweep(F, c, alpha, beta)
+    np.testing.assert_allclose(g, 1.0 - alpha * np.diag(Sigma), rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(mu, beta * Sigma @ F @ c, rtol=1e-8, atol=1e-10)
+    mu2, Sigma2 = rvr._low_rank_sweep(F, c, alpha, beta, full=True)
+    assert np.array_equal(mu, mu2)
+    np.testing.assert_allclose(Sigma2, Sigma, rtol=1e-8, atol=1e-12)
+
+
+def test_low_rank_basis_factors_phi():
+    # Oracle: Phi = [1, K] with K = B B^T exactly: Phi^T Phi = F F^T, Phi^T t = F c and
+    # ||t - Phi w||^2 = e2 + ||c - F^T w||^2 for a seeded w.
+    rng = np.random.default_rng(3)
+    B, t, w = rng.standard_normal((25, 4)), rng.standard_normal(25), rng.standard_normal(26)
+    Phi = np.hstack([np.ones((25, 1)), B @ B.T])
+    F, c, e2 = rvr._low_rank_basis(B, t)
+    np.testing.assert_allclose(F @ F.T, Phi.T @ Phi, rtol=1e-10, atol=1e-9)
+    np.testing.assert_allclose(F @ c, Phi.T @ t, rtol=1e-10, atol=1e-10)
+    assert np.isclose(np.sum((t - Phi @ w) ** 2), e2 + np.sum((c - F.T @ w) ** 2), rtol=1e-10)
+
+
+@pytest.mark.filterwarnings("ignore::sklearn.exceptions.ConvergenceWarning")
+def test_fit_on_the_kernel_factor_is_the_exact_fit(monkeypatch):
+    # Oracle: the same RVR fitted with the sweeps on H itself (LOW_RANK_SHARE 0: the factor
+    # never used): the same relevance vectors, and predictions within 1e-6 of the target's
+    # STD (the factor reproduces the kernel to 1e-10).
+    x, y = _one_input()
+    fast = RVRRegressor(sigma=1.0, max_iter=40, tol=1e-2, alpha_threshold=1e6).fit(x, y)
+    monkeypatch.setattr(rvr, "LOW_RANK_SHARE", 0.0)
+    exact = RVRRegressor(sigma=1.0, max_iter=40, tol=1e-2, alpha_threshold=1e6).fit(x, y)
+    assert np.array_equal(fast.relevance_indices_, exact.relevance_indices_)
+    np.testing.assert_allclose(fast.predict(x), exact.predict(x), rtol=0, atol=1e-6 * y.std())
+    _, s_fast = fast.predict(x, return_std=True)
+    _, s_exact = exact.predict(x, return_std=True)
+    np.testing.assert_allclose(s_fast, s_exact, rtol=1e-4)
