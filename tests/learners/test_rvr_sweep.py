@@ -139,7 +139,7 @@ def test_low_rank_basis_factors_phi():
 def test_fit_on_the_kernel_factor_is_the_exact_fit(monkeypatch):
     # Oracle: the same RVR fitted with the sweeps on H itself (LOW_RANK_SHARE 0: the factor
     # never used): the same relevance vectors, and predictions within 1e-6 of the target's
-    # STD (the factor reproduces the kernel to 1e-10).
+    # STD (the factor reproduces the kernel to RANK_TOL, 1e-8).
     x, y = _one_input()
     fast = RVRRegressor(sigma=1.0, max_iter=40, tol=1e-2, alpha_threshold=1e6).fit(x, y)
     monkeypatch.setattr(rvr, "LOW_RANK_SHARE", 0.0)
