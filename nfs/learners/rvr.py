@@ -363,18 +363,19 @@ class RVRRegressor(KernelRegressor):
         # most LOW_RANK_SHARE of the kept bases), then the kept bases' own blocks of Phi^T Phi
         # and Phi^T t
         B = _kernel_factor(K)
-        if B.shape[1] + 1 <= LOW_RANK_SHARE * (n + 1):
+        low = B.shape[1] + 1 <= LOW_RANK_SHARE * (n + 1)
+        if low:
             F, c, e2 = _low_rank_basis(B, t)
-            Phi_kept = PtP = Ptt = None
+            PtP = Ptt = None
         else:
             F = None
-            Phi_kept = Phi
             PtP, Ptt = Phi.T @ Phi, Phi.T @ t    # formed once; cut down as bases are pruned
+        Phi_kept = Phi
         tiny = np.finfo(float).tiny
         eps = np.finfo(float).eps
 
-        # the kept bases: their indices (column 0 is the bias), precisions, and rows of F,
-        # or columns of Phi and blocks of Phi^T Phi and Phi^T t, cut down when one is pruned
+        # the kept bases: their indices (column 0 is the bias), precisions, rows of F (or
+        # columns of Phi), blocks of Phi^T Phi and Phi^T t once formed, cut when one is pruned
         keep = np.arange(n + 1)
         alpha = np.full(n + 1, 1.0 / n**2)
         var_t = max(float(np.var(t)), eps)
@@ -383,19 +384,20 @@ class RVRRegressor(KernelRegressor):
         n_iter, converged = 0, False
         for n_iter in range(1, max_iter + 1):
             sweep = None
-            if F is not None and F.shape[1] <= LOW_RANK_SHARE * keep.size:
+            if low and F.shape[1] <= LOW_RANK_SHARE * keep.size:
                 sweep = _low_rank_sweep(F, c, alpha, beta)
             if sweep is None:
-                if F is not None:                     # the factor no longer pays
-                    F = None
-                    Phi_kept = Phi[:, keep]
-                    PtP, Ptt = Phi_kept.T @ Phi_kept, Phi_kept.T @ t
+                if low:           # the factor no longer pays: H of the kept bases from it
+                    low = False
+                    PtP, Ptt = F @ F.T, F @ c
                 mu, diag = self._posterior_diag(PtP, Ptt, alpha, beta)
                 g = 1.0 - alpha * diag
-                rss = float(np.sum((t - Phi_kept @ mu) ** 2))
             else:
                 mu, g = sweep
+            if F is not None:
                 rss = e2 + float(np.sum((c - F.T @ mu) ** 2))
+            else:
+                rss = float(np.sum((t - Phi_kept @ mu) ** 2))
             g = np.clip(g, eps, 1.0)
             with np.errstate(divide="ignore"):
                 alpha_new = g / (mu * mu)
@@ -412,6 +414,7 @@ class RVRRegressor(KernelRegressor):
                     F = F[kept]
                 else:
                     Phi_kept = Phi_kept[:, kept]
+                if PtP is not None:
                     PtP, Ptt = PtP[np.ix_(kept, kept)], Ptt[kept]
             if keep.size == 0 or (change < tol and np.all(finite)):
                 converged = True
@@ -423,11 +426,10 @@ class RVRRegressor(KernelRegressor):
                           stacklevel=2)
 
         final = None
-        if keep.size and F is not None:
+        if keep.size and low:
             final = _low_rank_sweep(F, c, alpha, beta, full=True)
             if final is None:
-                Phi_kept = Phi[:, keep]
-                PtP, Ptt = Phi_kept.T @ Phi_kept, Phi_kept.T @ t
+                PtP, Ptt = F @ F.T, F @ c
         if final is not None:
             mu, Sigma = final
         elif keep.size:
