@@ -10,7 +10,8 @@ Printed, all measured in this process or its children:
 2. ``nfs table`` itself, run as a command: wall and CPU seconds (its workers included) and
    the figure in units beside the goal (:data:`GOAL_UNITS`);
 3. the figures before the tuned trainings were made cheaper (:data:`BEFORE_DEFAULT`,
-   stored: measured on the code before those changes), and the baseline, the uncompensated
+   stored: measured on the code before those changes) and before the RVR's sweeps used the
+   kernel's low-rank factor (:data:`BEFORE_RVR_FACTOR_DEFAULT`), and the baseline, the uncompensated
    table (``nfs table --no-compensation``: the test start-ups simulated and north-found,
    intervals included), the part of the job that has nothing to train;
 4. the breakdown, stage by stage, of the same work done in this process: simulation of the
@@ -63,6 +64,13 @@ BEFORE_DEFAULT = (49.6, 80.0, 28.7)
 #: The same for ``--scenario scenarios/seed003_ramp_calibration.toml --n-jobs 1``, measured
 #: under load: (reference units,).
 BEFORE_ONE_WORKER_UNITS = 17.6
+#: The default table before the RVR's sweeps worked on the kernel's low-rank factor (the code
+#: of commit 543fc67), measured by this script on the same machine, idle: (wall [s], CPU [s],
+#: reference units).
+BEFORE_RVR_FACTOR_DEFAULT = (29.3, 47.0, 17.1)
+#: The same for ``--scenario scenarios/seed003_ramp_calibration.toml --n-jobs 1``, idle:
+#: (wall [s], reference units).
+BEFORE_RVR_FACTOR_ONE_WORKER = (27.3, 15.3)
 
 
 def refwork_s(n: int = 2) -> float:
@@ -155,9 +163,16 @@ def main(argv=None) -> None:
         w0, c0, u0 = BEFORE_DEFAULT
         print(f"before the cheaper trainings (BEFORE_DEFAULT, same machine, idle): {w0:.1f} s "
               f"wall, {c0:.0f} s CPU: {u0:.1f} units; now {u0 / (wall / ref):.2f}x faster")
+        w0, c0, u0 = BEFORE_RVR_FACTOR_DEFAULT
+        print(f"before the RVR's kernel factor (BEFORE_RVR_FACTOR_DEFAULT, same machine, idle): "
+              f"{w0:.1f} s wall, {c0:.0f} s CPU: {u0:.1f} units; now {u0 / (wall / ref):.2f}x "
+              "faster")
     elif one_worker and args.scenario and "seed003" in args.scenario:
         print(f"before the cheaper trainings (BEFORE_ONE_WORKER_UNITS, loaded): "
               f"{BEFORE_ONE_WORKER_UNITS:.1f} units")
+        w0, u0 = BEFORE_RVR_FACTOR_ONE_WORKER
+        print(f"before the RVR's kernel factor (BEFORE_RVR_FACTOR_ONE_WORKER, idle): {w0:.1f} s "
+              f"wall: {u0:.1f} units; now {u0 / (wall / ref):.2f}x faster")
     if base is not None:
         print(f"baseline, the uncompensated table (--no-compensation): {base:.1f} s, "
               f"{base / ref:.1f} units; the full table is {wall / base:.1f}x it")
