@@ -62,6 +62,7 @@ bytes.
 
 from __future__ import annotations
 
+import functools
 import zlib
 from dataclasses import dataclass, fields, replace
 from typing import Sequence
@@ -324,8 +325,10 @@ def unit_instrument(inst: Instrument, var: Variability, unit: int) -> Instrument
 # ---------------------------------------------------------------------------------------------
 # Per start-up
 
+@functools.lru_cache(maxsize=16)
 def unpowered_network(network: thermal.Network) -> thermal.Network:
-    """``network`` with every node's constant power set to zero (the unit switched off)."""
+    """``network`` with every node's constant power set to zero (the unit switched off);
+    made once per network (frozen: the start-ups of a unit share it)."""
     return thermal.Network(nodes=tuple(replace(n, power_w=0.0) for n in network.nodes),
                            links=network.links)
 

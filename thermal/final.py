@@ -5,8 +5,8 @@ The soak before a start-up (the unpowered network left in the chamber for a few 
 coarse grid, nfs/variability.py) is read only at its end, and the start-ups of a sweep soak
 the same network on grids of the same step: the step matrices of a step, equation (5) of
 thermal/solve.py, and the modal form of its recursion (:func:`thermal.solve.modal_form`)
-are kept for the next soak (:data:`KEPT_STEPS` at most, keyed by the network's A, B and
-capacities and the step's exact value), and the rates, powers and heat bookkeeping of a
+are kept for the next soak (:data:`KEPT_STEPS` at most, keyed by the network, a frozen
+value, and the step's exact value), and the rates, powers and heat bookkeeping of a
 :class:`~thermal.solve.ThermalResult` are not made.  The arithmetic is that of
 :func:`~thermal.solve.simulate` (the same closed form, operation for operation), so the end
 has the bits of ``simulate(...).temperature_c[-1]``.
@@ -31,14 +31,15 @@ KEPT_STEPS = 64
 _KEPT: dict = {}
 
 
-def _step(a: np.ndarray, b: np.ndarray, capacity: np.ndarray, h_s: float
-          ) -> tuple[StepMatrices, tuple]:
-    """The step matrices of ``h_s`` [s] (zero-order hold) and their modal form, kept."""
-    key = (a.tobytes(), b.tobytes(), capacity.tobytes(), float(h_s))
+def _step(network: Network, h_s: float) -> tuple[StepMatrices, tuple]:
+    """The step matrices of ``h_s`` [s] (zero-order hold) of ``network`` and their modal
+    form, kept (the network is frozen: equal networks share them)."""
+    key = (network, float(h_s))
     found = _KEPT.pop(key, None)
     if found is None:
+        a, b = network.matrices()
         mats = step_matrices(a, b, h_s)
-        found = (mats, modal_form(mats.phi_minus_i, capacity))
+        found = (mats, modal_form(mats.phi_minus_i, network.capacity_j_per_k))
         if len(_KEPT) >= KEPT_STEPS:
             _KEPT.pop(next(iter(_KEPT)))            # the least recently used goes
     _KEPT[key] = found                              # the most recently used last
@@ -65,10 +66,9 @@ def final_temperature(network: Network, time_s: np.ndarray, *, ambient_c,
                            f"{network.node_names[int(np.argmin(np.isfinite(t0)))]!r}")
     if t.size == 1:
         return t0
-    a, b = network.matrices()
     capacity = network.capacity_j_per_k
     steps, cls = _step_classes(t)
-    kept = [_step(a, b, capacity, h) for h in steps]
+    kept = [_step(network, h) for h in steps]
     inputs = np.empty((t.size, 1 + n))  # u_k = [T_amb,k, P_1, ..., P_n], equation (2)
     inputs[:, 0] = amb
     inputs[:, 1:] = network.node_power_w + 0.0
