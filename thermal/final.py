@@ -16,10 +16,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from thermal.errors import ThermalError
 from thermal.network import Network
-from thermal.solve import (StepMatrices, _as_ambient, _as_time, _closed_form, _step_classes,
-                           modal_form, step_matrices)
+from thermal.solve import (StepMatrices, _as_ambient, _as_initial, _as_time, _closed_form,
+                           _step_classes, modal_form, step_matrices)
 
 __all__ = ["final_temperature", "KEPT_STEPS"]
 
@@ -56,14 +55,7 @@ def final_temperature(network: Network, time_s: np.ndarray, *, ambient_c,
     t = _as_time(time_s)
     amb = _as_ambient(ambient_c, t)
     n = len(network.node_names)
-    try:
-        t0 = np.broadcast_to(np.asarray(initial_c, dtype=float), (n,)).copy()
-    except ValueError:
-        raise ThermalError(f"initial_c must be a scalar or have shape ({n},), got shape "
-                           f"{np.shape(initial_c)}") from None
-    if not np.all(np.isfinite(t0)):
-        raise ThermalError(f"initial_c is not finite for node "
-                           f"{network.node_names[int(np.argmin(np.isfinite(t0)))]!r}")
+    t0 = _as_initial(initial_c, network.node_names)
     if t.size == 1:
         return t0
     capacity = network.capacity_j_per_k

@@ -328,6 +328,20 @@ def _as_ambient(ambient_c: object, time_s: np.ndarray) -> np.ndarray:
     return amb
 
 
+def _as_initial(initial_c: object, names) -> np.ndarray:
+    """T(0) of every node [degC] (n,) from a scalar or an array (n,), checked finite."""
+    n = len(names)
+    try:
+        t0 = np.broadcast_to(np.asarray(initial_c, dtype=float), (n,)).copy()
+    except ValueError:
+        raise ThermalError(f"initial_c must be a scalar or have shape ({n},), got shape "
+                           f"{np.shape(initial_c)}") from None
+    if not np.all(np.isfinite(t0)):
+        raise ThermalError(f"initial_c is not finite for node "
+                           f"{names[int(np.argmin(np.isfinite(t0)))]!r}")
+    return t0
+
+
 def _check_power_array(power: np.ndarray, time_s: np.ndarray, names: tuple[str, ...],
                        source: str) -> None:
     """A :class:`ThermalError` locating the first non-finite power (time and node)."""
@@ -390,13 +404,7 @@ def simulate(network: Network, time_s: np.ndarray, *,
     names = network.node_names
     n = len(names)
     amb = _as_ambient(ambient_c, t)
-    try:
-        t0 = np.broadcast_to(np.asarray(initial_c, dtype=float), (n,)).copy()
-    except ValueError:
-        raise ThermalError(f"initial_c must be a scalar or have shape ({n},), got shape "
-                           f"{np.shape(initial_c)}") from None
-    if not np.all(np.isfinite(t0)):
-        raise ThermalError(f"initial_c is not finite for node {names[int(np.argmin(np.isfinite(t0)))]!r}")
+    t0 = _as_initial(initial_c, names)
 
     if ambient_hold not in AMBIENT_HOLDS:
         raise ThermalError(f"ambient_hold must be one of {', '.join(AMBIENT_HOLDS)}, got "
