@@ -14,7 +14,7 @@ from nfs.constants import OMEGA_IE_DPH
 from nfs.effects import Geometry, make_effect
 from nfs.effects.geometry import azimuth_elevation_deg, table_axes_ned, tilt_matrix
 from nfs.errors import EffectError
-from nfs.experiment import RunConditions, simulate_run, simulate_runs
+from nfs.experiment import RunConditions, _pointing, simulate_run, simulate_runs
 from nfs.instrument import load_instrument
 from nfs.northfind import (indexing_error_deg, north_find, tilt_model_error_deg,
                            wrap_deg_180)
@@ -289,3 +289,22 @@ def test_runs_stacked_share_their_pointing_only_without_a_geometry_effect(quiet)
         assert shared == (not sims[0].run.columns["position_deg"].flags.writeable)
         if not shared:
             assert not np.array_equal(sims[0].geometry.theta_deg, sims[1].geometry.theta_deg)
+
+
+def test_shared_pointing_holds_the_whole_time_grid(quiet):
+    # Oracle: two grids of one size and the same ends that differ inside are pointed each on
+    # its own (the turntable's angle at an inner sample), not shared.
+    sched = Schedule(FOUR, dwell_s=60.0, move_s=5.0)
+    cond = RunConditions(name="g", start_temperature_c=20.0, latitude_deg=LAT,
+                         true_heading_deg=100.0, schedule=sched, duration_s=2 * sched.cycle_s,
+                         seed=1)
+    even = cond.time_s
+    uneven = even.copy()
+    uneven[1:-1] += 0.4                         # the same size, first and last sample
+    shared: dict = {}
+    rng = np.random.default_rng(0)
+    a = _pointing(quiet, cond, even, rng, shared)
+    b = _pointing(quiet, cond, uneven, rng, shared)
+    np.testing.assert_array_equal(b[0], cond.turntable(uneven)[0])
+    assert not np.array_equal(a[0], b[0])
+    assert _pointing(quiet, cond, even.copy(), rng, shared)[0] is a[0]     # shared again
