@@ -175,17 +175,9 @@ def unseen_nodes(inst: Instrument) -> tuple[str, ...]:
 
 def _drift_cost(fr: FitResult) -> float:
     """The cost of a fit's drift stage in the channels' stated noise, its prior rows
-    included (:mod:`nfs.diagnose.stage`): what two fits of the same numbers are compared by
-    when the decisions read the dwell channels.
-
-    A stage whose residual stayed above its stated noise divides its data rows by their
-    RMS s (:attr:`~nfs.diagnose.stage.StageReport.noise_scale`) and reports that cost; the
-    data part is put back on the stated scale, (cost - cost_prior) s^2 + cost_prior, so a
-    fit that crossed the rescaling threshold is not favoured by a factor s^2 (seen on a
-    generator unit: 2951 reported for 4562 in the stated noise, against 3547 unscaled).
-    """
-    st = fr.stages["drift"]
-    return float((st.cost - st.cost_prior) * st.noise_scale ** 2 + st.cost_prior)
+    included (:attr:`nfs.diagnose.stage.StageReport.stated_cost`): what two fits of the same
+    numbers are compared by when the decisions read the dwell channels."""
+    return fr.stages["drift"].stated_cost
 
 
 def unseen_heat_rival(inst: Instrument, runs: Sequence[Run], label: str, **fit_kw) -> Rival:
@@ -236,7 +228,7 @@ def unseen_heat_rival(inst: Instrument, runs: Sequence[Run], label: str, **fit_k
                        **fit_kw)
     fits = [replace(around, params={**around.params, power: get_param(start, power)},
                     stderr={**around.stderr, power: p_se})]
-    _, usual = fit_candidate(inst, runs, name, node, **_apply_kw(fit_kw))
+    usual = fit_candidate(inst, runs, name, node, **_apply_kw(fit_kw))
     if usual.params[power] >= 0.0:
         fits.append(usual)
     fr = min(fits, key=_drift_cost)
@@ -301,9 +293,9 @@ def rival_model(inst: Instrument, runs: Sequence[Run], label: str, **fit_kw) -> 
             f"of this model ({', '.join(sorted(alts))})") from None
     if name in HEAT_EFFECTS and target in unseen_nodes(inst):
         return unseen_heat_rival(inst, runs, label, **fit_kw)
-    new, fr = fit_candidate(inst, runs, name, target or None, **_apply_kw(fit_kw))
+    fr = fit_candidate(inst, runs, name, target or None, **_apply_kw(fit_kw))
     own = f"effects.{label}."
-    return Rival(label, f"adds the effect {label}, refitted", new, fr,
+    return Rival(label, f"adds the effect {label}, refitted", fr.instrument, fr,
                  sum(1 for p in fr.params if p.startswith(own)),
                  get_effect(name).kind not in FAST_KINDS)
 

@@ -30,10 +30,10 @@ _THERMAL_STARTS = {"tau": 20.0}
 def fit_candidate(inst: Instrument, runs: Sequence[Run], name: str,
                   target: str | None = None, *, decimate_s: float = DEFAULT_DECIMATE_S,
                   start_state: StartModel | None = DEFAULT_START
-                  ) -> tuple[Instrument, FitResult]:
-    """Add effect ``name`` (on ``target``) to ``inst`` and refit: (new instrument,
-    FitResult), as :func:`apply_candidate` does without its before/after report (what a
-    rival of :mod:`nfs.design` needs)."""
+                  ) -> FitResult:
+    """Add effect ``name`` (on ``target``) to ``inst`` and refit: the fit (its
+    ``instrument`` the new model), as :func:`apply_candidate` does without its before/after
+    report (what a rival of :mod:`nfs.design` needs)."""
     runs = list(runs)
     if not runs:
         raise NfsError("a candidate needs runs to be fitted to: none given")
@@ -65,7 +65,7 @@ def fit_candidate(inst: Instrument, runs: Sequence[Run], name: str,
         free = list(dict.fromkeys(default_free(new) + new_paths))
         result = fit_model(new, runs, free=free, stages=("thermal", "drift"),
                            decimate_s=decimate_s, start_state=start_state)
-    return result.instrument, result
+    return result
 
 
 def apply_candidate(inst: Instrument, runs: Sequence[Run], name: str,
@@ -86,8 +86,9 @@ def apply_candidate(inst: Instrument, runs: Sequence[Run], name: str,
     the model already has on that target.
     """
     runs = list(runs)
-    fitted, result = fit_candidate(inst, runs, name, target, decimate_s=decimate_s,
-                                   start_state=start_state)
+    result = fit_candidate(inst, runs, name, target, decimate_s=decimate_s,
+                           start_state=start_state)
+    fitted = result.instrument
     start_c = result.start_c or start_states(fitted, runs, decimate_s, start_state)
 
     def heading(model: Instrument) -> float:
