@@ -123,6 +123,12 @@ def _aux_channels(inst: Instrument, th: thermal.ThermalResult, fs: float,
     return out
 
 
+def _channels_read(inst: Instrument) -> dict[str, str]:
+    """{effect label: the aux ``channel`` it reads} of every effect of ``inst`` that reads one."""
+    return {e.label: e.params["channel"] for e in inst.effects
+            if isinstance(e.params.get("channel"), str)}
+
+
 def _check_simulated_channels(inst: Instrument) -> None:
     """Every ``channel`` an effect reads must be one of the instrument's [[aux]] channels.
 
@@ -130,11 +136,10 @@ def _check_simulated_channels(inst: Instrument) -> None:
     to runs that recorded it); it cannot be simulated, since nothing produces the channel.
     """
     declared = {a.name for a in inst.aux}
-    for e in inst.effects:
-        channel = e.params.get("channel")
-        if isinstance(channel, str) and channel not in declared:
+    for label, channel in _channels_read(inst).items():
+        if channel not in declared:
             raise EffectError(
-                f"effect '{e.label}' reads channel '{channel}', which instrument "
+                f"effect '{label}' reads channel '{channel}', which instrument "
                 f"'{inst.name}' does not simulate; declare it under [[aux]] to simulate it "
                 f"(declared: {', '.join(sorted(declared)) or '(none)'})")
 
@@ -400,7 +405,7 @@ def _finish(prep: _Prepared, th, channels: Collection[str] | None = None
     wanted = (lambda column: True) if channels is None else channels.__contains__
     aux = (_aux_channels(inst, th, fs, rngs["aux"])
            if any(wanted(a.name) for a in inst.aux)
-           or any(isinstance(e.params.get("channel"), str) for e in inst.effects) else {})
+           or _channels_read(inst) else {})
     earth = prep.earth
     ctx = effect_context(inst, th, azimuth, earth, moving, aux, prep.powered)
 
