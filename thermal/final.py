@@ -14,6 +14,8 @@ has the bits of ``simulate(...).temperature_c[-1]``.
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 
 from thermal.network import Network
@@ -27,22 +29,15 @@ __all__ = ["final_temperature", "KEPT_STEPS"]
 #: its own).
 KEPT_STEPS = 64
 
-_KEPT: dict = {}
 
-
+@functools.lru_cache(maxsize=KEPT_STEPS)
 def _step(network: Network, h_s: float) -> tuple[StepMatrices, tuple]:
     """The step matrices of ``h_s`` [s] (zero-order hold) of ``network`` and their modal
-    form, kept (the network is frozen: equal networks share them)."""
-    key = (network, float(h_s))
-    found = _KEPT.pop(key, None)
-    if found is None:
-        a, b = network.matrices()
-        mats = step_matrices(a, b, h_s)
-        found = (mats, modal_form(mats.phi_minus_i, network.capacity_j_per_k))
-        if len(_KEPT) >= KEPT_STEPS:
-            _KEPT.pop(next(iter(_KEPT)))            # the least recently used goes
-    _KEPT[key] = found                              # the most recently used last
-    return found
+    form, the :data:`KEPT_STEPS` most recently used kept (the network is frozen: equal
+    networks share them)."""
+    a, b = network.matrices()
+    mats = step_matrices(a, b, h_s)
+    return mats, modal_form(mats.phi_minus_i, network.capacity_j_per_k)
 
 
 def final_temperature(network: Network, time_s: np.ndarray, *, ambient_c,
@@ -60,7 +55,7 @@ def final_temperature(network: Network, time_s: np.ndarray, *, ambient_c,
         return t0
     capacity = network.capacity_j_per_k
     steps, cls = _step_classes(t)
-    kept = [_step(network, h) for h in steps]
+    kept = [_step(network, float(h)) for h in steps]
     inputs = np.empty((t.size, 1 + n))  # u_k = [T_amb,k, P_1, ..., P_n], equation (2)
     inputs[:, 0] = amb
     inputs[:, 1:] = network.node_power_w + 0.0

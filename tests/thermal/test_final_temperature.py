@@ -48,7 +48,7 @@ def test_kept_steps_are_bounded_and_keyed_by_network():
     for k in range(thermal.final.KEPT_STEPS + 5):
         final_temperature(first, np.array([0.0, 1.0 + k / 100.0]), ambient_c=0.0,
                           initial_c=1.0)
-    assert len(thermal.final._KEPT) <= thermal.final.KEPT_STEPS
+    assert thermal.final._step.cache_info().currsize <= thermal.final.KEPT_STEPS
 
 
 def test_one_sample_and_bad_start():
