@@ -61,9 +61,6 @@ GOAL_ONE_WORKER_UNITS = 10.0
 #: a singular RVR posterior), measured by this script on the 2-core AMD EPYC, idle, the
 #: reference workload 1.72 s: (wall [s], CPU [s], reference units).
 BEFORE_DEFAULT = (49.6, 80.0, 28.7)
-#: The same for ``--scenario scenarios/seed003_ramp_calibration.toml --n-jobs 1``, measured
-#: under load: (reference units,).
-BEFORE_ONE_WORKER_UNITS = 17.6
 #: The default table before the RVR's sweeps worked on the kernel's low-rank factor (the code
 #: of commit 543fc67), measured by this script on the same machine, idle: (wall [s], CPU [s],
 #: reference units).
@@ -168,8 +165,6 @@ def main(argv=None) -> None:
               f"{w0:.1f} s wall, {c0:.0f} s CPU: {u0:.1f} units; now {u0 / (wall / ref):.2f}x "
               "faster")
     elif one_worker and args.scenario and "seed003" in args.scenario:
-        print(f"before the cheaper trainings (BEFORE_ONE_WORKER_UNITS, loaded): "
-              f"{BEFORE_ONE_WORKER_UNITS:.1f} units")
         w0, u0 = BEFORE_RVR_FACTOR_ONE_WORKER
         print(f"before the RVR's kernel factor (BEFORE_RVR_FACTOR_ONE_WORKER, idle): {w0:.1f} s "
               f"wall: {u0:.1f} units; now {u0 / (wall / ref):.2f}x faster")
