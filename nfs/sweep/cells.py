@@ -12,7 +12,6 @@ stage RMSE, the white-noise floor and the drift statistics.
 from __future__ import annotations
 
 import dataclasses
-import functools
 import math
 from typing import Any, Iterator
 
@@ -75,32 +74,28 @@ def run_cell(task: CellTask) -> dict[str, Any]:
         return _compute(task)
 
 
+#: The scenario of the last point this process loaded, with its (base scenario digest,
+#: point): a worker's consecutive batches of one point (a sweep of many seeds) read and check
+#: the files once, not once per batch (70 ms of a 256-cell batch's 2 s).  Scenarios are
+#: frozen, so the batches share it.  Kept by hand rather than by functools.lru_cache: a
+#: point's values may be lists (a sweep over ``start_temperatures_c``), which do not hash,
+#: so the key is compared by equality.
+_LAST_POINT: list = [None]
+
+
 def _point_scenario(task: CellTask):
-    """The base scenario with the task's point applied (its seed not yet); with the sweep's
-    base digest known, the last point loaded is kept (:func:`_loaded_point`)."""
-    if task.base_digest:
-        return _loaded_point(task.base_digest, task.scenario_path, task.scenario_values,
-                             task.instrument_values)
-    return _load_point(task.scenario_path, task.scenario_values, task.instrument_values)
-
-
-def _load_point(scenario_path, scenario_values: tuple, instrument_values: tuple):
-    """The scenario file with the point's scenario and instrument values applied."""
-    sc = load_scenario(scenario_path, dict(scenario_values))
-    if instrument_values:
+    """The base scenario with the task's point applied (its seed not yet)."""
+    key = (task.base_digest, _point(task)) if task.base_digest else None
+    last = _LAST_POINT[0]
+    if key is not None and last is not None and last[0] == key:
+        return last[1]
+    sc = load_scenario(task.scenario_path, dict(task.scenario_values))
+    if task.instrument_values:
         sc = dataclasses.replace(sc, instrument=set_params(sc.instrument,
-                                                           dict(instrument_values)))
+                                                           dict(task.instrument_values)))
+    if key is not None:
+        _LAST_POINT[0] = (key, sc)
     return sc
-
-
-@functools.lru_cache(maxsize=1)
-def _loaded_point(base_digest: str, scenario_path, scenario_values: tuple,
-                  instrument_values: tuple):
-    """:func:`_load_point`, the last one kept with the base scenario's digest: a worker's
-    consecutive batches of one point (a sweep of many seeds) read and check the files once,
-    not once per batch (70 ms of a 256-cell batch's 2 s).  Scenarios are frozen, so the
-    batches share it; the digest keeps a changed file from being taken for the kept one."""
-    return _load_point(scenario_path, scenario_values, instrument_values)
 
 
 def _point(task: CellTask) -> tuple:

@@ -15,6 +15,7 @@ from nfs.experiment import iter_simulate_runs, simulate_run
 from nfs.config.scenario import load_scenario
 from nfs.sweep import LocalExecutor, cell_batches, cell_tasks, load_sweep, run_cell, run_cells, \
     run_sweep
+from nfs.sweep import cells
 from nfs.sweep.run import FIGURES_RECORD
 from thermal.march import _ACCUMULATE_UP_TO
 
@@ -116,3 +117,24 @@ def test_a_fully_stored_rerun_computes_and_draws_nothing(tmp_path, short_scenari
     assert again[0].startswith("1 cells (0 computed, 1 from the store)")
     assert again[1:-1] == first[1:-1]                  # results.csv and the figures
     assert again[-1] == "[]"
+
+
+def test_batches_of_a_list_valued_point_share_its_scenario(tmp_path, short_scenario):
+    # Oracle: run_cell of each cell alone, with the worker's kept point cleared.  A point may
+    # hold a list (an axis over start_temperatures_c); a worker's consecutive batches of that
+    # point reuse the scenario it loaded, and give the records of the cells computed alone.
+    p = tmp_path / "sweep.toml"
+    p.write_text(f'scenario = "{short_scenario.name}"\nseeds = [0, 1, 2]\nspec_deg = 0.03\n'
+                 "[axes]\nstart_temperatures_c = [[-20.0], [30.0]]\n", encoding="utf-8")
+    tasks = list(cell_tasks(load_sweep(p)))
+    assert all(t.base_digest for t in tasks)
+    alone = []
+    for t in tasks:
+        cells._LAST_POINT[0] = None
+        alone.append(json.dumps(run_cell(t), sort_keys=True))
+    cells._LAST_POINT[0] = None
+    got = [json.dumps(r, sort_keys=True)
+           for batch in cell_batches(tasks, size=2) for r in run_cells(batch)]
+    assert got == alone
+    kept = cells._LAST_POINT[0][1]
+    assert cells._point_scenario(tasks[-1]) is kept        # the last point, not loaded again
