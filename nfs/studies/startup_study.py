@@ -20,7 +20,7 @@ Protocol (the FOG start-up paper, done on equal terms):
 
 The features of the test runs and their separated drift are computed once and shared by
 every method; the trainings (methods x tuner seeds) run in parallel on ``n_jobs`` worker
-threads, each seeded on its own, so the table does not depend on ``n_jobs``; on several
+processes, each seeded on its own, so the table does not depend on ``n_jobs``; on several
 workers they start as soon as the training set is made, while the test start-ups are
 simulated.
 """
@@ -33,7 +33,7 @@ from dataclasses import dataclass, field
 from typing import Any, Callable
 
 import numpy as np
-from joblib import Parallel, delayed
+from joblib import Parallel, delayed, effective_n_jobs
 from threadpoolctl import threadpool_limits
 from sklearn.exceptions import ConvergenceWarning
 
@@ -349,17 +349,20 @@ def run_study(scenario, settings: CompensationSettings | None = None, *,
     train_sc = train_scenario(scenario, s)
     if test is None:
         scenario = test_scenario(scenario, s)       # checked before any training starts
-    tick("simulating the training start-ups")
-    train_runs = tuple(r.run for r in simulate_runs(train_sc.instrument,
-                                                    train_sc.conditions()))
-    data = drift_dataset(train_runs, list(s.features), decimate_s=s.decimate_s,
-                         cutoff_period_s=s.cutoff_period_s,
-                         features_mode=check_features_mode(s.features_mode))
     # costliest trainings first, so that the workers finish together
     order = sorted(range(len(jobs)), key=lambda j: -jobs[j][0].cost)
     done: dict[int, SeedResult] = {}
     fitted: dict[int, tuple] = {}
     with training_pool(s.n_jobs) as parallel:
+        ready = parallel.start()          # the workers import while the training set is made
+        tick("simulating the training start-ups")
+        train_runs = tuple(r.run for r in simulate_runs(train_sc.instrument,
+                                                        train_sc.conditions()))
+        data = drift_dataset(train_runs, list(s.features), decimate_s=s.decimate_s,
+                             cutoff_period_s=s.cutoff_period_s,
+                             features_mode=check_features_mode(s.features_mode))
+        for _ in ready:
+            pass
         # on several workers the trainings start now, and the test start-ups are simulated,
         # separated and featured meanwhile (with one, each training when its turn comes)
         trained = parallel(delayed(train_method)(j, jobs[j][0].key, data, s, jobs[j][1])
@@ -411,26 +414,58 @@ def run_study(scenario, settings: CompensationSettings | None = None, *,
     return study
 
 
+def _quiet(fn, *args, **kwargs):
+    """``fn(*args, **kwargs)`` as a training runs in :func:`training_pool`: on one BLAS
+    thread, with the capped iterations' ConvergenceWarning ignored (RVR's evidence sweeps,
+    BP's epochs: part of the recipes).  Set where the training runs: in a worker process of
+    its own, or in this process's one thread when ``n_jobs`` is 1."""
+    with threadpool_limits(limits=1), warnings.catch_warnings():
+        warnings.simplefilter("ignore", ConvergenceWarning)
+        return fn(*args, **kwargs)
+
+
+class _Trainings:
+    """The pool of :func:`training_pool`: called like :class:`joblib.Parallel` on
+    ``delayed`` calls, each run through :func:`_quiet`."""
+
+    def __init__(self, parallel: Parallel):
+        self._parallel = parallel
+
+    def __call__(self, calls):
+        return self._parallel((_quiet, (fn, *args), kwargs) for fn, args, kwargs in calls)
+
+    def start(self):
+        """Start every worker now: one empty job each, whose unpickling imports this module
+        (the package, NumPy, SciPy, scikit-learn: about 1.5 s) while this process goes on.
+        The jobs' results (None) must be consumed before the next call."""
+        return self._parallel(delayed(_ready)()
+                              for _ in range(effective_n_jobs(self._parallel.n_jobs)))
+
+
+def _ready() -> None:
+    """The empty job of :meth:`_Trainings.start`."""
+
+
 @contextmanager
 def training_pool(n_jobs: int | None):
-    """The joblib pool the trainings of a study run in (results as they finish): threads of
-    this process, with one BLAS thread each and the capped iterations' ConvergenceWarning
-    ignored (RVR's evidence sweeps, BP's epochs: part of the recipes).
+    """The pool the trainings of a study run in (results as they finish): joblib's loky
+    worker processes (``n_jobs`` 1: this process), each training on one BLAS thread with the
+    capped iterations' ConvergenceWarning ignored (:func:`_quiet`).
 
-    Threads, not processes: LIBSVM's SMO, LAPACK and NumPy's array operations release the
-    GIL, and a thread needs no start-up (a loky worker imports NumPy, SciPy, scikit-learn and
-    the package first) nor copies of the training set and of the fitted searches (the default
-    table on a loaded 2-core machine: 101 s against 124 s, the same table).  One BLAS thread:
-    the trainings' matrices are small, and a BLAS thread pool beside the workers (or in the
-    one thread of ``n_jobs=1``) spins more than it computes (``nfs table
-    seed003_ramp_calibration --n-jobs 1``: 155 s with it, 54 s without, the same table).  The
-    warning filter is set here, once for every thread: ``warnings.catch_warnings`` in each
-    thread would race on the process's one list of filters."""
-    with threadpool_limits(limits=1), warnings.catch_warnings(), \
-            Parallel(n_jobs=n_jobs, prefer="threads",
-                     return_as="generator_unordered") as parallel:
-        warnings.simplefilter("ignore", ConvergenceWarning)
-        yield parallel
+    Processes, not threads: an RVR's evidence sweeps are many NumPy calls on matrices of a
+    few hundred rows, and hold the interpreter lock for much of their time, so two
+    trainings in threads of one process wait for each other (two HHO-RVR trainings of the
+    default table: 3.4 s each alone on one thread, 7.7 and 8.4 s side by side in two
+    threads, 4.3 and 4.8 s in two processes; the whole study 26.6 s in threads, 23.7 s in
+    processes, the same table).  A worker starts once per process (joblib keeps the loky
+    executor) and imports the package on its first training; the training set and the
+    fitted estimators are small to pickle.  One BLAS thread: the trainings' matrices are
+    small, and a BLAS thread pool beside the workers (or in the one thread of ``n_jobs=1``)
+    spins more than it computes (``nfs table seed003_ramp_calibration --n-jobs 1``: 155 s
+    with it, 54 s without, the same table)."""
+    with Parallel(n_jobs=n_jobs, backend="loky",
+                  return_as="generator_unordered") as parallel:
+        yield _Trainings(parallel)
 
 
 def ticker(progress: Callable[[int, int, str], None] | None, n_steps: int):

@@ -60,7 +60,8 @@ def test_training_sq_distances_are_those_of_the_scaled_inputs(standardize):
 @pytest.mark.parametrize("estimator", [RVRRegressor(sigma=1.5, max_iter=30),
                                        LSSVMRegressor(gamma=50.0, sigma=1.2),
                                        IRLSSVMRegressor(gamma=50.0, sigma=1.2,
-                                                        weight="myriad")],
+                                                        weight="myriad"),
+                                       SVRRegressor(C=5.0, sigma=1.2, epsilon=0.05)],
                          ids=lambda e: type(e).__name__)
 def test_fit_given_the_distances_is_the_fit_that_computes_them(estimator):
     # Oracle: identity.  The distances passed are those fit computes, so every bit agrees.
@@ -104,16 +105,23 @@ def test_search_reuses_one_distance_matrix_per_fold_and_scores_as_fresh_fits(mon
     assert search.best_params_ == search.cv_results_["params"][best]
 
 
+class _OwnDistances(SVRRegressor):
+    """A kernel regressor whose fit takes no distances (it makes its own)."""
+
+    def fit(self, X, y):
+        return super().fit(X, y)
+
+
 def test_search_without_distances_for_other_estimators(monkeypatch):
-    # Invariant: an estimator whose fit takes no distances (the SVR, on LIBSVM's own
-    # kernel) is searched as before: no distance matrix is made for it.
+    # Invariant: a kernel regressor whose fit takes no distances is searched as before: no
+    # distance matrix is made for it.
     X, y, groups = _grouped(n_groups=3, per_group=15)
 
     def refused(self, Xtrain):
         raise AssertionError("a distance matrix for an estimator that takes none")
 
-    monkeypatch.setattr(kernels.KernelRegressor, "training_sq_distances", refused)
-    search = MetaheuristicSearchCV(SVRRegressor(), {"C": Real(0.1, 10.0, log=True)},
+    search = MetaheuristicSearchCV(_OwnDistances(), {"C": Real(0.1, 10.0, log=True)},
                                    method="grid", budget=3, random_state=0)
+    monkeypatch.setattr(kernels.KernelRegressor, "training_sq_distances", refused)
     search.fit(X, y, groups=groups)
     assert search.n_evaluations_ == 3
