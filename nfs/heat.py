@@ -105,12 +105,14 @@ class HeatLaw:
                 p[j] += f(t_s, float(temperature_c[j]), self._moving[k], **params)
             return p
         # runs stacked: a few row by row (float arithmetic, cheaper than ufuncs on tiny
-        # arrays), more at once
-        p = np.repeat(fixed[None, :], temperature_c.shape[0], axis=0)
+        # arrays; each element's sum as the column's would be), more at once
+        p = self._fixed[k:k + 1].repeat(temperature_c.shape[0], axis=0)
         m = self._moving[k]
         if temperature_c.shape[0] <= _ROW_BY_ROW:
             for f, j, params in self._calls:
-                p[:, j] += [f(t_s, v, m, **params) for v in temperature_c[:, j].tolist()]
+                col = p[:, j]
+                for i, v in enumerate(temperature_c[:, j].tolist()):
+                    col[i] += f(t_s, v, m, **params)
             return p
         for f, j, params in self._calls:
             p[:, j] += f(t_s, temperature_c[:, j], m, **params)

@@ -154,6 +154,10 @@ def march(maps: StepMaps, cls: np.ndarray, time_s: np.ndarray, initial_c: np.nda
     frozen.flags.writeable = False
     seen = list(frozen[:, :n].transpose(0, 2, 1)) if stacked else list(frozen[:, :n, 0])
     want = (r, n) if stacked else (n,)
+    # the law's heated columns: a slice when they are contiguous (a view, where an index
+    # array copies them at every sample)
+    pick = (slice(int(nodes[0]), int(nodes[-1]) + 1)
+            if m and nodes[-1] - nodes[0] == m - 1 else nodes)
     columns = [np.ascontiguousarray(col[rows_used]) for col in maps.columns]
     classes = cls.tolist()
     few = r <= _ACCUMULATE_UP_TO
@@ -163,7 +167,9 @@ def march(maps: StepMaps, cls: np.ndarray, time_s: np.ndarray, initial_c: np.nda
     times = time_s.tolist()
     if few:
         _drive(maps, cls, ambient_c, slope_c_per_s, temp[1:])
-    rows, temps, new_temps = list(state), list(temp[:-1]), list(temp[1:])
+    # per sample: the state as (n + m, 1, R) for the products, T_k and the slot of T_{k+1}
+    rows, temps, new_temps = list(state[:, :, None, :]), list(temp[:-1]), list(temp[1:])
+    last = acc[-1]                                  # the running sum's end (few runs)
     powers = list(power.transpose(0, 2, 1)) if stacked else list(power[:, :, 0])
     for k, t_s in enumerate(times):
         if law is not None:
@@ -172,7 +178,7 @@ def march(maps: StepMaps, cls: np.ndarray, time_s: np.ndarray, initial_c: np.nda
                 raise ThermalError(f"power_w(t_s, temperature_c) must return shape {want}"
                                    f"{f' for {r} runs' if stacked else ''}, got shape "
                                    f"{p.shape}")
-            powers[k][...] = p if every else p[..., nodes]
+            powers[k][...] = p if every else p[..., pick]
         if k == n_t - 1:
             break
         if not few and k % _DRIVE_BLOCK == 0:   # d_k of the next block, in the order of (9)
@@ -181,10 +187,10 @@ def march(maps: StepMaps, cls: np.ndarray, time_s: np.ndarray, initial_c: np.nda
                    None if slope_c_per_s is None else slope_c_per_s[k:stop + 1],
                    temp[k + 1:stop + 1], scratch)
         new = new_temps[k]
-        np.multiply(columns[classes[k]], rows[k][:, None, :], out=prod)
+        np.multiply(columns[classes[k]], rows[k], out=prod)
         if few:
             np.add.accumulate(prod, axis=0, out=acc)
-            new += acc[-1]
+            new += last
         else:
             np.add.reduce(prod, axis=0, out=acc)
             new += acc
