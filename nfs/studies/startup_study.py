@@ -430,16 +430,28 @@ class _Trainings:
 
     def __init__(self, parallel: Parallel):
         self._parallel = parallel
+        self._results = None
 
     def __call__(self, calls):
-        return self._parallel((_quiet, (fn, *args), kwargs) for fn, args, kwargs in calls)
+        self._results = self._parallel((_quiet, (fn, *args), kwargs)
+                                       for fn, args, kwargs in calls)
+        return self._results
 
     def start(self):
         """Start every worker now: one empty job each, whose unpickling imports this module
         (the package, NumPy, SciPy, scikit-learn: about 1.5 s) while this process goes on.
         The jobs' results (None) must be consumed before the next call."""
-        return self._parallel(delayed(_ready)()
-                              for _ in range(effective_n_jobs(self._parallel.n_jobs)))
+        self._results = self._parallel(delayed(_ready)()
+                                       for _ in range(effective_n_jobs(self._parallel.n_jobs)))
+        return self._results
+
+    def close(self) -> None:
+        """Cancel the jobs whose results were left unread (an error or an interrupt in the
+        study), without joblib's warning that it cancelled them."""
+        if self._results is not None:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", UserWarning)
+                self._results.close()
 
 
 def _ready() -> None:
@@ -450,7 +462,8 @@ def _ready() -> None:
 def training_pool(n_jobs: int | None):
     """The pool the trainings of a study run in (results as they finish): joblib's loky
     worker processes (``n_jobs`` 1: this process), each training on one BLAS thread with the
-    capped iterations' ConvergenceWarning ignored (:func:`_quiet`).
+    capped iterations' ConvergenceWarning ignored (:func:`_quiet`); this process's own work
+    meanwhile (the test start-ups, predictions, north-finding) on one BLAS thread too.
 
     Processes, not threads: an RVR's evidence sweeps are many NumPy calls on matrices of a
     few hundred rows, and hold the interpreter lock for much of their time, so two
@@ -463,9 +476,13 @@ def training_pool(n_jobs: int | None):
     small, and a BLAS thread pool beside the workers (or in the one thread of ``n_jobs=1``)
     spins more than it computes (``nfs table seed003_ramp_calibration --n-jobs 1``: 155 s
     with it, 54 s without, the same table)."""
-    with Parallel(n_jobs=n_jobs, backend="loky",
-                  return_as="generator_unordered") as parallel:
-        yield _Trainings(parallel)
+    with threadpool_limits(limits=1), Parallel(n_jobs=n_jobs, backend="loky",
+                                               return_as="generator_unordered") as parallel:
+        pool = _Trainings(parallel)
+        try:
+            yield pool
+        finally:
+            pool.close()
 
 
 def ticker(progress: Callable[[int, int, str], None] | None, n_steps: int):
