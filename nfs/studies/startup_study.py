@@ -49,6 +49,7 @@ from ..errors import NfsError
 from ..experiment import simulate_runs
 from ..io.provenance import output_provenance
 from ..scoring.heading_table import TableRow, pooled_rmse
+from ..workers import close_unread
 from .scenario_runs import (northfind_runs, run_scenario, run_stage_errors, stage_names,
                             uncompensated_table)
 
@@ -449,9 +450,7 @@ class _Trainings:
         """Cancel the jobs whose results were left unread (an error or an interrupt in the
         study), without joblib's warning that it cancelled them."""
         if self._results is not None:
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore", UserWarning)
-                self._results.close()
+            close_unread(self._results)
 
 
 def _ready() -> None:

@@ -22,6 +22,7 @@ from joblib import Parallel, delayed
 from tqdm import tqdm
 
 from ..errors import NfsError
+from ..workers import close_unread
 
 __all__ = ["LocalExecutor", "DaskExecutor", "SweepProgress"]
 
@@ -44,7 +45,13 @@ class LocalExecutor:
         """fn(task) for every task, yielded as they finish."""
         with Parallel(n_jobs=self.jobs, return_as="generator_unordered",
                       pre_dispatch="2*n_jobs") as parallel:
-            yield from parallel(delayed(fn)(t) for t in tasks)
+            results = parallel(delayed(fn)(t) for t in tasks)
+            try:
+                # not ``yield from``: closing it would close ``results`` before the finally
+                for result in results:
+                    yield result
+            finally:               # a stopped sweep: its batches in flight are cancelled
+                close_unread(results)
 
     def close(self) -> None:
         """Nothing to release."""
