@@ -334,7 +334,7 @@ def _drift_study(scenario, s, specs, train, test, n_boot, tick, spans,
     comps: dict[str, DriftCompensator] = {}
     preds = {UNCOMPENSATED: [np.full(r.n_samples, constant) for r in test]}
     order = sorted(specs, key=lambda sp: -sp.cost)
-    with training_pool(s.n_jobs) as parallel:
+    with training_pool(s.n_jobs, len(order)) as parallel:
         for j, comp, pred in parallel(delayed(train_and_predict)(
                 j, spec.key, data, s, s.random_state, plans) for j, spec in enumerate(order)):
             comps[order[j].name], preds[order[j].name] = comp, pred

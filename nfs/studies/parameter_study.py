@@ -293,7 +293,7 @@ def run_parameter_study(scenario, settings=None, *, n_boot: int = 2000,
 
     models: dict = {}
     jobs = [(spec.key, p) for spec in sorted(specs, key=lambda sp: -sp.cost) for p in PARAMETERS]
-    with training_pool(s.n_jobs) as parallel:
+    with training_pool(s.n_jobs, len(jobs)) as parallel:
         for key, p, est in parallel(delayed(_fit)(key, p, *_stack(train, p), s.budget,
                                                   s.random_state) for key, p in jobs):
             models[(get_method(key).name, p)] = est
@@ -333,7 +333,7 @@ def run_parameter_study(scenario, settings=None, *, n_boot: int = 2000,
                              stride_s=min(10.0, s.decimate_s)) for r in test_runs]
     sample_nf: dict = {}
     order = sorted(specs, key=lambda sp: -sp.cost)
-    with training_pool(s.n_jobs) as parallel:
+    with training_pool(s.n_jobs, len(order)) as parallel:
         for j, comp, preds in parallel(delayed(train_and_predict)(
                 j, spec.key, data, s, s.random_state, plans) for j, spec in enumerate(order)):
             runs = [comp.compensate(r, drift_dph=p) for r, p in zip(test_runs, preds)]

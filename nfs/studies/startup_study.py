@@ -354,7 +354,7 @@ def run_study(scenario, settings: CompensationSettings | None = None, *,
     order = sorted(range(len(jobs)), key=lambda j: -jobs[j][0].cost)
     done: dict[int, SeedResult] = {}
     fitted: dict[int, tuple] = {}
-    with training_pool(s.n_jobs) as parallel:
+    with training_pool(s.n_jobs, len(jobs)) as parallel:
         ready = parallel.start()          # the workers import while the training set is made
         tick("simulating the training start-ups")
         train_runs = tuple(r.run for r in simulate_runs(train_sc.instrument,
@@ -458,11 +458,13 @@ def _ready() -> None:
 
 
 @contextmanager
-def training_pool(n_jobs: int | None):
-    """The pool the trainings of a study run in (results as they finish): joblib's loky
-    worker processes (``n_jobs`` 1: this process), each training on one BLAS thread with the
-    capped iterations' ConvergenceWarning ignored (:func:`_quiet`); this process's own work
-    meanwhile (the test start-ups, predictions, north-finding) on one BLAS thread too.
+def training_pool(n_jobs: int | None, trainings: int | None = None):
+    """The pool the ``trainings`` of a study run in (results as they finish): joblib's loky
+    worker processes, ``n_jobs`` of them (-1: one per core) but no more than there are
+    trainings (each worker holds about 0.3 GB), or this process when that is one.  Each
+    training runs on one BLAS thread with the capped iterations' ConvergenceWarning
+    ignored (:func:`_quiet`); this process's own work meanwhile (the test start-ups,
+    predictions, north-finding) on one BLAS thread too.
 
     Processes, not threads: an RVR's evidence sweeps are many NumPy calls on matrices of a
     few hundred rows, and hold the interpreter lock for much of their time, so two
@@ -475,7 +477,10 @@ def training_pool(n_jobs: int | None):
     small, and a BLAS thread pool beside the workers (or in the one thread of ``n_jobs=1``)
     spins more than it computes (``nfs table seed003_ramp_calibration --n-jobs 1``: 155 s
     with it, 54 s without, the same table)."""
-    with threadpool_limits(limits=1), Parallel(n_jobs=n_jobs, backend="loky",
+    workers = effective_n_jobs(n_jobs)
+    if trainings is not None:
+        workers = max(1, min(workers, trainings))
+    with threadpool_limits(limits=1), Parallel(n_jobs=workers, backend="loky",
                                                return_as="generator_unordered") as parallel:
         pool = _Trainings(parallel)
         try:

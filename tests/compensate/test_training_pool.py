@@ -10,6 +10,7 @@ import os
 import subprocess
 import sys
 
+import pytest
 from joblib import delayed
 from threadpoolctl import threadpool_info
 
@@ -31,8 +32,10 @@ def test_several_workers_are_other_processes_on_one_blas_thread():
         assert _blas_threads(info) <= {1}
 
 
-def test_one_worker_is_this_process():
-    with training_pool(1) as pool:
+@pytest.mark.parametrize("n_jobs, trainings", [(1, None), (-1, 1)])
+def test_one_worker_is_this_process(n_jobs, trainings):
+    # one worker asked for, or one training on every core: no worker process is started
+    with training_pool(n_jobs, trainings) as pool:
         list(pool.start())
         out = list(pool(delayed(os.getpid)() for _ in range(2)))
     assert set(out) == {os.getpid()}
