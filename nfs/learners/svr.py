@@ -105,7 +105,12 @@ class SVRRegressor(KernelRegressor):
         held-out fold this way)."""
         Xs = self._validate_predict(X)
         svr = self.svr_
-        f = kernel_expansion(Xs, self.support_vectors_, svr.dual_coef_[0],
-                             float(svr.intercept_[0]), self.sigma)
+        # a model fitted on LIBSVM's own RBF kernel (a model file of an earlier version)
+        # holds its support vectors inside LIBSVM's model
+        centres = getattr(self, "support_vectors_", None)
+        if centres is None:
+            centres = svr.support_vectors_
+        f = kernel_expansion(Xs, centres, svr.dual_coef_[0], float(svr.intercept_[0]),
+                             self.sigma)
         return self.y_mean_ + self.y_scale_ * f
 

@@ -18,6 +18,7 @@ from sklearn.metrics.pairwise import rbf_kernel
 from sklearn.svm import SVR
 from sklearn.utils.estimator_checks import parametrize_with_checks
 
+from nfs.compensate.model_file import read_model_file, write_model_file
 from nfs.learners.kernels import gaussian_kernel, sigma_to_gamma
 from nfs.learners.lssvm import IRLSSVMRegressor, LSSVMRegressor, lssvm_solve
 from nfs.learners.rvr import RVRRegressor
@@ -126,6 +127,27 @@ def test_svr_equals_libsvm_on_standardised_problem():
     np.testing.assert_allclose(model.predict(Xt), my + sy * ref.predict((Xt - mx) / sx),
                                rtol=0, atol=1e-12 * sy)
     assert np.array_equal(model.svr_.support_, ref.support_)
+
+
+def test_an_svr_fitted_on_libsvms_own_kernel_still_predicts(tmp_path):
+    # Invariant: a model an earlier version fitted (LIBSVM's RBF kernel, its support
+    # vectors inside LIBSVM's model, no support_vectors_ of its own), as a model file of
+    # that version holds it, predicts what the model fitted now on the precomputed kernel
+    # predicts (the same dual problem; the kernels' entries differ by rounding).
+    X, y = _smooth_problem()
+    Xt, _ = _smooth_problem(n=50, seed=1)
+    now = SVRRegressor(C=SEED004_C, sigma=SEED004_SIGMA, epsilon=0.05).fit(X, y)
+    old = SVRRegressor(C=SEED004_C, sigma=SEED004_SIGMA, epsilon=0.05)
+    for name in ("x_mean_", "x_scale_", "y_mean_", "y_scale_", "n_features_in_"):
+        setattr(old, name, getattr(now, name))
+    old.svr_ = SVR(kernel="rbf", C=SEED004_C, gamma=1.0 / (2.0 * SEED004_SIGMA**2),
+                   epsilon=0.05).fit((X - now.x_mean_) / now.x_scale_,
+                                     (y - now.y_mean_) / now.y_scale_)
+    path = write_model_file(tmp_path / "old.npz", {}, old)
+    _, loaded = read_model_file(path)
+    assert not hasattr(loaded, "support_vectors_")
+    np.testing.assert_allclose(loaded.predict(Xt), now.predict(Xt), rtol=0,
+                               atol=1e-9 * y.std())
 
 
 def test_svr_epsilon_and_C_are_unit_free():
