@@ -99,14 +99,17 @@ def _column(run: Run, name: str) -> np.ndarray:
                                column=name) from None
 
 
-def _dwell_means(values: np.ndarray, idx: np.ndarray, owner: np.ndarray, n: int) -> np.ndarray:
-    """Mean of the finite values over each dwell (NaN for a dwell without one)."""
+def _dwell_means(values: np.ndarray, idx: np.ndarray, owner: np.ndarray,
+                 n: int) -> tuple[np.ndarray, int]:
+    """Mean of the finite values over each dwell (NaN for a dwell without one), and how
+    many of the dwells' values are not finite."""
     v = values[idx]
     ok = np.isfinite(v)
     count = np.bincount(owner, ok, minlength=n)
     total = np.bincount(owner, np.where(ok, v, 0.0), minlength=n)
     with np.errstate(invalid="ignore", divide="ignore"):
-        return np.where(count > 0, total / np.maximum(count, 1), np.nan)
+        means = np.where(count > 0, total / np.maximum(count, 1), np.nan)
+    return means, int(v.size - np.count_nonzero(ok))
 
 
 #: The last segmentation of :func:`north_find`, (inputs, (cycles, idx, owner)): the runs of
@@ -208,20 +211,17 @@ def north_find(run: Run, *, tilt_correction: bool = True, settle_s: float = 0.0,
     dwells = [d for c in cycles for d in c.dwells]
     shape = (n_cyc, n_pos)
     theta = np.array([d.theta_deg for d in dwells]).reshape(shape)
-    rate = _dwell_means(gyro, idx, owner, len(dwells)).reshape(shape)
-    missing = {gyro_column: int(np.count_nonzero(~np.isfinite(gyro[idx])))}
+    rate, bad = _dwell_means(gyro, idx, owner, len(dwells))
+    rate = rate.reshape(shape)
+    missing = {gyro_column: bad}
+    acc = {}
     for col in ("acc_x_g", "acc_y_g"):
-        if col in run.columns:
-            missing[col] = int(np.count_nonzero(~np.isfinite(_column(run, col)[idx])))
-    if tilt_correction or "acc_x_g" in run.columns:
-        acc_x = _dwell_means(_column(run, "acc_x_g"), idx, owner, len(dwells)).reshape(shape)
-    else:
-        acc_x = np.full(shape, np.nan)
-
-    if tilt_correction or "acc_y_g" in run.columns:
-        acc_y = _dwell_means(_column(run, "acc_y_g"), idx, owner, len(dwells)).reshape(shape)
-    else:
-        acc_y = np.full(shape, np.nan)
+        if tilt_correction or col in run.columns:
+            means, missing[col] = _dwell_means(_column(run, col), idx, owner, len(dwells))
+            acc[col] = means.reshape(shape)
+        else:
+            acc[col] = np.full(shape, np.nan)
+    acc_x, acc_y = acc["acc_x_g"], acc["acc_y_g"]
 
     theta_rad = np.radians(theta)
     bias = np.full((n_cyc, 2), np.nan)

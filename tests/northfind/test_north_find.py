@@ -175,13 +175,20 @@ def test_missing_data_gives_nan_for_that_cycle_only():
     res = north_find(dataclasses.replace(run, columns={**run.columns, "gyro_dph": gyro}))
     assert np.isnan(res.heading_deg[1])
     assert np.all(np.abs(res.error_deg[[0, 2]]) < 1e-9)
+    # the missing samples counted are those inside the dwells, per column
+    samples = np.arange(gyro.size)
+    inside = np.concatenate([samples[dw.index] for c in res.cycles for dw in c.dwells])
+    assert res.n_missing == {"gyro_dph": len(samples[d.index]) + int(5 in inside)}
     # the same for a dwell without accelerometer data, when tilt correction needs it
     acc = run.columns["acc_x_g"].copy()
     acc[north_find(run).cycles[2].dwells[0].index] = np.nan
     run_acc = dataclasses.replace(run, columns={**run.columns, "acc_x_g": acc})
     res = north_find(run_acc)
     assert np.isnan(res.heading_deg[2]) and np.all(np.abs(res.error_deg[:2]) < 1e-9)
-    assert np.all(np.abs(north_find(run_acc, tilt_correction=False).error_deg) < 1e-9)
+    lost = len(acc[north_find(run).cycles[2].dwells[0].index])
+    assert res.n_missing == {"acc_x_g": lost}
+    level = north_find(run_acc, tilt_correction=False)
+    assert np.all(np.abs(level.error_deg) < 1e-9) and level.n_missing == {"acc_x_g": lost}
 
 
 def test_result_is_frozen_and_errors_locate_the_fault():
