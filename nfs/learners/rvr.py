@@ -358,19 +358,19 @@ class RVRRegressor(KernelRegressor):
         Xs, t = self._fit_scaling(X, y, scale_y=True)
         n = Xs.shape[0]
         K = kernel_from_sq_distances(self._train_sq_distances(Xs, sq_distances), sigma)
-        Phi = np.hstack([np.ones((n, 1)), K])
         # Phi^T Phi through the kernel's low-rank factor F while that is cheaper (r + 1 at
         # most LOW_RANK_SHARE of the kept bases), then the kept bases' own blocks of Phi^T Phi
-        # and Phi^T t
+        # and Phi^T t; Phi = [1, K] itself only when the factor never pays
         B = _kernel_factor(K)
         low = B.shape[1] + 1 <= LOW_RANK_SHARE * (n + 1)
         if low:
             F, c, e2 = _low_rank_basis(B, t)
-            PtP = Ptt = None
+            Phi_kept = PtP = Ptt = None
         else:
             F = None
-            PtP, Ptt = Phi.T @ Phi, Phi.T @ t    # formed once; cut down as bases are pruned
-        Phi_kept = Phi
+            Phi_kept = np.hstack([np.ones((n, 1)), K])
+            # formed once; cut down as bases are pruned
+            PtP, Ptt = Phi_kept.T @ Phi_kept, Phi_kept.T @ t
         tiny = np.finfo(float).tiny
         eps = np.finfo(float).eps
 
