@@ -44,13 +44,11 @@ north finder:
 from __future__ import annotations
 
 import dataclasses
-import warnings
 from dataclasses import dataclass, field
 from typing import Callable
 
 import numpy as np
 from joblib import delayed
-from sklearn.exceptions import ConvergenceWarning
 from sklearn.model_selection import KFold
 
 from ..constants import POSITION_TOL_DEG, earth_rate_components_dph
@@ -222,9 +220,7 @@ def _fit(key: str, parameter: str, x, y, budget: int, seed: int):
     if spec.tuned:   # Liang et al. 2021, section 4.1: 5-fold cross-validation over the cycles
         est.set_params(cv=KFold(5, shuffle=True, random_state=seed))
     ok = np.isfinite(x[:, 0]) & np.isfinite(y)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", ConvergenceWarning)
-        est.fit(x[ok], y[ok])
+    est.fit(x[ok], y[ok])        # in training_pool: the capped iterations' warning ignored
     return key, parameter, est
 
 
