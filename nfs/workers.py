@@ -16,8 +16,8 @@ __all__ = ["close_unread"]
 
 def close_unread(results) -> None:
     """Close the generator ``results`` of a joblib ``Parallel`` call: the jobs still
-    running are cancelled (joblib's UserWarning about them is not shown); a generator read
-    to its end is left as it is."""
+    running are cancelled (joblib's UserWarning about them, "N tasks ...", is not shown;
+    any other warning is); a generator read to its end is left as it is."""
     with warnings.catch_warnings():
-        warnings.simplefilter("ignore", UserWarning)
+        warnings.filterwarnings("ignore", message=r"\d+ tasks ", category=UserWarning)
         results.close()
