@@ -76,8 +76,8 @@ TRTRI_LEAF = 64
 
 
 def _lower_inverse(c: np.ndarray) -> tuple[np.ndarray, int]:
-    """(L^-1, info) of a lower-triangular L (the Cholesky factor of :func:`_cholesky`; only
-    its lower triangle is read): info 0, or LAPACK trtri's info > 0 for a zero pivot.
+    """(L^-1, info) of a lower-triangular L (the Cholesky factor of :func:`_cholesky`, its
+    upper triangle zero): info 0, or LAPACK trtri's info > 0 for a zero pivot.
 
     By blocks (L = [[A, 0], [B, C]], L^-1 = [[A^-1, 0], [-C^-1 B A^-1, C^-1]]), halving down
     to :data:`TRTRI_LEAF`: the off-diagonal blocks are matrix products, which BLAS runs
@@ -87,8 +87,12 @@ def _lower_inverse(c: np.ndarray) -> tuple[np.ndarray, int]:
     """
     n = c.shape[0]
     if n <= TRTRI_LEAF:
+        # trtri writes only the lower triangle of its copy of c, whose upper triangle potrf
+        # has already zeroed (clean=True), so np.tril (a mask built per call, a quarter of
+        # this function's time in an HHO-RVR search) is a C-ordered copy: the products
+        # downstream see the same memory layout, hence the same bits
         Li, info = scipy.linalg.lapack.dtrtri(c, lower=True)
-        return np.tril(Li), info
+        return np.ascontiguousarray(Li), info
     k = n // 2
     A, info = _lower_inverse(c[:k, :k])
     if info:
