@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import math
 
+from .. import ranges
 from ..parameters import (PARAM_KINDS, ParameterError, canonical_path, expand_paths,
                           get_param, list_params, param_kind, param_paths, set_params)
 
@@ -47,7 +48,8 @@ def default_bounds(path: str, value: float, unit: str | None = None) -> tuple[fl
     ======================================  =====================================================
 
     ``unit`` is the effect parameter's unit (looked up by :func:`fit_bounds`); without it
-    an effect parameter is unbounded.
+    an effect parameter is unbounded.  :func:`fit_bounds` cuts the boxes relative to the
+    value to a decade beyond the parameter's typical range (:mod:`nfs.ranges`).
     """
     v = float(value)
     leaf = path.rsplit(".", 1)[-1]
@@ -87,14 +89,58 @@ def effect_unit(inst, path: str) -> str | None:
     return inst.effect(label).spec.parameter(name).unit
 
 
+#: How far beyond the typical range of :mod:`nfs.ranges` a box relative to the value (a
+#: tenth to ten times it) may reach [factor]: a decade each way.
+TYPICAL_REACH = 10.0
+
+
 def fit_bounds(inst, path: str) -> tuple[float, float]:
     """:func:`default_bounds` of ``path`` at its value in ``inst``, effect units looked up,
-    within the physical bounds an effect parameter is registered with (shupe_stress's c_m)."""
+    within the physical bounds an effect parameter is registered with (shupe_stress's c_m),
+    and, for a box relative to the value, within a decade (:data:`TYPICAL_REACH`) of the
+    typical range of :mod:`nfs.ranges` on either side (:func:`_anchored`)."""
     path = canonical_path(inst, path)
-    lo, hi = default_bounds(path, get_param(inst, path), effect_unit(inst, path))
+    value = get_param(inst, path)
+    unit = effect_unit(inst, path)
+    lo, hi = default_bounds(path, value, unit)
     if path.startswith("effects."):
         label, name = path[len("effects."):].rsplit(".", 1)
         physical = inst.effect(label).spec.parameter(name).bounds
         if physical is not None:
             lo, hi = max(lo, physical[0]), min(hi, physical[1])
+    if _relative(path, unit) and value > 0:
+        lo, hi = _anchored(path, float(value), lo, hi)
+    return lo, hi
+
+
+def _relative(path: str, unit: str | None) -> bool:
+    """Whether :func:`default_bounds` gives ``path`` a box relative to its value (value/10
+    .. value*10): capacities, conductances, effect time constants and temperature periods."""
+    leaf = path.rsplit(".", 1)[-1]
+    return (leaf in ("capacity_j_per_k", "conductance_w_per_k")
+            or (path.startswith("effects.") and unit in ("s", "K")))
+
+
+def _anchored(path: str, value: float, lo: float, hi: float) -> tuple[float, float]:
+    """The relative box (lo, hi) of ``value`` cut to the typical range of ``path``
+    (:func:`nfs.ranges.find`) widened by :data:`TYPICAL_REACH` each way, the value itself
+    always kept inside.
+
+    A box relative to the value moves with it: a fit that starts from another fit's result
+    (a model file that is itself a fit, then the structure's refinement, then a candidate's
+    refit) can take a capacity a decade further down at every link of the chain, to a coil
+    of 0.1 J/K (three fits) that no winding has.  Anchored to the one table of ranges, a
+    chain stops a decade beyond what real units have; a fit from a value inside the typical
+    range keeps its box as it was (value/10 >= typical low/10, value*10 <= typical high*10),
+    and a value already beyond the reach (a unit the table does not know) is not pushed
+    back, only kept from going further.
+    """
+    found = ranges.find(path)
+    if found is None:
+        return lo, hi
+    typ_lo, typ_hi = found.typical
+    if typ_lo > 0:
+        lo = max(lo, min(value, typ_lo / TYPICAL_REACH))
+    if typ_hi > 0:
+        hi = min(hi, max(value, typ_hi * TYPICAL_REACH))
     return lo, hi

@@ -107,3 +107,35 @@ def test_default_bounds(inst):
     for p in list_params(inst):
         lo, hi = fit_bounds(inst, p)
         assert lo <= get_param(inst, p) <= hi, p
+
+
+def test_relative_boxes_of_a_typical_unit_are_a_decade_each_way(inst):
+    # every value of the default instrument is typical: the anchoring leaves its boxes alone
+    for p in list_params(inst):
+        if p.endswith(("capacity_j_per_k", "conductance_w_per_k")):
+            v = get_param(inst, p)
+            assert fit_bounds(inst, p) == default_bounds(p, v), p
+
+
+def test_chained_fits_cannot_walk_a_capacity_out_of_its_range(inst):
+    """A fit started from another fit's result gets a box relative to that result; chained,
+    the boxes would let a capacity fall a decade per fit.  Anchored to the typical range of
+    nfs.ranges (coil_outer 40-100 J/K), the box stops a decade below it, however many fits
+    come before."""
+    path = "thermal.nodes.coil_outer.capacity_j_per_k"
+    floor = 40.0 / 10.0
+    walked = inst
+    for _ in range(4):                     # each fit ends on the floor of its box
+        lo, hi = fit_bounds(walked, path)
+        assert lo >= floor * (1 - 1e-12)
+        walked = set_params(walked, {path: lo})
+    assert get_param(walked, path) == pytest.approx(floor)
+    # a value between the floor and the typical range: the floor, not value / 10
+    mid = set_params(inst, {path: 20.0})
+    assert fit_bounds(mid, path) == (floor, 200.0)
+    # a value already below the floor (a unit the table does not know) is kept, not raised
+    low = set_params(inst, {path: 0.2})
+    assert fit_bounds(low, path) == (0.2, 2.0)
+    # the top side: a decade above the typical high (qfa_x 30-60 J/K -> 600 J/K)
+    high = set_params(inst, {"thermal.nodes.qfa_x.capacity_j_per_k": 100.0})
+    assert fit_bounds(high, "thermal.nodes.qfa_x.capacity_j_per_k") == (10.0, 600.0)
