@@ -1,6 +1,6 @@
 """What a parameter at a bound says about the model's structure, and where else to start.
 
-A fitted parameter that ends on its box (:func:`nfs.diagnose.params.default_bounds`) is
+A fitted parameter that ends on its box (:func:`nfs.diagnose.params.fit_bounds`) is
 rarely a measurement of that parameter: the data pull it there because the model cannot
 reproduce them with physical values, and the parameter is the nearest knob.
 :func:`bound_advice` turns the kind of parameter and the side of the box into what to try.
@@ -48,7 +48,8 @@ def bound_advice(path: str, value: float, bounds: tuple[float, float]) -> str:
             return (f"the {node} capacity wants to vanish: the thermometer sees a faster "
                     f"response than {node} can give; it may sit on another node (electronics), "
                     f"its lag may be too long, or {node} lacks a direct link to its heat source")
-        return (f"the {node} capacity wants more than 10x the preset: the thermometer sees a "
+        return (f"the {node} capacity wants more than its box allows (10x the preset, or a decade "
+                f"above what such a node holds): the thermometer sees a "
                 f"larger mass (weights toward the housing), or a node is missing between "
                 f"{node} and the heat")
     if path.startswith("thermal.links."):
@@ -56,7 +57,8 @@ def bound_advice(path: str, value: float, bounds: tuple[float, float]) -> str:
         if side == "low":
             return (f"the link {link} wants to vanish: the heat takes another path between "
                     "these nodes (add the node or link it passes through)")
-        return (f"the link {link} wants to be 10x stronger: the two ends behave as one node "
+        return (f"the link {link} wants to be stronger than its box allows (10x the preset, or a "
+                "decade above what such a link conducts): the two ends behave as one node "
                 "(merge them), or a second path between them is missing")
     if path.startswith("thermometers."):
         name = parts[1]
