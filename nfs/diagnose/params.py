@@ -25,20 +25,25 @@ _INF = math.inf
 # ---------------------------------------------------------------------------------------------
 # Bounds
 
+#: How far beyond the typical range of :mod:`nfs.ranges` a box relative to the value (a
+#: tenth to ten times it) may reach [factor]: a decade each way.
+TYPICAL_REACH = 10.0
+
+
 def default_bounds(path: str, value: float, unit: str | None = None) -> tuple[float, float]:
     """The box (lower, upper) a fit keeps parameter ``path`` (now at ``value``) in.
 
     ======================================  =====================================================
     parameter                               bounds
     ======================================  =====================================================
-    capacities, conductances                value/10 .. value*10 (> 0: a network stays physical);
-                                            a zero conductance 0 .. 10 W/K
+    capacities, conductances                value/10 .. value*10 (> 0: a network stays physical),
+                                            anchored (below); a zero conductance 0 .. 10 W/K
     node powers                             0 .. max(10 value, 1 W) (negative: 10 value .. 0)
     thermometer lag_s                       0 .. 300 s
     thermometer offset_c                    -2 .. +2 K
     noise, quantum, ARW, BI, RRW fields     0 .. inf
     tilts                                   -1 .. +1 deg
-    effect time constants (unit ``s``),     value/10 .. value*10
+    effect time constants (unit ``s``),     value/10 .. value*10, anchored (below)
     temperature periods (unit ``K``)
     effect temperatures (unit ``degC``)     value - 20 .. value + 20 K
     TEC slopes (unit ``W/K``)               0 .. max(10 value, 1 W/K)
@@ -48,13 +53,14 @@ def default_bounds(path: str, value: float, unit: str | None = None) -> tuple[fl
     ======================================  =====================================================
 
     ``unit`` is the effect parameter's unit (looked up by :func:`fit_bounds`); without it
-    an effect parameter is unbounded.  :func:`fit_bounds` cuts the boxes relative to the
-    value to a decade beyond the parameter's typical range (:mod:`nfs.ranges`).
+    an effect parameter is unbounded.  Anchored: a box relative to the value stops a decade
+    (:data:`TYPICAL_REACH`) beyond the parameter's typical range in :mod:`nfs.ranges`, the
+    value itself kept inside (:func:`_anchored`).
     """
     v = float(value)
     leaf = path.rsplit(".", 1)[-1]
     if leaf in ("capacity_j_per_k", "conductance_w_per_k"):
-        return (v / 10.0, v * 10.0) if v > 0 else (0.0, 10.0)
+        return _anchored(path, v, v / 10.0, v * 10.0) if v > 0 else (0.0, 10.0)
     if leaf == "power_w" and path.startswith("thermal."):
         return (0.0, max(10.0 * v, 1.0)) if v >= 0 else (10.0 * v, 0.0)
     if path.startswith("thermometers."):
@@ -69,7 +75,7 @@ def default_bounds(path: str, value: float, unit: str | None = None) -> tuple[fl
         return (-1.0, 1.0)
     if path.startswith("effects.") and unit is not None:
         if unit in ("s", "K"):
-            return (v / 10.0, v * 10.0) if v > 0 else (0.0, _INF)
+            return _anchored(path, v, v / 10.0, v * 10.0) if v > 0 else (0.0, _INF)
         if unit == "degC":
             return (v - 20.0, v + 20.0)
         if unit == "W/K":
@@ -89,36 +95,17 @@ def effect_unit(inst, path: str) -> str | None:
     return inst.effect(label).spec.parameter(name).unit
 
 
-#: How far beyond the typical range of :mod:`nfs.ranges` a box relative to the value (a
-#: tenth to ten times it) may reach [factor]: a decade each way.
-TYPICAL_REACH = 10.0
-
-
 def fit_bounds(inst, path: str) -> tuple[float, float]:
     """:func:`default_bounds` of ``path`` at its value in ``inst``, effect units looked up,
-    within the physical bounds an effect parameter is registered with (shupe_stress's c_m),
-    and, for a box relative to the value, within a decade (:data:`TYPICAL_REACH`) of the
-    typical range of :mod:`nfs.ranges` on either side (:func:`_anchored`)."""
+    within the physical bounds an effect parameter is registered with (shupe_stress's c_m)."""
     path = canonical_path(inst, path)
-    value = get_param(inst, path)
-    unit = effect_unit(inst, path)
-    lo, hi = default_bounds(path, value, unit)
+    lo, hi = default_bounds(path, get_param(inst, path), effect_unit(inst, path))
     if path.startswith("effects."):
         label, name = path[len("effects."):].rsplit(".", 1)
         physical = inst.effect(label).spec.parameter(name).bounds
         if physical is not None:
             lo, hi = max(lo, physical[0]), min(hi, physical[1])
-    if _relative(path, unit) and value > 0:
-        lo, hi = _anchored(path, float(value), lo, hi)
     return lo, hi
-
-
-def _relative(path: str, unit: str | None) -> bool:
-    """Whether :func:`default_bounds` gives ``path`` a box relative to its value (value/10
-    .. value*10): capacities, conductances, effect time constants and temperature periods."""
-    leaf = path.rsplit(".", 1)[-1]
-    return (leaf in ("capacity_j_per_k", "conductance_w_per_k")
-            or (path.startswith("effects.") and unit in ("s", "K")))
 
 
 def _anchored(path: str, value: float, lo: float, hi: float) -> tuple[float, float]:
