@@ -87,6 +87,21 @@ def test_matrices_two_nodes_by_hand():
     np.testing.assert_allclose(b, [[0.5 / 100, 1 / 100, 0.0], [0.0, 0.0, 1 / 50]], rtol=1e-15)
 
 
+def test_kept_matrices_are_handed_out_as_copies():
+    # Invariant: the network keeps its matrices once made; what a caller does to the arrays
+    # it was given does not reach the network (a frozen value) or the next caller.
+    net = two_nodes()
+    a0, b0 = net.matrices()
+    l0, g0 = net.conductances()
+    for m in (*net.matrices(), *net.conductances()):
+        m *= 2.0
+    np.testing.assert_array_equal(net.matrices()[0], a0)
+    np.testing.assert_array_equal(net.matrices()[1], b0)
+    np.testing.assert_array_equal(net.conductances()[0], l0)
+    np.testing.assert_array_equal(net.conductances()[1], g0)
+    assert net.matrices()[0] is not net.matrices()[0]
+
+
 def test_parallel_links_add():
     one = Network((Node("a", 3.0),), (Link("a", CHAMBER, 0.75),))
     two = Network((Node("a", 3.0),), (Link("a", CHAMBER, 0.5), Link(CHAMBER, "a", 0.25)))
