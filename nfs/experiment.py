@@ -105,7 +105,8 @@ def effect_context(inst: Instrument, th: thermal.ThermalResult, azimuth_deg: np.
         coil_inner=inst.gyro.coil_inner, source=inst.gyro.source,
         axis_azimuth_deg=azimuth_deg, earth_rate_dph=earth_rate_dph, moving=moving,
         acc_nodes=inst.accelerometers.nodes, aux=aux, t_ref_c=inst.t_ref_c,
-        since_power_on_s=None if powered is None else since_power_on_s(th.time_s, powered))
+        since_power_on_s=None if powered is None else since_power_on_s(th.time_s, powered),
+        coil_layout=inst.coil_layout)
 
 
 def _aux_channels(inst: Instrument, th: thermal.ThermalResult, fs: float,

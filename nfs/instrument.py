@@ -8,6 +8,7 @@ checks every key, naming the file and the dotted key of any fault.
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass, replace
 from importlib import resources
 from pathlib import Path
@@ -16,8 +17,9 @@ from typing import Any
 import numpy as np
 from thermal import Link, Network, Node
 
+from .coil import WoundCoil, coil_from_dict, with_coil, without_coil
 from .constants import T_REF_C
-from .effects import EffectInstance, check_geometry, make_effect
+from .effects import CoilLayout, EffectInstance, check_geometry, make_effect
 from .effects.thermometer import THERMOMETERS
 from .errors import EffectError, ScenarioError, ThermalError
 from .io.tomlio import (check_keys, dumps_toml, load_toml, number, string, table)
@@ -143,6 +145,19 @@ class Instrument:
     """T_ref of the effect library [degC]."""
     description: str = ""
     """Free text, e.g. where the values come from."""
+    coil: WoundCoil | None = None
+    """The wound coil (``[coil]``), whose layers ``coil_1`` .. ``coil_N`` are nodes of
+    :attr:`network`; None: the coil is the two lumped nodes of ``[gyro]``."""
+
+    @property
+    def coil_layout(self) -> CoilLayout | None:
+        """Where the wound coil's layers sit (for ``shupe_winding``); None when lumped."""
+        return None if self.coil is None else self.coil.layout
+
+    @functools.cached_property
+    def own_network(self) -> Network:
+        """The ``[thermal]`` network: :attr:`network` without the wound coil's layers."""
+        return self.network if self.coil is None else without_coil(self.network, self.coil)
 
     def with_effects(self, effects) -> "Instrument":
         """A copy with another effect list (checked against this instrument)."""
@@ -160,15 +175,18 @@ class Instrument:
 
     def to_dict(self) -> dict[str, Any]:
         """The TOML form (inverse of :func:`instrument_from_dict`)."""
+        own = self.own_network
         nodes = {n.name: {"capacity_j_per_k": n.capacity_j_per_k, "power_w": n.power_w}
-                 for n in self.network.nodes}
+                 for n in own.nodes}
         links = [{"between": [l.a, l.b], "conductance_w_per_k": l.conductance_w_per_k}
-                 for l in self.network.links]
+                 for l in own.links]
         out: dict[str, Any] = {"name": self.name}
         if self.description:
             out["description"] = self.description
         out["t_ref_c"] = self.t_ref_c
         out["thermal"] = {"nodes": nodes, "links": links}
+        if self.coil is not None:
+            out["coil"] = self.coil.to_dict()
         out["gyro"] = dict(vars(self.gyro))
         out["accelerometers"] = dict(vars(self.accelerometers))
         out["turntable"] = dict(vars(self.turntable))
@@ -184,7 +202,7 @@ class Instrument:
         return dumps_toml(self.to_dict()) + "\n"
 
 
-_TOP_KEYS = ("name", "description", "t_ref_c", "thermal", "gyro", "accelerometers",
+_TOP_KEYS = ("name", "description", "t_ref_c", "thermal", "coil", "gyro", "accelerometers",
              "turntable", "thermometers", "aux", "effects")
 _GYRO_KEYS = tuple(GyroModel.__dataclass_fields__)
 _ACC_KEYS = tuple(AccelerometerModel.__dataclass_fields__)
@@ -372,6 +390,32 @@ def _check_effect_targets(inst: Instrument, file: Any) -> None:
                 raise ScenarioError(msg, file=file, key=where)
 
 
+def _check_winding(inst: Instrument, file: Any) -> None:
+    """A ``shupe_winding`` of a wound coil must be that coil: its mean diameter D between
+    the winding's inner and outer diameters, its fibre filling the winding's volume at a
+    pitch a fibre has (``limits.fibre_pitch_mm``, ``limits.layer_pitch_mm`` of
+    :mod:`nfs.ranges`)."""
+    if inst.coil is None:
+        return
+    coil = inst.coil
+    for i, e in enumerate(inst.effects):
+        if e.name != "shupe_winding":
+            continue
+        where = f"effects[{i}] (shupe_winding)"
+        d = e.params["D"]
+        lo, hi = 2.0 * coil.inner_radius_m, 2.0 * coil.outer_radius_m
+        if not lo <= d <= hi:
+            raise ScenarioError(f"D = {d:g} m is not the wound coil's mean diameter: the "
+                                f"[coil] winding spans {lo:g}-{hi:g} m (r_i + r_o = "
+                                f"{coil.mean_diameter_m:g} m)", file=file, key=f"{where}.D")
+        volume = coil.capacity_j_per_k / coil.heat_capacity_j_per_m3_k
+        check("limits.fibre_pitch_mm", 1e3 * float(np.sqrt(volume / e.params["L"])),
+              file=file, key=f"{where}.L", error=ScenarioError)
+        check("limits.layer_pitch_mm",
+              1e3 * (coil.outer_radius_m - coil.inner_radius_m) / e.params["N_opt"],
+              file=file, key=f"{where}.N_opt", error=ScenarioError)
+
+
 def _check_heating(network: Network, file: Any, effects=()) -> None:
     """The steady-state rise of every node above the chamber under the nodes' constant
     powers and the effects' constant heat sources (G dT = P, the chamber as ground) against
@@ -434,7 +478,18 @@ def _instrument_from_dict(d: dict[str, Any], file: Any) -> Instrument:
     check_keys(d, _TOP_KEYS, "", file, required=("thermal", "gyro", "accelerometers",
                                                   "thermometers"))
     network = _network(table(d, "thermal", "", file), "thermal", file)
-    gyro = _dataclass_numbers(GyroModel, table(d, "gyro", "", file), "gyro", file,
+    gyro_tbl = table(d, "gyro", "", file)
+    coil = None
+    if "coil" in d:
+        coil = coil_from_dict(table(d, "coil", "", file), file, network.node_names)
+        try:
+            network = with_coil(network, coil)
+        except ThermalError as exc:
+            raise ScenarioError(str(exc), file=file, key="thermal.nodes") from None
+        # the coil's nodes in [gyro] are its innermost and outermost layers unless named
+        gyro_tbl = {"coil_outer": coil.layer_names[-1], "coil_inner": coil.layer_names[0],
+                    **gyro_tbl}
+    gyro = _dataclass_numbers(GyroModel, gyro_tbl, "gyro", file,
                               {"coil_outer": "", "coil_inner": "", "source": ""}, network)
     acc = _dataclass_numbers(AccelerometerModel, table(d, "accelerometers", "", file),
                              "accelerometers", file, {"x_node": "", "y_node": ""}, network)
@@ -446,9 +501,10 @@ def _instrument_from_dict(d: dict[str, Any], file: Any) -> Instrument:
     inst = Instrument(name=string(d, "name", "", file, "instrument"), network=network,
                       gyro=gyro, accelerometers=acc, turntable=tt, thermometers=thermo,
                       effects=effects, aux=aux, t_ref_c=number(d, "t_ref_c", "", file, T_REF_C),
-                      description=string(d, "description", "", file, ""))
+                      description=string(d, "description", "", file, ""), coil=coil)
     _check_effect_targets(inst, file)
     check_tree(d, file=file, error=ScenarioError)
+    _check_winding(inst, file)
     _check_heating(network, file, inst.effects)
     return inst
 

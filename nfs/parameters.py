@@ -8,6 +8,8 @@ path                                                        kind
 ``thermal.nodes.<node>.capacity_j_per_k``                   thermal      C_j [J/K]
 ``thermal.nodes.<node>.power_w``                            thermal      P_j [W]
 ``thermal.links.<a>-<b>.conductance_w_per_k``               thermal      G_ab [W/K]
+``coil.<conductivity_w_per_m_k|inner_radius_m|...>``        thermal      the wound coil's
+``coil.<inner_contacts|outer_contacts>.<node>``             thermal      its faces' G [W/K]
 ``thermometers.<fog|acc_x|acc_y>.<lag_s|offset_c|...>``     thermometer  tau [s], offset [degC]
 ``gyro.<bias_dph|scale_factor|...>``                        drift        b [deg/h], ...
 ``accelerometers.<bias_x_g|bias_y_g|...>``                  accelerometer  [g]
@@ -15,7 +17,9 @@ path                                                        kind
 ``effects.<label>.<param>``                                 the effect's kind (gyro -> drift)
 ==========================================================  ====================================
 
-A link is named by its two ends in either order (``coil_outer-coil_inner`` or
+A wound coil's layers (``coil_1`` .. ``coil_N``, :mod:`nfs.coil`) and the links it makes are
+not paths of their own: they follow the coil's numbers.  A link is named by its two ends in
+either order (``coil_outer-coil_inner`` or
 ``coil_inner-coil_outer``; ``chamber`` is an end like any node).  An effect is named by its
 :attr:`~nfs.effects.EffectInstance.label` (``shupe_gradient``,
 ``acc_bias_temperature:x``, ``tec_power``); only its numeric parameters are paths.
@@ -36,6 +40,7 @@ from typing import Iterable, Mapping
 
 from thermal import Link, Network
 
+from .coil import with_coil
 from .errors import NfsError
 
 __all__ = ["ParameterError", "PARAM_KINDS", "get_param", "set_params", "list_params",
@@ -70,11 +75,14 @@ def _link_key(link: Link) -> str:
 def param_paths(inst) -> list[tuple[str, str]]:
     """(path, kind) of every number of ``inst``, in TOML order (kinds: :data:`PARAM_KINDS`)."""
     out: list[tuple[str, str]] = []
-    for node in inst.network.nodes:
+    own = inst.own_network
+    for node in own.nodes:
         out.append((f"thermal.nodes.{node.name}.capacity_j_per_k", "thermal"))
         out.append((f"thermal.nodes.{node.name}.power_w", "thermal"))
-    for link in inst.network.links:
+    for link in own.links:
         out.append((f"thermal.links.{_link_key(link)}.conductance_w_per_k", "thermal"))
+    if inst.coil is not None:
+        out.extend((p, "thermal") for p in inst.coil.paths())
     for name, model in inst.thermometers.items():
         for f in _numeric_fields(model):
             out.append((f"thermometers.{name}.{f}", "thermometer"))
@@ -132,7 +140,7 @@ def canonical_path(inst, path: str, valid: set[str] | None = None) -> str:
         raise ParameterError(f"a parameter path must be a string, got {path!r}")
     if path.startswith("thermal.links.") and path.endswith(".conductance_w_per_k"):
         key = path[len("thermal.links."):-len(".conductance_w_per_k")]
-        for link in inst.network.links:
+        for link in inst.own_network.links:
             if key in (f"{link.a}-{link.b}", f"{link.b}-{link.a}"):
                 return f"thermal.links.{_link_key(link)}.conductance_w_per_k"
         raise _bad_path(inst, path, "no such link")
@@ -177,9 +185,11 @@ def get_param(inst, path: str) -> float:
             node = inst.network.nodes[inst.network.index(".".join(parts[2:-1]))]
             return float(getattr(node, parts[-1]))
         key = ".".join(parts[2:-1])
-        for link in inst.network.links:
+        for link in inst.own_network.links:
             if _link_key(link) == key:
                 return float(link.conductance_w_per_k)
+    elif head == "coil":
+        return inst.coil.number(path[len("coil."):])
     elif head == "thermometers":
         return float(getattr(inst.thermometers[parts[1]], parts[2]))
     elif head in _SECTIONS:
@@ -202,6 +212,7 @@ def set_params(inst, values: Mapping[str, float]):
     thermo_set: dict[str, dict[str, float]] = {}
     section_set: dict[str, dict[str, float]] = {}
     effect_set: dict[str, dict[str, float]] = {}
+    coil_set: dict[str, float] = {}
     valid = {p for p, _ in param_paths(inst)}
     for raw, value in values.items():
         path = canonical_path(inst, raw, valid)
@@ -212,6 +223,8 @@ def set_params(inst, values: Mapping[str, float]):
             node_set.setdefault(".".join(parts[2:-1]), {})[parts[-1]] = v
         elif head == "thermal":
             link_set[".".join(parts[2:-1])] = v
+        elif head == "coil":
+            coil_set[path[len("coil."):]] = v
         elif head == "thermometers":
             thermo_set.setdefault(parts[1], {})[parts[2]] = v
         elif head in _SECTIONS:
@@ -220,12 +233,18 @@ def set_params(inst, values: Mapping[str, float]):
             label, name = path[len("effects."):].rsplit(".", 1)
             effect_set.setdefault(label, {})[name] = v
     changes: dict = {}
-    if node_set or link_set:
+    if node_set or link_set or coil_set:
+        own = inst.own_network
         nodes = tuple(replace(n, **node_set[n.name]) if n.name in node_set else n
-                      for n in inst.network.nodes)
+                      for n in own.nodes)
         links = tuple(replace(l, conductance_w_per_k=link_set[_link_key(l)])
-                      if _link_key(l) in link_set else l for l in inst.network.links)
-        changes["network"] = Network(nodes=nodes, links=links)
+                      if _link_key(l) in link_set else l for l in own.links)
+        network = Network(nodes=nodes, links=links)
+        if inst.coil is not None:
+            coil = inst.coil.with_numbers(coil_set) if coil_set else inst.coil
+            network = with_coil(network, coil)
+            changes["coil"] = coil
+        changes["network"] = network
     if thermo_set:
         changes["thermometers"] = {k: replace(m, **thermo_set[k]) if k in thermo_set else m
                                    for k, m in inst.thermometers.items()}

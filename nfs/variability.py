@@ -46,7 +46,9 @@ Every parameter path (:mod:`nfs.parameters`) of a family gets a factor or an off
   (``capacity_rel_std``), link conductances (``conductance_rel_std``), node powers and the
   thermal effects' powers and power slopes [W], [W/K] (``power_rel_std``), the gyro and
   accelerometer effects' coefficients (``effect_rel_std``; reference temperatures [degC],
-  angles [deg] and phases [rad] are set points, not coefficients, and are kept);
+  angles [deg] and phases [rad] are set points, not coefficients, and are kept, as are the
+  constants of a design a data sheet gives, registered ``constant``: a coil's fibre length
+  and diameter, the fibre's index and dn/dT);
 - absolute: p_u = p + std z: the thermometer offsets (``thermometer_offset_c``);
 - ``parameters``: a scatter of one's own per path or glob pattern (relative, or absolute with
   ``{ std = ... }``), which overrides the families for the paths it names.
@@ -291,8 +293,11 @@ def unit_scatter(inst: Instrument, var: Variability) -> dict[str, tuple[float, b
             std, rel = var.thermometer_offset_c, False
         elif path.startswith("effects."):
             label = path[len("effects."):].rsplit(".", 1)[0]
-            unit = inst.effect(label).spec.parameter(leaf).unit
-            if kind == "thermal" and unit in ("W", "W/K"):
+            par = inst.effect(label).spec.parameter(leaf)
+            unit = par.unit
+            if par.constant:        # a data sheet's constant: every unit of a design has it
+                pass
+            elif kind == "thermal" and unit in ("W", "W/K"):
                 std = var.power_rel_std
             elif kind in ("drift", "accelerometer") and unit not in _REFERENCE_UNITS:
                 std = var.effect_rel_std

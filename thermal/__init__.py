@@ -5,6 +5,8 @@ it exactly over sample intervals of held input (or of a chamber linear between s
 many runs of one network together with :func:`simulate_many` (or, streamed,
 :func:`iter_simulate_many`), or only where a soak ends with :func:`final_temperature`;
 the :class:`ThermalResult` labels every node and carries the energy bookkeeping.
+:class:`Annulus` makes the nodes and links of a layered body (a thick-walled cylinder in
+radial shells, conduction through cylindrical shells).
 :func:`estimate_states` estimates the node temperatures from :class:`LinearSensor` readings
 through the network (Kalman filter and smoother, thermal/estimate.py).
 """
@@ -19,7 +21,7 @@ _PUBLIC = {
     "CHAMBER": "thermal.network", "Node": "thermal.network", "Link": "thermal.network",
     "Network": "thermal.network", "simulate": "thermal.solve", "ThermalResult": "thermal.solve",
     "simulate_many": "thermal.batch", "iter_simulate_many": "thermal.batch",
-    "final_temperature": "thermal.final",
+    "final_temperature": "thermal.final", "Annulus": "thermal.annulus",
     **{name: "thermal.estimate" for name in (
         "LinearSensor", "ThermalRecord", "StatePower", "NodeEstimate", "ProcessNoiseFit",
         "StateEstimate", "kalman_smooth", "fit_process_noise", "estimate_states")},

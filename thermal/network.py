@@ -35,7 +35,7 @@ __all__ = ["CHAMBER", "Node", "Link", "Network"]
 CHAMBER: str = "chamber"
 
 
-def _finite_number(value: object, what: str) -> float:
+def finite_number(value: object, what: str) -> float:
     """``value`` as a float, or a :class:`ThermalError` naming ``what``."""
     if isinstance(value, bool):
         raise ThermalError(f"{what} must be a number, got {value!r}")
@@ -75,12 +75,12 @@ class Node:
             raise ThermalError(f"node name must be a non-empty string, got {self.name!r}")
         if self.name == CHAMBER:
             raise ThermalError(f"node name {CHAMBER!r} is reserved for the boundary")
-        capacity = _finite_number(self.capacity_j_per_k,
+        capacity = finite_number(self.capacity_j_per_k,
                                   f"node {self.name!r}: capacity_j_per_k")
         if capacity <= 0.0:
             raise ThermalError(f"node {self.name!r}: capacity_j_per_k must be > 0, "
                                f"got {capacity}")
-        power = _finite_number(self.power_w, f"node {self.name!r}: power_w")
+        power = finite_number(self.power_w, f"node {self.name!r}: power_w")
         object.__setattr__(self, "capacity_j_per_k", capacity)
         object.__setattr__(self, "power_w", power)
 
@@ -108,7 +108,7 @@ class Link:
                                    f"{self.a!r}-{self.b!r}")
         if self.a == self.b:
             raise ThermalError(f"{self}: links {self.a!r} to itself")
-        conductance = _finite_number(self.conductance_w_per_k,
+        conductance = finite_number(self.conductance_w_per_k,
                                      f"{self}: conductance_w_per_k")
         if conductance < 0.0:
             raise ThermalError(f"{self}: conductance_w_per_k must be >= 0, got {conductance}")
@@ -252,7 +252,7 @@ class Network:
                 raise ThermalError(f"steady_state: power_w must have shape {power.shape}, "
                                    f"got {extra.shape}")
             power = power + extra
-        ambient = _finite_number(ambient_c, "steady_state: ambient_c")
+        ambient = finite_number(ambient_c, "steady_state: ambient_c")
         return np.linalg.solve(laplacian, to_chamber * ambient + power)
 
     def modes(self) -> tuple[np.ndarray, np.ndarray]:

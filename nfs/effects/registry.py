@@ -79,8 +79,9 @@ class Parameter:
     default: Any = None
     """Default value; ``None`` means required (unless ``optional``)."""
     type: type = float
-    """``float`` for numbers, ``str`` for names (nodes, channels, axes), ``tuple`` for a list
-    of numbers (one per turntable position, say; ``bounds`` apply to each)."""
+    """``float`` for numbers, ``int`` for counts (a coil's layers; never fitted), ``str`` for
+    names (nodes, channels, axes, a winding pattern), ``tuple`` for a list of numbers (one per
+    turntable position, say; ``bounds`` apply to each)."""
     optional: bool = False
     """True when ``None`` is a legal value (the effect then uses its own default target)."""
     shape: bool = False
@@ -91,6 +92,11 @@ class Parameter:
     bounds: tuple[float, float] | None = None
     """Closed interval (low, high) of the values where the effect is physical; a value
     outside raises :class:`~nfs.errors.EffectError` on construction.  None: unbounded."""
+    constant: bool = False
+    """True for a constant of the design or its materials that a data sheet gives (a
+    fibre's index and dn/dT, a coil's length and diameter): units of one design share it,
+    so a unit's scatter (:mod:`nfs.variability`) leaves it alone and a fit holds it unless
+    named."""
 
     @property
     def required(self) -> bool:
@@ -162,6 +168,8 @@ class EffectSpec:
                         raise EffectError(
                             f"{prefix}effect '{self.name}' parameter '{p.name}' = {value:g} "
                             f"[{p.unit}] is outside [{lo:.6g}, {hi:.6g}] ({p.description})")
+                elif p.type is int:
+                    value = self._count(p, value, prefix)
                 elif p.type is str and not isinstance(value, str):
                     raise EffectError(f"{prefix}effect '{self.name}' parameter '{p.name}' "
                                       f"must be a name (string), got {value!r}")
@@ -179,6 +187,19 @@ class EffectSpec:
             except EffectError as exc:
                 raise EffectError(f"{prefix}effect '{self.name}': {exc}") from None
         return out
+
+    def _count(self, p: Parameter, value: Any, prefix: str) -> int:
+        """A whole number (an int, or a float with no fraction) inside ``p.bounds``."""
+        if (isinstance(value, bool) or not isinstance(value, (int, float))
+                or not float(value).is_integer()):
+            raise EffectError(f"{prefix}effect '{self.name}' parameter '{p.name}' must be a "
+                              f"whole number, got {value!r}")
+        value = int(value)
+        if p.bounds is not None and not p.bounds[0] <= value <= p.bounds[1]:
+            lo, hi = p.bounds
+            raise EffectError(f"{prefix}effect '{self.name}' parameter '{p.name}' = {value} "
+                              f"is outside [{lo:g}, {hi:g}] ({p.description})")
+        return value
 
     def _number_list(self, p: Parameter, value: Any, prefix: str) -> tuple[float, ...]:
         """A list of numbers as a tuple of floats, each inside ``p.bounds``."""

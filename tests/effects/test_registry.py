@@ -12,6 +12,8 @@ from nfs.errors import EffectError
 #: Oracle: the contract table of ../shared/spec/effects.md, copied here so the test does not
 #: need ../shared at run time (test_effects_md_matches checks the copy when shared/ is there).
 EFFECTS_MD = {
+    "shupe_winding": ("gyro", {"L", "D", "pattern", "N_opt", "n", "dn_dT", "alpha", "k_m", "c_m",
+                               "L_asym"}),
     "bias_temperature": ("gyro", {"b1", "b2"}),
     "shupe_gradient": ("gyro", {"k_r"}),
     "shupe_rate": ("gyro", {"k_s"}),
