@@ -42,7 +42,7 @@ from .effects import CoilLayout
 from .errors import ScenarioError, ThermalError
 from .io.tomlio import check_keys, integer, number, table
 
-__all__ = ["WoundCoil", "COIL_PREFIX", "coil_from_dict", "with_coil", "without_coil"]
+__all__ = ["WoundCoil", "COIL_PREFIX", "coil_from_dict", "with_coil", "own_parts"]
 
 #: The layers' nodes are ``coil_1`` (spool) .. ``coil_N`` (outer face).
 COIL_PREFIX = "coil"
@@ -183,21 +183,22 @@ def coil_from_dict(tbl: dict[str, Any], file: Any, nodes: tuple[str, ...]) -> Wo
                             key="coil") from None
 
 
-def with_coil(network: Network, coil: WoundCoil) -> Network:
-    """``network`` (the ``[thermal]`` nodes and links) with the coil's layers added."""
+def with_coil(nodes: tuple[Node, ...], links: tuple[Link, ...], coil: WoundCoil) -> Network:
+    """The network of the ``[thermal]`` ``nodes`` and ``links`` (which may link to the
+    coil's layers) with the coil's layers and their links added after them."""
     ann = coil.annulus
-    taken = set(network.node_names) & set(ann.layer_names)
+    taken = {n.name for n in nodes} & set(ann.layer_names)
     if taken:
         raise ThermalError(f"node '{sorted(taken)[0]}' is a layer of the wound coil; "
                            f"[thermal] cannot define it")
-    return Network(nodes=network.nodes + ann.nodes(), links=network.links + ann.links())
+    return Network(nodes=tuple(nodes) + ann.nodes(), links=tuple(links) + ann.links())
 
 
-def without_coil(network: Network, coil: WoundCoil) -> Network:
-    """``network`` without the coil's layers and the links :func:`with_coil` added (the
-    layers' own and each face's reduced contacts): the ``[thermal]`` network it was given.
-    A link of ``[thermal]`` equal to one the coil made is kept (one occurrence is removed
-    per link made, from the end, where :func:`with_coil` put them)."""
+def own_parts(network: Network, coil: WoundCoil) -> tuple[tuple[Node, ...], tuple[Link, ...]]:
+    """(nodes, links) of ``network`` that are not the coil's: the ``[thermal]`` parts
+    :func:`with_coil` was given.  The links the coil made (its layers' own and each face's
+    reduced contacts) are removed one occurrence each, from the end where :func:`with_coil`
+    put them, so a link of ``[thermal]`` equal to one of them is kept."""
     layers = set(coil.layer_names)
     made = list(coil.annulus.links())
     kept: list[Link] = []
@@ -208,5 +209,4 @@ def without_coil(network: Network, coil: WoundCoil) -> Network:
             kept.append(link)
     if made:
         raise ThermalError("the network does not hold the wound coil's links")
-    nodes: tuple[Node, ...] = tuple(n for n in network.nodes if n.name not in layers)
-    return Network(nodes=nodes, links=tuple(reversed(kept)))
+    return (tuple(n for n in network.nodes if n.name not in layers), tuple(reversed(kept)))

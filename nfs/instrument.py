@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 from thermal import Link, Network, Node
 
-from .coil import WoundCoil, coil_from_dict, with_coil, without_coil
+from .coil import WoundCoil, coil_from_dict, own_parts, with_coil
 from .constants import T_REF_C
 from .effects import CoilLayout, EffectInstance, check_geometry, make_effect
 from .effects.thermometer import THERMOMETERS
@@ -154,10 +154,30 @@ class Instrument:
         """Where the wound coil's layers sit (for ``shupe_winding``); None when lumped."""
         return None if self.coil is None else self.coil.layout
 
+    @property
+    def target_nodes(self) -> tuple[str, ...]:
+        """The nodes an effect can be put at by a diagnosis or a rival: every node but the
+        interior layers of a wound coil, which is one body whose faces (its innermost and
+        outermost layers) are where heat arrives and a thermometer could sit."""
+        if self.coil is None:
+            return self.network.node_names
+        inner = set(self.coil.layer_names[1:-1])
+        return tuple(n for n in self.network.node_names if n not in inner)
+
+    def with_own_parts(self, nodes, links) -> "Instrument":
+        """A copy whose ``[thermal]`` nodes and links are ``nodes`` and ``links`` (the wound
+        coil, if any, added to them as :func:`nfs.coil.with_coil` does)."""
+        if self.coil is None:
+            return replace(self, network=Network(nodes=tuple(nodes), links=tuple(links)))
+        return replace(self, network=with_coil(tuple(nodes), tuple(links), self.coil))
+
     @functools.cached_property
-    def own_network(self) -> Network:
-        """The ``[thermal]`` network: :attr:`network` without the wound coil's layers."""
-        return self.network if self.coil is None else without_coil(self.network, self.coil)
+    def own_parts(self) -> tuple[tuple[Node, ...], tuple[Link, ...]]:
+        """(nodes, links) of ``[thermal]``: :attr:`network` without the wound coil's layers
+        and the links it makes (a link of ``[thermal]`` to a layer is its own)."""
+        if self.coil is None:
+            return self.network.nodes, self.network.links
+        return own_parts(self.network, self.coil)
 
     def with_effects(self, effects) -> "Instrument":
         """A copy with another effect list (checked against this instrument)."""
@@ -175,11 +195,11 @@ class Instrument:
 
     def to_dict(self) -> dict[str, Any]:
         """The TOML form (inverse of :func:`instrument_from_dict`)."""
-        own = self.own_network
+        own_nodes, own_links = self.own_parts
         nodes = {n.name: {"capacity_j_per_k": n.capacity_j_per_k, "power_w": n.power_w}
-                 for n in own.nodes}
+                 for n in own_nodes}
         links = [{"between": [l.a, l.b], "conductance_w_per_k": l.conductance_w_per_k}
-                 for l in own.links]
+                 for l in own_links]
         out: dict[str, Any] = {"name": self.name}
         if self.description:
             out["description"] = self.description
@@ -211,7 +231,9 @@ _THERMO_KEYS = tuple(ThermometerModel.__dataclass_fields__)
 _AUX_KEYS = tuple(AuxChannel.__dataclass_fields__)
 
 
-def _network(tbl: dict, prefix: str, file: Any) -> Network:
+def _network(tbl: dict, prefix: str, file: Any, coil: WoundCoil | None = None) -> Network:
+    """The ``[thermal]`` table's network, with the wound ``coil``'s layers when given (its
+    links may then name the layers)."""
     check_keys(tbl, ("nodes", "links"), prefix, file, required=("nodes", "links"))
     nodes_tbl = table(tbl, "nodes", prefix, file)
     nodes = []
@@ -244,6 +266,8 @@ def _network(tbl: dict, prefix: str, file: Any) -> Network:
         g = number(spec, "conductance_w_per_k", p, file, minimum=0.0)
         links.append(Link(a=between[0], b=between[1], conductance_w_per_k=g))
     try:
+        if coil is not None:
+            return with_coil(tuple(nodes), tuple(links), coil)
         return Network(nodes=tuple(nodes), links=tuple(links))
     except ThermalError as exc:
         raise ScenarioError(str(exc), file=file, key=prefix) from None
@@ -477,15 +501,15 @@ def instrument_from_dict(d: dict[str, Any], file: Any = None) -> Instrument:
 def _instrument_from_dict(d: dict[str, Any], file: Any) -> Instrument:
     check_keys(d, _TOP_KEYS, "", file, required=("thermal", "gyro", "accelerometers",
                                                   "thermometers"))
-    network = _network(table(d, "thermal", "", file), "thermal", file)
+    thermal_tbl = table(d, "thermal", "", file)
     gyro_tbl = table(d, "gyro", "", file)
     coil = None
     if "coil" in d:
-        coil = coil_from_dict(table(d, "coil", "", file), file, network.node_names)
-        try:
-            network = with_coil(network, coil)
-        except ThermalError as exc:
-            raise ScenarioError(str(exc), file=file, key="thermal.nodes") from None
+        nodes_tbl = thermal_tbl.get("nodes")
+        coil = coil_from_dict(table(d, "coil", "", file), file,
+                              tuple(nodes_tbl) if isinstance(nodes_tbl, dict) else ())
+    network = _network(thermal_tbl, "thermal", file, coil)
+    if coil is not None:
         # the coil's nodes in [gyro] are its innermost and outermost layers unless named
         gyro_tbl = {"coil_outer": coil.layer_names[-1], "coil_inner": coil.layer_names[0],
                     **gyro_tbl}

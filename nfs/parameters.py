@@ -75,11 +75,11 @@ def _link_key(link: Link) -> str:
 def param_paths(inst) -> list[tuple[str, str]]:
     """(path, kind) of every number of ``inst``, in TOML order (kinds: :data:`PARAM_KINDS`)."""
     out: list[tuple[str, str]] = []
-    own = inst.own_network
-    for node in own.nodes:
+    own_nodes, own_links = inst.own_parts
+    for node in own_nodes:
         out.append((f"thermal.nodes.{node.name}.capacity_j_per_k", "thermal"))
         out.append((f"thermal.nodes.{node.name}.power_w", "thermal"))
-    for link in own.links:
+    for link in own_links:
         out.append((f"thermal.links.{_link_key(link)}.conductance_w_per_k", "thermal"))
     if inst.coil is not None:
         out.extend((p, "thermal") for p in inst.coil.paths())
@@ -140,7 +140,7 @@ def canonical_path(inst, path: str, valid: set[str] | None = None) -> str:
         raise ParameterError(f"a parameter path must be a string, got {path!r}")
     if path.startswith("thermal.links.") and path.endswith(".conductance_w_per_k"):
         key = path[len("thermal.links."):-len(".conductance_w_per_k")]
-        for link in inst.own_network.links:
+        for link in inst.own_parts[1]:
             if key in (f"{link.a}-{link.b}", f"{link.b}-{link.a}"):
                 return f"thermal.links.{_link_key(link)}.conductance_w_per_k"
         raise _bad_path(inst, path, "no such link")
@@ -185,7 +185,7 @@ def get_param(inst, path: str) -> float:
             node = inst.network.nodes[inst.network.index(".".join(parts[2:-1]))]
             return float(getattr(node, parts[-1]))
         key = ".".join(parts[2:-1])
-        for link in inst.own_network.links:
+        for link in inst.own_parts[1]:
             if _link_key(link) == key:
                 return float(link.conductance_w_per_k)
     elif head == "coil":
@@ -234,17 +234,17 @@ def set_params(inst, values: Mapping[str, float]):
             effect_set.setdefault(label, {})[name] = v
     changes: dict = {}
     if node_set or link_set or coil_set:
-        own = inst.own_network
+        own_nodes, own_links = inst.own_parts
         nodes = tuple(replace(n, **node_set[n.name]) if n.name in node_set else n
-                      for n in own.nodes)
+                      for n in own_nodes)
         links = tuple(replace(l, conductance_w_per_k=link_set[_link_key(l)])
-                      if _link_key(l) in link_set else l for l in own.links)
-        network = Network(nodes=nodes, links=links)
-        if inst.coil is not None:
+                      if _link_key(l) in link_set else l for l in own_links)
+        if inst.coil is None:
+            changes["network"] = Network(nodes=nodes, links=links)
+        else:
             coil = inst.coil.with_numbers(coil_set) if coil_set else inst.coil
-            network = with_coil(network, coil)
+            changes["network"] = with_coil(nodes, links, coil)
             changes["coil"] = coil
-        changes["network"] = network
     if thermo_set:
         changes["thermometers"] = {k: replace(m, **thermo_set[k]) if k in thermo_set else m
                                    for k, m in inst.thermometers.items()}

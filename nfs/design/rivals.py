@@ -140,10 +140,11 @@ def _factor(cov: np.ndarray) -> np.ndarray:
 
 
 def _rate_rival(inst: Instrument, runs: Sequence[Run], **fit_kw) -> Rival:
-    """``shupe_rate`` on every node with its own coefficient, the drift stage refitted."""
+    """``shupe_rate`` on every node with its own coefficient, the drift stage refitted (a
+    wound coil's faces, not its interior layers, whose rates are all but collinear)."""
     added = []
     have = {e.label for e in inst.effects}
-    for node in inst.network.node_names:
+    for node in inst.target_nodes:
         e = make_effect("shupe_rate", {"k_s": 0.0, "node": node})
         if e.label not in have:
             added.append(e)
@@ -170,7 +171,7 @@ def unseen_nodes(inst: Instrument) -> tuple[str, ...]:
     """The nodes of ``inst`` that no thermometer reads (weight 0 in every one): where heat
     shows only through what it does to the gyro."""
     read = {n for th in inst.thermometers.values() for n, w in th.nodes.items() if w != 0.0}
-    return tuple(n for n in inst.network.node_names if n not in read)
+    return tuple(n for n in inst.target_nodes if n not in read)
 
 
 def _drift_cost(fr: FitResult) -> float:

@@ -121,7 +121,7 @@ def targets(spec: EffectSpec, inst: Instrument, runs: Sequence[Run]) -> list[str
         return [None]
     if t == "node":
         par = spec.parameter(t)
-        return ([None] if not par.required else []) + list(inst.network.node_names)
+        return ([None] if not par.required else []) + list(inst.target_nodes)
     if t == "axis":
         return ["x", "y"]
     if t == "thermometer":
@@ -135,7 +135,8 @@ def targets(spec: EffectSpec, inst: Instrument, runs: Sequence[Run]) -> list[str
 def candidates(inst: Instrument, runs: Sequence[Run]) -> list[Candidate]:
     """Every registered effect on every target that ``inst`` does not have.
 
-    Targets: ``node`` -> every thermal node, and None (the effect's default node, e.g. the
+    Targets: ``node`` -> every thermal node (a wound coil's faces, not its interior layers:
+    :attr:`~nfs.instrument.Instrument.target_nodes`), and None (the effect's default node, e.g. the
     coil mean) when the node parameter is optional; ``axis`` -> x, y; ``thermometer`` ->
     fog, acc_x, acc_y; ``channel`` -> every ``aux_*`` column present in all runs, declared
     under the model's ``[[aux]]`` or not (a column missing from some runs gives a candidate

@@ -29,8 +29,8 @@ periods [K], set points [degC] and channel references (collinear with the bias).
 def default_free(inst: Instrument, stages: Sequence[str] = FIT_STAGES) -> list[str]:
     """The default free set.
 
-    thermal stage: every node capacity, every conductance to the chamber, every non-zero
-    node power, every thermometer lag and offset, the coefficients of the thermal effects
+    thermal stage: every node capacity (a wound coil's: its volumetric heat capacity), every
+    conductance to the chamber, every non-zero node power, every thermometer lag and offset, the coefficients of the thermal effects
     (TEC slopes c_h, c_c; heat powers).  drift stage: ``gyro.bias_dph``, every coefficient of
     the gyro and accelerometer effects, the accelerometer biases and the turntable tilts.
     Effect time constants [s], temperature periods [K], set points [degC], channel
@@ -44,6 +44,8 @@ def default_free(inst: Instrument, stages: Sequence[str] = FIT_STAGES) -> list[s
             label = path[len("effects."):].rsplit(".", 1)[0]
             par = inst.effect(label).spec.parameter(leaf)
             take = par.unit not in _NOT_FREE_UNITS and not par.shape
+        elif path.startswith("coil."):     # a wound coil: its capacity (nfs.coil)
+            take = leaf == "heat_capacity_j_per_m3_k"
         elif kind == "thermal":
             take = (leaf == "capacity_j_per_k"
                     or (leaf == "power_w" and get_param(inst, path) != 0.0)

@@ -21,6 +21,11 @@ __all__ = ["ParameterError", "PARAM_KINDS", "get_param", "set_params", "list_par
 
 _INF = math.inf
 
+#: A wound coil's numbers whose box is relative to the value, as a capacity's or a link's
+#: (:mod:`nfs.coil`): its material and its faces' contacts.
+_COIL_RELATIVE = ("coil.conductivity_w_per_m_k", "coil.heat_capacity_j_per_m3_k",
+                  "coil.inner_contacts.", "coil.outer_contacts.")
+
 
 # ---------------------------------------------------------------------------------------------
 # Bounds
@@ -38,6 +43,9 @@ def default_bounds(path: str, value: float, unit: str | None = None) -> tuple[fl
     ======================================  =====================================================
     capacities, conductances                value/10 .. value*10 (> 0: a network stays physical),
                                             anchored (below); a zero conductance 0 .. 10 W/K
+    a wound coil's conductivity, volumetric value/10 .. value*10, anchored (below); its faces'
+    heat capacity and contacts              contacts as conductances
+    a wound coil's radii and height         value/2 .. value*2 (its drawing: rarely freed)
     node powers                             0 .. max(10 value, 1 W) (negative: 10 value .. 0)
     thermometer lag_s                       0 .. 300 s
     thermometer offset_c                    -2 .. +2 K
@@ -59,8 +67,10 @@ def default_bounds(path: str, value: float, unit: str | None = None) -> tuple[fl
     """
     v = float(value)
     leaf = path.rsplit(".", 1)[-1]
-    if leaf in ("capacity_j_per_k", "conductance_w_per_k"):
+    if leaf in ("capacity_j_per_k", "conductance_w_per_k") or path.startswith(_COIL_RELATIVE):
         return _anchored(path, v, v / 10.0, v * 10.0) if v > 0 else (0.0, 10.0)
+    if path.startswith("coil."):                                   # radii and height
+        return (v / 2.0, v * 2.0)
     if leaf == "power_w" and path.startswith("thermal."):
         return (0.0, max(10.0 * v, 1.0)) if v >= 0 else (10.0 * v, 0.0)
     if path.startswith("thermometers."):

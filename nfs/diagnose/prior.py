@@ -65,6 +65,14 @@ PRIOR_WIDTHS: dict[str, PriorWidth] = {
     "thermal.links.*.conductance_w_per_k": PriorWidth(
         0.5, True, 0.1, "docs/physics.md ranges span x4-6 (components to housing 0.3-2 W/K); "
                         "50 % keeps the preset's network shape"),
+    "coil.heat_capacity_j_per_m3_k": PriorWidth(
+        0.2, True, 3e5, "a potted winding's volumetric heat capacity: silica 1.6e6, acrylate "
+                        "and epoxy 1.7-2.2e6 J/(m^3 K)"),
+    "coil.conductivity_w_per_m_k": PriorWidth(
+        0.5, True, 0.1, "a potted winding conducts 0.2-0.5 W/(m K) across its layers: x2.5"),
+    "coil.*_contacts.*": PriorWidth(
+        0.5, True, 0.1, "a face's contacts, as the network's links"),
+    "coil.*": PriorWidth(0.05, True, 1e-3, "the coil's drawing: radii and height known"),
     "thermometers.*.lag_s": PriorWidth(
         0.5, True, 30.0, "docs/physics.md: tau 10-60 s"),
     "thermometers.*.offset_c": PriorWidth(
@@ -96,6 +104,7 @@ EFFECT_PRIOR_WIDTHS: dict[str, PriorWidth] = {
     "g/K": PriorWidth(2e-4, False, 2e-4, "QFA bias 10-50 ug/K: 4x the range"),
     "1/K": PriorWidth(3e-3, False, 3e-3, "scale factor 17-800 ppm/K: 4x the range"),
     "s": PriorWidth(0.5, True, 60.0, "effect time constants (turn-on 1-5 min): x2-5 ranges"),
+    "m": PriorWidth(0.5, False, 0.5, "a winding's asymmetric length (a few cm): 10x it"),
     "K": PriorWidth(0.5, True, 1.0, "temperature periods: a factor 2"),
     "degC": PriorWidth(5.0, False, 5.0, "set points: a few kelvin"),
     "deg": PriorWidth(180.0, False, 180.0, "an azimuth: anywhere"),

@@ -166,16 +166,17 @@ def split_node(inst: Instrument, node: str) -> StructuralAlternative:
     1/100..100 times that.
     """
     net = inst.network
-    j = net.index(node)
-    old = net.nodes[j]
+    own_nodes, own_links = inst.own_parts
+    j = [n.name for n in own_nodes].index(node)
+    old = own_nodes[j]
     twin = _new_name(net, f"{node}_2")
     half = 0.5 * old.capacity_j_per_k
     g_all = sum(l.conductance_w_per_k for l in net.links if node in (l.a, l.b))
     g0 = 0.25 * g_all if g_all > 0 else 0.1
-    nodes = list(net.nodes)
+    nodes = list(own_nodes)
     nodes[j] = replace(old, capacity_j_per_k=half)
     nodes.insert(j + 1, Node(twin, half))
-    new = replace(inst, network=Network(tuple(nodes), net.links + (Link(node, twin, g0),)))
+    new = inst.with_own_parts(nodes, own_links + (Link(node, twin, g0),))
     return StructuralAlternative(
         name=f"split {node}", kind="split",
         description=(f"splits {node} into two halves of {half:.4g} J/K linked by a conductance "
@@ -193,23 +194,24 @@ def insert_node(inst: Instrument, node: str, to: str | None = None) -> Structura
     the chamber).
     """
     net = inst.network
+    own_nodes, own_links = inst.own_parts      # a wound coil's own links are not cut
     to = to or _housing(inst)
-    links = [l for l in net.links if {l.a, l.b} == {node, to}]
+    links = [l for l in own_links if {l.a, l.b} == {node, to}]
     if not links:
         raise NfsError(f"insert_node: no link {node}-{to} in instrument '{inst.name}'")
     g0 = sum(l.conductance_w_per_k for l in links)
     mid = _new_name(net, f"{node}_mid")
     c0 = net.nodes[net.index(node)].capacity_j_per_k / 3.0
-    kept = tuple(l for l in net.links if l not in links)
-    new_net = Network(net.nodes + (Node(mid, c0),),
-                      kept + (Link(node, mid, 2 * g0), Link(mid, to, 2 * g0)))
+    kept = tuple(l for l in own_links if l not in links)
+    new = inst.with_own_parts(own_nodes + (Node(mid, c0),),
+                              kept + (Link(node, mid, 2 * g0), Link(mid, to, 2 * g0)))
     free = (f"thermal.nodes.{mid}.capacity_j_per_k", _link_path(node, mid), _link_path(mid, to))
     start = (c0, 2 * g0, 2 * g0)
     return StructuralAlternative(
         name=f"insert node {node}-{to}", kind="insert",
         description=(f"puts a node of fitted capacity between {node} and {to} (the "
                      f"{node}-{to} link becomes two links through it)"),
-        instrument=replace(inst, network=new_net), free=free, start=start,
+        instrument=new, free=free, start=start,
         bounds=tuple((v / 100.0, v * 100.0) for v in start))
 
 
@@ -220,7 +222,8 @@ def free_link(inst: Instrument, a: str, b: str) -> StructuralAlternative:
         net.index(n)  # thermal.ThermalError (one of USER_ERRORS) listing the valid nodes
     if any({l.a, l.b} == {a, b} for l in net.links):
         raise NfsError(f"free_link: {a} and {b} are linked already in '{inst.name}'")
-    new = replace(inst, network=Network(net.nodes, net.links + (Link(a, b, 0.0),)))
+    own_nodes, own_links = inst.own_parts
+    new = inst.with_own_parts(own_nodes, own_links + (Link(a, b, 0.0),))
     return StructuralAlternative(
         name=f"link {a}-{b}", kind="link",
         description=f"adds a conductance between {a} and {b}, which the model does not link",
@@ -328,21 +331,29 @@ def structural_alternatives(inst: Instrument) -> list[StructuralAlternative]:
     housing = _housing(inst)
     acc = set(inst.accelerometers.nodes.values())
     coil = [n for n in (g.coil_outer, g.coil_inner) if n]
+    # a wound coil's layers are resolved already and their links are its own numbers
+    # (nfs.coil): they are linked to, not split or cut
+    layers = set(inst.coil.layer_names) if inst.coil is not None else set()
     powered = [n.name for n in net.nodes
                if n.power_w > 0 and n.name not in acc and n.name != g.source]
     shell = [housing] if housing else []
     core = list(dict.fromkeys(coil + [g.source] + powered + shell))
-    out = [split_node(inst, n) for n in dict.fromkeys(coil + shell + powered)]
+    out = [split_node(inst, n) for n in dict.fromkeys(coil + shell + powered)
+           if n not in layers]
     fog_nodes = list(inst.thermometers["fog"].nodes)
     if housing:
         out += [insert_node(inst, n, housing) for n in fog_nodes
-                if n != housing and any({l.a, l.b} == {n, housing} for l in net.links)]
+                if n != housing and n not in layers
+                and any({l.a, l.b} == {n, housing} for l in inst.own_parts[1])]
     linked = {frozenset((l.a, l.b)) for l in net.links}
     for i, a in enumerate(core):
         for b in core[i + 1:]:
-            if frozenset((a, b)) not in linked:
+            if frozenset((a, b)) not in linked and not {a, b} <= layers:
                 out.append(free_link(inst, a, b))
-    near = [m for n in fog_nodes for m in _neighbours(net, n) if m not in fog_nodes]
+    # a thermometer sits on a face of a wound coil, never inside the winding
+    inside = set(inst.coil.layer_names[1:-1]) if inst.coil is not None else set()
+    near = [m for n in fog_nodes for m in _neighbours(net, n)
+            if m not in fog_nodes and m not in inside]
     out += [thermometer_weight(inst, "fog", m) for m in dict.fromkeys(near)]
     if len(fog_nodes) > 1:
         out.append(thermometer_weight(inst, "fog", fog_nodes[0]))
@@ -351,7 +362,7 @@ def structural_alternatives(inst: Instrument) -> list[StructuralAlternative]:
             continue
         own = list(model.nodes)
         out += [thermometer_weight(inst, name, m) for m in dict.fromkeys(
-            m for n in own for m in _neighbours(net, n) if m not in own)]
+            m for n in own for m in _neighbours(net, n) if m not in own and m not in inside)]
     if any(e.name == "tec_power" for e in inst.effects):
         out.append(tec_set_point(inst))
     return out

@@ -25,7 +25,7 @@ from nfs.errors import NfsError
 
 @pytest.fixture(scope="module")
 def world():
-    model = nfs.load_instrument("default")
+    model = nfs.load_instrument("lumped")      # two coil nodes: coil_inner is unseen
     truth = model.with_effects(list(model.effects) + [
         make_effect("heat_source", {"node": "coil_inner", "power": 0.5})])
     sc = nfs.load_scenario().nominal()
@@ -56,7 +56,11 @@ def test_each_kind_of_rival_adds_its_explanation(world):
 
 
 def test_unseen_nodes_are_those_no_thermometer_reads():
-    model = nfs.load_instrument("default")
+    # a wound coil: the FOG thermometer reads the outer face's layer; the spool and the
+    # spool-side face are unseen, the interior layers are not targets of their own
+    assert unseen_nodes(nfs.load_instrument("default")) == (
+        "housing", "board", "spool", "coil_1")
+    model = nfs.load_instrument("lumped")
     # fog reads electronics and coil_outer, each QFA thermometer its own QFA
     assert unseen_nodes(model) == ("housing", "board", "coil_inner")
     seen = dataclasses.replace(model, thermometers={

@@ -26,11 +26,11 @@ from nfs.config.scenario import load_scenario
 
 #: The perturbed parameters (+20 % of the default) and the truth.
 PERTURBED = {
-    "thermal.nodes.coil_inner.capacity_j_per_k": 1.2,
+    "coil.heat_capacity_j_per_m3_k": 1.2,
     "thermal.links.housing-chamber.conductance_w_per_k": 1.2,
     "thermometers.fog.lag_s": 1.2,
     "effects.tec_power.c_h": 1.2,
-    "effects.shupe_gradient.k_r": 1.2,
+    "effects.shupe_winding.k_m": 1.2,
     "effects.bias_temperature.b1": 1.2,
 }
 
@@ -62,8 +62,8 @@ def fitted(scenario, runs):
 def test_recovers_perturbed_parameters(fitted, truth):
     # Tolerance: within 3 standard errors (or 1 % where the error is tiny) and never more
     # than 6 % off (the thermal solver holds the TEC power over 10 s knots, and the
-    # capacities trade off against each other: coil_inner is seen only through the FOG's
-    # thermometer and the drift).
+    # capacities trade off against each other: the wound coil's and its spool's are seen
+    # only through the FOG's thermometer and the drift).
     for p in PERTURBED:
         want = get_param(truth, p)
         got = fitted.params[p]
@@ -96,7 +96,7 @@ def test_write_fitted_model(fitted, tmp_path):
     path = write_fitted_model(fitted, tmp_path / "fitted.toml")
     text = path.read_text()
     assert "# Fitted parameters" in text
-    assert "effects.shupe_gradient.k_r = " in text
+    assert "effects.shupe_winding.k_m = " in text
     back = load_instrument(path)
     for p, v in fitted.params.items():
         assert get_param(back, p) == pytest.approx(v, rel=1e-12)
@@ -164,8 +164,8 @@ def test_bad_input(scenario, runs):
     no_heading = replace(runs[0], meta=replace(runs[0].meta, true_heading_deg=None))
     with pytest.raises(NfsError, match="true_heading_deg"):
         fit_model(inst, [no_heading], stages=("drift",))
-    with pytest.raises(NfsError, match="shupe_gradient.k_r"):
-        fit_model(inst, runs[:1], ["effects.shupe_gradient.kr"])
+    with pytest.raises(NfsError, match="shupe_winding.k_m"):
+        fit_model(inst, runs[:1], ["effects.shupe_winding.km"])
     with pytest.raises(NfsError, match="stage"):
         fit_model(inst, runs[:1], stages=("thermals",))
 

@@ -3,7 +3,8 @@
 Oracles: invariants (get after set returns what was set; the original instrument is
 unchanged; a TOML round trip keeps the set value), the instrument's own TOML form (the path
 names the same number as the TOML key), and the error contract (a bad path names itself
-and lists close valid ones).
+and lists close valid ones).  Both coils: the default's wound coil (its layers follow the
+coil's numbers ``coil.*``) and the lumped preset's two nodes.
 """
 
 import math
@@ -21,12 +22,20 @@ def inst():
     return load_instrument("default")
 
 
-def test_round_trip_every_path(inst):
+@pytest.fixture(scope="module")
+def lumped():
+    return load_instrument("lumped")
+
+
+@pytest.mark.parametrize("preset", ["default", "lumped"])
+def test_round_trip_every_path(preset):
+    inst = load_instrument(preset)
     paths = list_params(inst)
     assert len(paths) == len(set(paths)) > 40
     for p in paths:
         v = get_param(inst, p)
-        new = v * 1.25 + 0.5
+        # a coil's radii and height by 10 % (its winding stays between them)
+        new = v * 1.1 if p.startswith("coil.") else v * 1.25 + 0.5
         out = set_params(inst, {p: new})
         assert get_param(out, p) == pytest.approx(new, rel=1e-15), p
         # the original is unchanged
@@ -37,7 +46,8 @@ def test_round_trip_every_path(inst):
                 assert get_param(out, q) == get_param(inst, q), (p, q)
 
 
-def test_set_many_and_toml_round_trip(inst):
+def test_set_many_and_toml_round_trip(lumped):
+    inst = lumped
     values = {"thermal.nodes.coil_inner.capacity_j_per_k": 222.0,
               "thermal.links.chamber-housing.conductance_w_per_k": 1.9,   # reversed order
               "thermometers.fog.lag_s": 36.0, "gyro.bias_dph": 0.03,
@@ -54,11 +64,34 @@ def test_set_many_and_toml_round_trip(inst):
     assert inst.network.nodes[4].capacity_j_per_k == 190.0
 
 
-def test_kinds(inst):
+def test_a_wound_coils_layers_follow_its_numbers(inst):
+    # the layers are not paths: the coil's numbers are, and setting one rebuilds them
+    paths = list_params(inst)
+    assert not any(".coil_3." in p or "coil_3-" in p for p in paths)
+    assert {"coil.conductivity_w_per_m_k", "coil.heat_capacity_j_per_m3_k",
+            "coil.inner_contacts.spool", "coil.outer_contacts.housing"} <= set(paths)
+    out = set_params(inst, {"coil.heat_capacity_j_per_m3_k": 2.0e6,
+                            "coil.outer_contacts.housing": 0.6,
+                            "thermal.nodes.spool.capacity_j_per_k": 90.0})
+    caps = {n.name: n.capacity_j_per_k for n in out.network.nodes}
+    old = {n.name: n.capacity_j_per_k for n in inst.network.nodes}
+    assert caps["coil_5"] == pytest.approx(old["coil_5"] * 2.0 / 1.7, rel=1e-12)
+    assert caps["spool"] == 90.0
+    assert sum(caps[f"coil_{k}"] for k in range(1, 9)) == pytest.approx(
+        out.coil.capacity_j_per_k, rel=1e-12)
+    back = instrument_from_dict(out.to_dict())
+    assert back.network == out.network and back.coil == out.coil
+    with pytest.raises(ParameterError, match="coil_3"):
+        get_param(inst, "thermal.nodes.coil_3.capacity_j_per_k")
+
+
+def test_kinds(inst, lumped):
     thermal = list_params(inst, "thermal")
     assert "thermal.nodes.housing.capacity_j_per_k" in thermal
     assert "effects.tec_power.c_h" in thermal
-    assert "effects.shupe_gradient.k_r" in list_params(inst, "drift")
+    assert "coil.conductivity_w_per_m_k" in thermal
+    assert "effects.shupe_winding.k_m" in list_params(inst, "drift")
+    assert "effects.shupe_gradient.k_r" in list_params(lumped, "drift")
     assert "gyro.bias_dph" in list_params(inst, "drift")
     assert "effects.acc_bias_temperature:x.b_q1" in list_params(inst, "accelerometer")
     assert set(list_params(inst, "thermometer")) >= {"thermometers.fog.lag_s",
@@ -67,7 +100,8 @@ def test_kinds(inst):
         list_params(inst, "gyros")
 
 
-def test_patterns(inst):
+def test_patterns(lumped):
+    inst = lumped
     caps = expand_paths(inst, "thermal.nodes.*.capacity_j_per_k")
     assert len(caps) == len(inst.network.nodes)
     got = expand_paths(inst, ["thermometers.*.lag_s", "effects.shupe_*.*",
@@ -87,7 +121,8 @@ def test_patterns(inst):
     ("thermometers.fog.lag", "thermometers.fog.lag_s"),
     ("gyro.bias", "gyro.bias_dph"),
 ])
-def test_bad_path(inst, bad, close):
+def test_bad_path(lumped, bad, close):
+    inst = lumped
     with pytest.raises(NfsError) as err:
         get_param(inst, bad)
     msg = str(err.value)
@@ -117,11 +152,12 @@ def test_relative_boxes_of_a_typical_unit_are_a_decade_each_way(inst):
             assert fit_bounds(inst, p) == (v / 10.0, v * 10.0), p
 
 
-def test_chained_fits_cannot_walk_a_capacity_out_of_its_range(inst):
+def test_chained_fits_cannot_walk_a_capacity_out_of_its_range(lumped):
     """A fit started from another fit's result gets a box relative to that result; chained,
     the boxes would let a capacity fall a decade per fit.  Anchored to the typical range of
     nfs.ranges (coil_outer 40-100 J/K), the box stops a decade below it, however many fits
     come before."""
+    inst = lumped
     path = "thermal.nodes.coil_outer.capacity_j_per_k"
     floor = 40.0 / 10.0
     walked = inst

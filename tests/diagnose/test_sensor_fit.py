@@ -25,7 +25,7 @@ from nfs.sensors import axis_elevation_deg
 
 TRUTH = {"turntable.tilt_north_deg": 0.3, "turntable.tilt_east_deg": -0.2,
          "accelerometers.bias_x_g": 3e-3, "accelerometers.bias_y_g": -2e-3,
-         "effects.shupe_gradient.k_r": 0.15}
+         "effects.shupe_winding.k_m": 1.5e-5}
 
 #: Standard error of a 10 s window mean of the QFA white noise [g].
 WINDOW_FLOOR_G = 20e-6 * math.sqrt(0.5) / math.sqrt(10.0)

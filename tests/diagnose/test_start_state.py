@@ -120,10 +120,13 @@ def test_simulated_unfinished_soak_records_its_history(default):
     assert 0.5 * sc.variability.soak_h < hours < 2.0 * sc.variability.soak_h
 
 
-def test_known_starts_are_recovered(default):
+def test_known_starts_are_recovered():
     """Runs started at T0 + a_1 v_1 + b u (soak-history-free) with the model's own
     parameters: the profiled amplitudes (u freed) come back to within 10 mK and the
-    residual sits at the floor; started at T0 the same runs miss by far more."""
+    residual sits at the floor; started at T0 the same runs miss by far more.  On the
+    lumped-coil preset: a wound coil's share of u decays in seconds, before the first 10 s
+    knot, so its b is not seen there (the fit's start is, which is what the fit needs)."""
+    default = load_instrument("lumped")
     sc = load_scenario().nominal()
     basis = start_basis(default.network, 1, fast=True)
     truth = {-32.0: (0.6, 0.05), 17.0: (-0.3, -0.04), 54.0: (-0.45, 0.08)}

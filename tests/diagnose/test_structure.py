@@ -1,6 +1,8 @@
 """Tests of nfs.diagnose.structure: is the model's thermal structure adequate?
 
-"Measured" runs: the default scenario's conditions at four start temperatures (-32, -5, 28,
+"Measured" runs: the default scenario's conditions, with the lumped-coil preset (``nfs preset
+lumped``, two coil nodes, on which these figures were measured; the wound coil's structure
+is checked in tests/diagnose/test_wound_coil.py), at four start temperatures (-32, -5, 28,
 54 C; one each side of the TEC set point and two far out), shortened to 2 h (one hour of
 start-up, one of stable stage), simulated with noise by nfs.experiment.simulate_run.
 Residual grid every 30 s.  Oracle: the generating instrument (we know its structure).
@@ -30,6 +32,7 @@ from nfs.diagnose.thermal_residual import prepare_thermal, thermal_residual_part
 from nfs.errors import NfsError
 from nfs.experiment import simulate_run
 from nfs.config.scenario import load_scenario
+from nfs.instrument import load_instrument
 
 TEMPS = (-32.0, -5.0, 28.0, 54.0)
 FLOOR_K = math.hypot(0.01, 0.0625 / math.sqrt(12.0))
@@ -39,7 +42,7 @@ HIDDEN_G = 0.3
 
 @pytest.fixture(scope="module")
 def default():
-    return load_scenario().nominal().instrument
+    return load_instrument("lumped")
 
 
 def _runs(inst):
