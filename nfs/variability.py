@@ -42,8 +42,10 @@ Per unit (unit-to-unit, drawn once per unit)
 Every parameter path (:mod:`nfs.parameters`) of a family gets a factor or an offset:
 
 - relative: p_u = p exp(s z - s^2/2), s^2 = ln(1 + rel^2), z ~ N(0, 1): mean p, standard
-  deviation rel |p|, never a change of sign (a log-normal factor): node capacities
-  (``capacity_rel_std``), link conductances (``conductance_rel_std``), node powers and the
+  deviation rel |p|, never a change of sign (a log-normal factor): node capacities and a
+  wound coil's volumetric heat capacity (``capacity_rel_std``), link conductances, a wound
+  coil's conductivity and its faces' contacts (``conductance_rel_std``; its radii and
+  height are its drawing's, kept), node powers and the
   thermal effects' powers and power slopes [W], [W/K] (``power_rel_std``), the gyro and
   accelerometer effects' coefficients (``effect_rel_std``; reference temperatures [degC],
   angles [deg] and phases [rad] are set points, not coefficients, and are kept, as are the
@@ -289,6 +291,10 @@ def unit_scatter(inst: Instrument, var: Variability) -> dict[str, tuple[float, b
             std = var.capacity_rel_std if leaf == "capacity_j_per_k" else var.power_rel_std
         elif path.startswith("thermal.links."):
             std = var.conductance_rel_std
+        elif path.startswith("coil."):      # a wound coil: its potting and its contacts
+            std = {"heat_capacity_j_per_m3_k": var.capacity_rel_std,
+                   "conductivity_w_per_m_k": var.conductance_rel_std}.get(
+                leaf, var.conductance_rel_std if "_contacts." in path else 0.0)
         elif path.startswith("thermometers.") and leaf == "offset_c":
             std, rel = var.thermometer_offset_c, False
         elif path.startswith("effects."):

@@ -41,10 +41,10 @@ def test_output_is_the_sum_of_its_named_terms(inst):
 def test_ablation_changes_only_that_term(inst):
     # Switching one effect to the null effect removes its term and nothing else.
     r0 = simulate_run(inst, cond())
-    effects = [make_effect("null") if e.name == "shupe_gradient" else e for e in inst.effects]
+    effects = [make_effect("null") if e.name == "shupe_winding" else e for e in inst.effects]
     r1 = simulate_run(inst.with_effects(effects), cond())
     diff = r0.run["gyro_dph"] - r1.run["gyro_dph"]
-    np.testing.assert_allclose(diff, r0.gyro_terms_dph["shupe_gradient"], atol=1e-12)
+    np.testing.assert_allclose(diff, r0.gyro_terms_dph["shupe_winding"], atol=1e-12)
     np.testing.assert_array_equal(r0.gyro_noise_dph, r1.gyro_noise_dph)
     np.testing.assert_array_equal(r0.run["temp_fog_c"], r1.run["temp_fog_c"])
 

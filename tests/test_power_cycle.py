@@ -321,11 +321,11 @@ def test_turn_on_transient_restarts(inst, warm_up_cycle):
 
 
 def test_restart_separates_coil_heat_from_the_turn_on_transient(inst, conds):
-    """docs/power_cycles.md: the drift of heat released inside the coil restarts scaled by
-    how far the unit cooled while off (growing with the off time towards its cold-start
-    value), the turn-on transient at full amplitude whatever the off time."""
+    """docs/power_cycles.md: the drift of heat released at the coil restarts scaled by how
+    far the unit cooled while off (growing with the off time towards its cold-start value),
+    the turn-on transient at full amplitude whatever the off time."""
     hot = dataclasses.replace(inst, effects=inst.effects + parse_effects(
-        [{"name": "heat_source", "node": "coil_inner", "power": 0.3}], file="test"))
+        [{"name": "heat_source", "node": "coil_8", "power": 0.3}], file="test"))
     base = conds[3]
     t1 = 7200.0
     a = _effect_params(inst, "turn_on_transient")["a"]
@@ -340,7 +340,10 @@ def test_restart_separates_coil_heat_from_the_turn_on_transient(inst, conds):
         cold_start = drift[0]
         assert with_heat.gyro_terms_dph[_transient_label(with_heat)][i2] == a
     assert 0.0 < coil_heat[0] < coil_heat[1] < coil_heat[2] < cold_start
-    assert coil_heat[0] < 0.1 * cold_start      # a blip restarts almost nothing
+    # the heat arrives at the winding's outer face, whose outermost layer follows it within
+    # seconds (the winding's radial modes are 3-27 s): a blip restarts a part of it, not
+    # the whole of a cold start (the lumped coil's 190 J/K inner node restarted 7 % of it)
+    assert coil_heat[0] < 0.5 * cold_start
     assert coil_heat[2] > 0.9 * cold_start      # half an hour off: nearly a cold start
 
 

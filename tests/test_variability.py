@@ -142,12 +142,15 @@ def test_a_parameter_draw_depends_only_on_its_unit_and_path(default):
     # values for every other parameter.
     inst = default.instrument
     var = default.variability
-    fewer = inst.with_effects([e for e in inst.effects if e.name != "shupe_rate"])
+    fewer = inst.with_effects([e for e in inst.effects if e.name != "turn_on_transient"])
     a, b = unit_instrument(inst, var, 4), unit_instrument(fewer, var, 4)
     for path in unit_scatter(fewer, var):
         assert get_param(a, path) == get_param(b, path), path
-    assert get_param(a, "effects.shupe_gradient.k_r") != \
-        get_param(unit_instrument(inst, var, 5), "effects.shupe_gradient.k_r")
+    assert get_param(a, "effects.shupe_winding.k_m") != \
+        get_param(unit_instrument(inst, var, 5), "effects.shupe_winding.k_m")
+    # a design's constants are the same in every unit (the fibre's length and dn/dT)
+    for path in ("effects.shupe_winding.L", "effects.shupe_winding.dn_dT"):
+        assert get_param(a, path) == get_param(inst, path) and path not in unit_scatter(inst, var)
 
 
 # ------------------------------------------------------------------------------ the world varies
@@ -161,7 +164,7 @@ def test_two_start_ups_differ_beyond_noise(default):
     sims = [simulate_run(sc.instrument, c) for c in sc.conditions()]
     u0a, u0b = sims[0], sims[3]
     assert u0a.conditions.unit == u0b.conditions.unit == 0
-    coil = [s.thermal.node("coil_inner") for s in (u0a, u0b)]
+    coil = [s.thermal.node("coil_1") for s in (u0a, u0b)]
     assert np.max(np.abs(coil[0] - coil[1])) > 0.1
     noise = sc.instrument.thermometers["fog"].noise_c
     assert noise <= 0.01
@@ -211,7 +214,9 @@ def test_unit_scatter_matches_its_stated_std(default):
              "thermal.links.housing-chamber.conductance_w_per_k": var.conductance_rel_std,
              "thermal.nodes.board.power_w": var.power_rel_std,
              "effects.tec_power.c_h": var.power_rel_std,
-             "effects.shupe_gradient.k_r": var.effect_rel_std,
+             "effects.shupe_winding.k_m": var.effect_rel_std,
+             "coil.heat_capacity_j_per_m3_k": var.capacity_rel_std,
+             "coil.outer_contacts.housing": var.conductance_rel_std,
              "effects.acc_bias_temperature:y.b_q1": var.effect_rel_std}
     units = [unit_instrument(inst, var, u) for u in range(400)]
     for path, rel in paths.items():
@@ -300,11 +305,11 @@ def test_chamber_wander_and_cycling_statistics():
     ('[variability]\ncycling_shape = "square"\n', "variability.cycling_shape", "triangle"),
     ("[variability]\nchamber_wander_tau_s = 0\n", "variability.chamber_wander_tau_s", "> 0"),
     ("[variability]\nunfinished_soak = 1\n", "variability.unfinished_soak", "true or false"),
-    ('[variability.parameters]\n"effects.shupe_gradiant.k_r" = 0.3\n',
-     'variability.parameters."effects.shupe_gradiant.k_r"', "shupe_gradient"),
-    ('[variability.parameters]\n"effects.shupe_gradient.k_r" = -0.3\n',
-     'variability.parameters."effects.shupe_gradient.k_r"', ">= 0"),
-    ("[variability.parameters]\neffects.shupe_gradient.k_r = 0.3\n",
+    ('[variability.parameters]\n"effects.shupe_windng.k_m" = 0.3\n',
+     'variability.parameters."effects.shupe_windng.k_m"', "shupe_winding"),
+    ('[variability.parameters]\n"effects.shupe_winding.k_m" = -0.3\n',
+     'variability.parameters."effects.shupe_winding.k_m"', ">= 0"),
+    ("[variability.parameters]\neffects.shupe_winding.k_m = 0.3\n",
      'variability.parameters."effects"', "quote"),
     ('variability = "none"\n', "variability", "preset"),
     ("units = 0\n", "units", ">= 1"),
@@ -332,9 +337,9 @@ def test_bad_variability_exits_2_with_one_line(tmp_path, cli, scenario_text):
 def test_parameters_of_ones_own(tmp_path, scenario_text):
     sc = _scenario(tmp_path, scenario_text,
                    '[variability]\npreset = "custom"\n[variability.parameters]\n'
-                   '"effects.shupe_gradient.k_r" = 0.3\n"thermometers.*.lag_s" = { std = 5.0 }\n')
+                   '"effects.shupe_winding.k_m" = 0.3\n"thermometers.*.lag_s" = { std = 5.0 }\n')
     scatter = unit_scatter(sc.instrument, sc.variability)
-    assert scatter == {"effects.shupe_gradient.k_r": (0.3, True),
+    assert scatter == {"effects.shupe_winding.k_m": (0.3, True),
                        "thermometers.fog.lag_s": (5.0, False),
                        "thermometers.acc_x.lag_s": (5.0, False),
                        "thermometers.acc_y.lag_s": (5.0, False)}

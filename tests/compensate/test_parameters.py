@@ -99,7 +99,9 @@ def test_a_rotating_schedule_cancels_the_bias_and_one_position_does_not(study):
     # constant calibration through a 30 K ramp.
     rows = {(h.schedule, h.method): h for h in study.headings}
     fitted = rows[("as run", BIAS_FITTED)].rmse_deg
-    assert rows[("as run", CONSTANT)].rmse_deg == pytest.approx(fitted, rel=1e-6)
+    # (the constant model's accelerometer biases and scale factor move the levelling by a
+    # few parts per million of the heading error: 4.5e-6 on the default instrument)
+    assert rows[("as run", CONSTANT)].rmse_deg == pytest.approx(fitted, rel=1e-5)
     # (a predicted scale factor and accelerometer biases move the levelling a hair)
     assert rows[("as run", "LS (parameters)")].rmse_deg == pytest.approx(fitted, rel=1e-3)
     one_c = rows[("one position", CONSTANT)]

@@ -166,7 +166,7 @@ def test_sobol_draws_are_seeded_and_inside_their_ranges(tmp_path, short_scenario
 scenario = "{short_scenario.name}"
 seeds = [1]
 [axes]
-"effects.shupe_gradient.k_r" = {{ low = 0.1, high = 1.0, log = true }}
+"effects.shupe_winding.k_m" = {{ low = 1e-6, high = 1e-5, log = true }}
 schedule.dwell_s = {{ low = 60.0, high = 180.0 }}
 [draws]
 sampler = "sobol"
@@ -178,7 +178,7 @@ seed = 3
     assert spec.n_cells == len(pts) == 4
     again = list(load_sweep(write_sweep(tmp_path, text, "again.toml")).points())
     assert pts == again
-    k = np.array([p["effects.shupe_gradient.k_r"] for p in pts])
+    k = np.array([p["effects.shupe_winding.k_m"] for p in pts]) * 1e5  # in 1e-5 /K
     d = np.array([p["schedule.dwell_s"] for p in pts])
     assert np.all((k >= 0.1) & (k <= 1.0)) and np.all((d >= 60.0) & (d <= 180.0))
     # a scrambled Sobol set of 4 puts one point in each quarter of each (log) range

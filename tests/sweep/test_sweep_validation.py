@@ -17,8 +17,8 @@ CASES = [
      "value 95.0: must be <= 89.0"),
     ("seeds = [1]\n[axes]\n\"gyro.arw_deg_per_rth_h\" = { low = 0.001, high = 0.0001 }\n",
      "key 'axes.gyro.arw_deg_per_rth_h'", "low < high"),
-    ("seeds = [1]\n[axes]\n\"effects.shupe_gradient.k_r\" = { low = 0.0, high = 1.0, "
-     "log = true }\n", "key 'axes.effects.shupe_gradient.k_r'", "log range needs low > 0"),
+    ("seeds = [1]\n[axes]\n\"effects.shupe_winding.k_m\" = { low = 0.0, high = 1e-5, "
+     "log = true }\n", "key 'axes.effects.shupe_winding.k_m'", "log range needs low > 0"),
     ("seeds = [1]\n[axes]\n\"thermal.nodes.housing.capacity_j_per_k\" = [-5.0]\n",
      "key 'axes.thermal.nodes.housing.capacity_j_per_k'", "capacity_j_per_k must be > 0"),
     ("seeds = [1]\n[axes]\nschedule.dwell_s = [60.0, 5000.0]\n", "key 'axes.schedule.dwell_s'",
