@@ -32,6 +32,7 @@ parameter path change the coil's few numbers (``coil.conductivity_w_per_m_k``,
 from __future__ import annotations
 
 import functools
+import math
 from dataclasses import dataclass
 from typing import Any
 
@@ -113,9 +114,9 @@ class WoundCoil:
     @property
     def radial_time_constant_s(self) -> float:
         """The slowest radial mode of the winding alone with its outer face held and its
-        inner face adiabatic, 4 d^2 / (pi^2 a) [s] (a flat wall; Carslaw & Jaeger sec. 3.3):
-        the scale on which heat arriving at one face reaches the other."""
-        return 4.0 * self.annulus.diffusion_time_s / 9.869604401089358
+        inner face adiabatic, 4 d^2 / (pi^2 a) [s] (a flat wall; Carslaw and Jaeger (1959),
+        sec. 3.3): the scale on which heat arriving at one face reaches the other."""
+        return 4.0 * self.annulus.diffusion_time_s / math.pi ** 2
 
     @functools.cached_property
     def layout(self) -> CoilLayout:

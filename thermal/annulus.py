@@ -10,8 +10,8 @@ volume,
     C_k = rho c pi (r_k^2 - r_(k-1)^2) h,                                               (1)
 
 and two neighbouring nodes are joined by the conductance of the cylindrical shell between
-their radii (steady radial conduction; Incropera & DeWitt, Fundamentals of Heat and Mass
-Transfer, 6th ed., eq. (3.33): R = ln(r_2 / r_1) / (2 pi k h)),
+their radii (steady radial conduction; Incropera and DeWitt (2007), Fundamentals of Heat and
+Mass Transfer, 6th ed., eq. (3.33): R = ln(r_2 / r_1) / (2 pi k h)),
 
     G_k,k+1 = 2 pi k h / ln(rho_(k+1) / rho_k).                                        (2)
 
@@ -23,7 +23,8 @@ reduction): with G_f the half shell and G_1 .. G_m the face's contacts, S = G_f 
 
     G(shell, node_i) = G_f G_i / S,     G(node_i, node_j) = G_i G_j / S,               (3)
 
-and the face temperature is the mean of its neighbours weighted by their conductances,
+(Doerfler and Bullo (2013)) and the face temperature is the mean of its neighbours
+weighted by their conductances,
 
     T_face = (G_f T_shell + sum_i G_i T_i) / S                                          (4)
 
@@ -175,8 +176,8 @@ class Annulus:
     def diffusion_time_s(self) -> float:
         """(r_o - r_i)^2 rho c / k [s]: the wall's diffusion time d^2 / a.  The slowest
         radial mode of a flat wall with one face held and the other adiabatic decays with
-        4 / pi^2 of it, with both faces held with 1 / pi^2 (Carslaw & Jaeger, Conduction of
-        Heat in Solids, 2nd ed., sec. 3.3)."""
+        4 / pi^2 of it, with both faces held with 1 / pi^2 (Carslaw and Jaeger (1959),
+        Conduction of Heat in Solids, sec. 3.3)."""
         d = self.outer_radius_m - self.inner_radius_m
         return d * d * self.heat_capacity_j_per_m3_k / self.conductivity_w_per_m_k
 

@@ -14,7 +14,7 @@ from collections.abc import Iterator
 import numpy as np
 
 from thermal.errors import ThermalError
-from thermal.march import heated_rows, march, step_maps
+from thermal.march import heated_rows, march, state_buffer, step_maps
 from thermal.network import Network
 from thermal.solve import (AMBIENT_HOLDS, PowerLaw, ThermalResult, _as_ambient, _as_time,
                            _result, _step_classes, fill_inputs, simulate, step_matrices)
@@ -143,18 +143,18 @@ def iter_simulate_many(network: Network, time_s: np.ndarray, *, ambient_c, initi
         slopes = np.zeros(ambs.shape)
         if linear and n_t > 1:
             slopes[:, :-1] = np.diff(ambs, axis=1) / np.diff(t)
-        state = march(maps, cls, t, t0_all[batch.start:batch.stop].T,
-                      np.ascontiguousarray(ambs.T),
-                      np.ascontiguousarray(slopes.T) if linear else None, None, law,
-                      stacked=True, heated=nodes)
-        for s0 in range(0, len(batch), _READ_RUNS):
-            part = slice(s0, min(len(batch), s0 + _READ_RUNS))
-            temps, powers = _read_out(state, part, n)
-            for q, k in enumerate(range(part.start, part.stop)):
-                inputs = np.empty((n_t, 1 + n))
-                inputs[:, 0] = ambs[k]
-                fill_inputs(inputs, network.node_power_w, nodes, powers[q], t, names)
-                yield _result(network, a, b, mats, steps, cls, t, ambs[k], slopes[k], linear,
-                              temps[q], inputs, ambient_hold)
-            del temps, powers
-        del state
+        with state_buffer((n_t, n + nodes.size, len(batch))) as state:
+            march(maps, cls, t, t0_all[batch.start:batch.stop].T,
+                  np.ascontiguousarray(ambs.T),
+                  np.ascontiguousarray(slopes.T) if linear else None, None, law,
+                  stacked=True, heated=nodes, out=state)
+            for s0 in range(0, len(batch), _READ_RUNS):
+                part = slice(s0, min(len(batch), s0 + _READ_RUNS))
+                temps, powers = _read_out(state, part, n)
+                for q, k in enumerate(range(part.start, part.stop)):
+                    inputs = np.empty((n_t, 1 + n))
+                    inputs[:, 0] = ambs[k]
+                    fill_inputs(inputs, network.node_power_w, nodes, powers[q], t, names)
+                    yield _result(network, a, b, mats, steps, cls, t, ambs[k], slopes[k],
+                                  linear, temps[q], inputs, ambient_hold)
+                del temps, powers

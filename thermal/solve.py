@@ -259,8 +259,12 @@ def _modal_recursion(phi_minus_i: np.ndarray, capacity: np.ndarray, t0: np.ndarr
     w = (drive * d) @ q                                  # (n_t - 1, n)
     w0 = w[0] if n_t > 1 else np.zeros(mu.size)
     k = np.arange(n_t)[:, None]
-    with np.errstate(divide="ignore"):                   # log1p(-1) = -inf, then clipped
-        k_log_lam = k * np.maximum(np.log1p(mu), -700.0)  # lambda = 0 underflows to e^-700
+    # log lambda, clipped at -700 (lambda = 0, mu = -1, underflows to e^-700), without an
+    # errstate context (a context variable set and reset at every call)
+    log_lam = np.full(mu.shape, -700.0)
+    live = mu > -1.0
+    log_lam[live] = np.maximum(np.log1p(mu[live]), -700.0)
+    k_log_lam = k * log_lam
     floating = mu == 0.0
     geometric = np.where(floating, k, np.expm1(k_log_lam) / np.where(floating, 1.0, mu))
     z = np.exp(k_log_lam) * (q.T @ (d * t0)) + geometric * w0
@@ -467,7 +471,9 @@ def _result(network, a, b, mats, steps, cls, t, amb, slope, linear, temp, inputs
     """The read-only :class:`ThermalResult` of one run: its rates now, its heat bookkeeping
     (6) when first read (:func:`_heat_ledger`; ``slope`` is recomputed then from the
     chamber, as it was made)."""
-    rate = temp @ a.T + inputs @ b.T
+    # B u with B = [C^-1 g | diag(C^-1)] (network.py (2)) taken as the two products it
+    # holds per node, element by element, not as a dense product with its zeros
+    rate = temp @ a.T + (inputs[:, :1] * b[:, 0] + inputs[:, 1:] * np.diagonal(b[:, 1:]))
     arrays = dict(time_s=t, capacity_j_per_k=network.capacity_j_per_k,
                   temperature_c=np.ascontiguousarray(temp), rate_c_per_s=rate,
                   power_w=inputs[:, 1:].copy(), ambient_c=amb)

@@ -141,18 +141,22 @@ class EffectContext:
         lumped coil, the mean of the layers of a wound one."""
         if self.coil_layout is None:
             return 0.5 * (self.node(self.coil_outer) + self.node(self.coil_inner))
-        return self.temperature_c[:, self._layers].mean(axis=1)
+        return self.temperature_c @ self._layer_mean
 
     @property
     def coil_rate_c_per_s(self) -> np.ndarray:
         """dT_coil/dt [K/s]."""
         if self.coil_layout is None:
             return 0.5 * (self.rate(self.coil_outer) + self.rate(self.coil_inner))
-        return self.rate_c_per_s[:, self._layers].mean(axis=1)
+        return self.rate_c_per_s @ self._layer_mean
 
     @property
-    def _layers(self) -> list[int]:
-        return [self._index(name) for name in self.coil_layout.layers]
+    def _layer_mean(self) -> np.ndarray:
+        """Weights 1/N on the N layers of a wound coil (0 elsewhere), by node."""
+        w = np.zeros(len(self.node_names))
+        w[[self._index(name) for name in self.coil_layout.layers]] = 1.0 / len(
+            self.coil_layout.layers)
+        return w
 
     def temperature(self, node: str | None) -> np.ndarray:
         """T of ``node``, or T_coil when ``node`` is None [degC]."""

@@ -249,13 +249,16 @@ def shupe_winding(ctx: EffectContext, *, L: float = 1000.0, D: float = 0.09,
                           f"(T_coil - T_ref) inside the operating range at T_ref = "
                           f"{ctx.t_ref_c:g} C (allowed {lo:.6g}..{hi:.6g})")
     w, t = winding_node_weights(layout, pattern, N_opt, L, L_asym)
-    cols = [ctx.node_names.index(name) if name in ctx.node_names else _missing(name, ctx)
-            for name in layout.nodes]
-    rate = ctx.rate_c_per_s[:, cols] @ w                       # sum_j W'_j dT_j/dt [m^2 K/s]
+    index = {name: i for i, name in enumerate(ctx.node_names)}
+    w_all, t_all = np.zeros(len(index)), np.zeros(len(index))
+    for name, wi, ti in zip(layout.nodes, w, t):
+        if name not in index:
+            _missing(name, ctx)
+        w_all[index[name]], t_all[index[name]] = wi, ti
+    rate = ctx.rate_c_per_s @ w_all                    # sum_j W'_j dT_j/dt [m^2 K/s]
     coef = dn_dT + n * alpha
     if k_m != 0.0:
-        t_coil = ctx.temperature_c[:, cols] @ t
-        coef = coef + k_m * (1.0 + c_m * (t_coil - ctx.t_ref_c))
+        coef = coef + k_m * (1.0 + c_m * (ctx.temperature_c @ t_all - ctx.t_ref_c))
     return (n / (L * D) * DPH_PER_RAD_PER_S) * coef * rate
 
 
