@@ -39,6 +39,7 @@ _PUBLIC = {
     # scenarios, instruments, runs
     "Scenario": "nfs.scenario", "load_scenario": "nfs.config.scenario",
     "Instrument": "nfs.instrument", "load_instrument": "nfs.instrument",
+    "WoundCoil": "nfs.coil", "make_effect": "nfs.effects",
     "Run": "nfs.run", "RunMeta": "nfs.run",
     "read_run": "nfs.io.measurement", "read_runs": "nfs.io.measurement",
     "write_run": "nfs.io.measurement",

@@ -80,7 +80,7 @@ def test_cold_starts_worse(table):
 
 #: The Shupe-type drift effects of the library (docs/effects.md): thermal non-reciprocity of the
 # coil.
-SHUPE_TYPE = ("shupe_gradient", "shupe_rate", "shupe_stress", "shupe_product")
+SHUPE_TYPE = ("shupe_gradient", "shupe_rate", "shupe_stress", "shupe_product", "shupe_winding")
 
 
 def _startup_rmse_alone(inst, names, cond, settings):

@@ -205,16 +205,37 @@ def group_records(model: Model, records: Sequence[ThermalRecord]
 
 
 def initial_cov(model: Model, initial_std_c: float, initial_power_std_w: float) -> np.ndarray:
-    """P_0: T_j independent with initial_std_c, d_j with initial_power_std_w, lags in
-    equilibrium with T (y = L T, so their covariance follows from T's)."""
+    """P_0: T along the network's free modes, d_j independent with initial_std_c, lags in
+    equilibrium with T (y = L T, so their covariance follows from T's).
+
+    A soaked unit deviates from its start by what the chamber's fluctuations leave after
+    the network filtered them: a first-order mode driven by white noise has a variance
+    proportional to its time constant, so mode i (shape v_i with max |v_i| = 1, time
+    constant tau_i: :meth:`thermal.Network.modes`) gets the variance
+    initial_std_c^2 tau_i / tau_1, the slowest mode (the whole unit against the chamber)
+    initial_std_c^2.  Nodes coupled within seconds (a wound coil's layers) then start
+    together, where independent deviations of initial_std_c would start the filter with
+    gradients no soak leaves.
+    """
     n = model.n
     big = model.a.shape[0]
     jac = np.zeros((big, 2 * n))
     jac[:n, :n] = np.eye(n)
     jac[n:2 * n, n:] = np.eye(n)
     jac[2 * n:, :n] = model.lag_from_t
-    base = np.diag(np.concatenate([np.full(n, initial_std_c ** 2),
-                                   np.full(n, initial_power_std_w ** 2)]))
+    d = 1.0 / np.sqrt(model.inv_c)                         # sqrt(C)
+    a = model.a[:n, :n]
+    sym = d[:, None] * a / d[None, :]                      # C^1/2 A C^-1/2, symmetric
+    rates, u = np.linalg.eigh(-0.5 * (sym + sym.T))
+    v = u / d[:, None]                                     # mode shapes C^-1/2 u_i
+    v = v / np.max(np.abs(v), axis=0)
+    live = rates > 1e3 * np.finfo(float).eps * max(rates.max(), 0.0)
+    share = np.ones(n) if not live.all() else rates.min() / rates
+    share[~live] = 1.0
+    cov_t = (v * (initial_std_c ** 2 * share)) @ v.T
+    base = np.zeros((2 * n, 2 * n))
+    base[:n, :n] = cov_t
+    base[n:, n:] = np.diag(np.full(n, initial_power_std_w ** 2))
     return jac @ base @ jac.T
 
 

@@ -25,6 +25,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..effects import get_effect
 from ..instrument import Instrument
 from .candidates import Candidate
 from .columns import PreparedRun, candidate_columns, fit_shapes
@@ -174,8 +175,12 @@ def score_with_shapes(c: Candidate, ch: ResidualChannel, preps: list[PreparedRun
     beta_c = clustered_fit(augmented_grams(ch.base, ch.ys, ch.Xs, cols)).beta[
         ch.Xs[0].shape[1]:]
     jac: list[list[np.ndarray]] = [[] for _ in preps]
+    spec = get_effect(c.effect)
     for s in c.shapes:  # d(fitted contribution)/d(shape), forward differences
         step = 1e-4 * max(abs(shapes[s]), 1.0)
+        bounds = spec.parameter(s).bounds
+        if bounds is not None and shapes[s] + step > bounds[1]:
+            step = -step            # a shape on its upper bound: the backward difference
         moved = candidate_columns(c, {**shapes, s: shapes[s] + step}, preps, bare)
         for i, (m, c0) in enumerate(zip(moved, cols)):
             jac[i].append((m - c0) @ beta_c / step)

@@ -22,10 +22,16 @@ chamber temperature, the turntable's moving fraction and the state-free thermal-
 powers averaged over each knot interval and held, and the state-dependent thermal effects
 (the TEC law) evaluated at the filtered estimate and held over the interval (its slope left
 out of the covariance; thermal/estimate.py).  Temperatures come back to the run's own time
-base by cubic Hermite interpolation of the knot values and knot rates, and the rates there
-are the derivative of that interpolant (at the knots: the model rate A T + B u + C^-1 d at
-the smoothed state), so a drift effect that uses dT/dt sees the derivative of the
-temperatures it is given.
+base as the model's own solution at every sample (open loop from the run's start, the
+recorded chamber and the heat law at full rate, as the drift stage replays it) plus the
+smoother's correction of it, the difference at the knots of the smoothed values and rates
+from that solution's, carried between the knots by cubic Hermite interpolation; the rates
+are the derivative of those temperatures (at the knots: the model rate A T + B u + C^-1 d
+at the smoothed state).  The network's fast answers to known inputs (a wound coil's outer
+layers to the electronics' heat after power-on, within seconds) come from the solution at
+full rate, what the thermometers correct varies over the knots: interpolating the whole
+state instead loses what happens within a knot interval, and a drift effect on a wound
+coil's face then leaves a residual that is not noise on the model's own runs.
 
 What the thermometers cannot tell: no thermometer sees the coil's inner layers, and the FOG
 thermometer reads a weighted mean of the electronics and coil_outer, so how the unmodelled
@@ -41,6 +47,7 @@ from typing import Mapping, Sequence
 
 import numpy as np
 
+import thermal
 from thermal import (LinearSensor, NodeEstimate, ProcessNoiseFit, ThermalRecord,
                      estimate_states)
 from thermal.network import index_of
@@ -48,7 +55,7 @@ from thermal.network import index_of
 from ..docfields import document_fields
 from ..effects.thermometer import THERMOMETERS
 from ..errors import InputError, NfsError, ThermalError
-from ..experiment import conditions_from_run, fixed_thermal_power
+from ..experiment import conditions_from_run, fixed_thermal_power, thermal_power
 from ..instrument import Instrument
 from ..run import Run
 
@@ -172,6 +179,9 @@ class _Prepared:
     record: ThermalRecord
     time_s: np.ndarray
     knots: np.ndarray
+    open_loop: thermal.ThermalResult
+    """The model's solution at every sample, from the run's start (what the smoother
+    corrects)."""
 
 
 def _window_mean(x: np.ndarray, knots: np.ndarray) -> np.ndarray:
@@ -225,11 +235,14 @@ def _prepare(inst: Instrument, run: Run, decimate_s: float,
 
     readings = np.column_stack([np.asarray(run[col], dtype=float)[knots]
                                 for col in THERMOMETERS.values()])
+    initial = cond.start_temperature_c if start_c is None else start_c
     record = ThermalRecord(time_s=t_knot, readings_c=readings,
-                           ambient_c=_window_mean(amb, knots),
-                           initial_c=cond.start_temperature_c if start_c is None else start_c,
+                           ambient_c=_window_mean(amb, knots), initial_c=initial,
                            power_w=_window_mean(fixed, knots), power_law=law)
-    return _Prepared(record=record, time_s=t, knots=knots)
+    power, _, _ = thermal_power(inst, t, moving, powered)
+    open_loop = thermal.simulate(inst.network, t, ambient_c=amb, initial_c=initial,
+                                 power_w=power, ambient_hold="first-order")
+    return _Prepared(record=record, time_s=t, knots=knots, open_loop=open_loop)
 
 
 def _hermite(t: np.ndarray, t_knot: np.ndarray, y: np.ndarray, m: np.ndarray
@@ -315,7 +328,12 @@ def smooth_runs(inst: Instrument, runs: Sequence[Run], *,
         raise NfsError(f"smooth_runs: {exc}") from None
     out = []
     for run, prep, knot in zip(runs, prepared, est.records):
-        temp, rate = _hermite(prep.time_s, knot.time_s, knot.temperature_c, knot.rate_c_per_s)
+        ol = prep.open_loop
+        temp, rate = _hermite(prep.time_s, knot.time_s,
+                              knot.temperature_c - ol.temperature_c[prep.knots],
+                              knot.rate_c_per_s - ol.rate_c_per_s[prep.knots])
+        temp += ol.temperature_c
+        rate += ol.rate_c_per_s
         std = np.column_stack([np.interp(prep.time_s, knot.time_s, s)
                                for s in knot.temperature_std_c.T])
         for a in (temp, rate, std):
