@@ -24,7 +24,7 @@ by ``cycling_period_rel_std``.
 Initial node temperatures at power-on (the soak), node j:
 
     T_j(0) = S_j + d_soak + e_j,      d_soak ~ N(0, soak_offset_c^2),
-                                      e_j ~ N(0, soak_node_c^2)                        [degC]
+    e = sum_i s_i z_i v_i,  z_i ~ N(0, 1),  s_i^2 = soak_node_c^2 tau_i / tau_1          [degC]
 
 S is the soak, solved exactly (:func:`thermal.final_temperature`): the unpowered network, from
 ``soak_from_c`` (an unfinished soak: the unit brought from the laboratory) or from T0, left
@@ -34,8 +34,15 @@ power-on.  In still air S - T0 = expm(A t_soak) (T_from - T0) 1: the slowest mod
 housing's global time constant) remains, so the residual grows with |T_from - T0|; the
 wander and the cycling add what the network's low-pass lets through, the housing lagging the
 air and the coil lagging the housing (gradients of a few thousandths of a kelvin, where
-independent draws e_j of the same size per node would be tenths).  d_soak and e_j stand for
-what a lumped chamber misses (the door opened to cable the unit, unevenly stirred air).
+independent draws e_j of the same size per node would be tenths).  d_soak and e stand for
+what a lumped chamber misses (the door opened to cable the unit, unevenly stirred air): e
+lies along the network's free modes v_i (time constants tau_i, :meth:`thermal.Network.modes`,
+each scaled to max |v_i| = 1), mode i with a standard deviation s_i, s_i^2 proportional to
+tau_i (a mode driven by the air's white fluctuations holds a variance proportional to its
+time constant), the slowest soak_node_c.  Parts that equalise within seconds (a wound coil's
+layers, its outer face and the shield) then start together, as no soak leaves them apart,
+and the estimators' start model (:mod:`nfs.diagnose.start_state`, the smoother's prior)
+describes what the world draws.
 
 Per unit (unit-to-unit, drawn once per unit)
 --------------------------------------------
@@ -59,9 +66,9 @@ Seeds.  Every draw comes from a :class:`numpy.random.SeedSequence`.  A start-up'
 children of its own entropy (the noise seed of :class:`~nfs.experiment.RunConditions`, which
 holds the scenario seed, the start temperature, the repeat and the unit), with spawn keys
 after the sensor-noise streams; a unit's draws come from (``unit_seed``, unit) with the
-parameter path's CRC-32 as spawn key, and a node's soak scatter from its name's: adding a
-unit, a node or an effect leaves every other draw unchanged.  The same seed gives the same
-bytes.
+parameter path's CRC-32 as spawn key: adding a unit or an effect leaves every other draw
+unchanged (a node changes the network's modes, so the soak scatter's too).  The same seed
+gives the same bytes.
 """
 
 from __future__ import annotations
@@ -441,9 +448,22 @@ def start_up_state(inst: Instrument, var: Variability, start_temperature_c: floa
                                         else t0)
     out += var.soak_offset_c * common
     if var.soak_node_c:
-        for j, name in enumerate(net.node_names):
-            out[j] += var.soak_node_c * _run_rng(entropy, _NODE_KEY, _crc(name)).standard_normal()
+        share, shapes = _modes(net)
+        z = _run_rng(entropy, _NODE_KEY).standard_normal(share.size)
+        out += shapes @ (var.soak_node_c * np.sqrt(share) * z)
     return out, terms
+
+
+@functools.lru_cache(maxsize=16)
+def _modes(network: thermal.Network) -> tuple[np.ndarray, np.ndarray]:
+    """(tau_i / tau_1, v_i) of the network's free modes, longest first (a mode with no path
+    to the chamber: 1), kept per network (a sweep's start-ups of one unit share them)."""
+    taus, shapes = network.modes()
+    finite = np.isfinite(taus)
+    share = np.ones(taus.size)
+    if finite.any():
+        share[finite] = taus[finite] / taus[finite].max()
+    return share, shapes
 
 
 def describe_units(units: int, run_units: Sequence[int]) -> str:
