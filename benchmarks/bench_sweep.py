@@ -3,9 +3,13 @@
 Run as ``python benchmarks/bench_sweep.py`` (``--startups N`` for another size, 1000 by
 default; ``--full`` adds the goal's sweep of 10,000 start-ups on 2 workers and its peak
 memory, a few minutes; ``--no-dask`` leaves the Dask cluster out).  The sweep: the default
-instrument and scenario, one start-up per cell (2.5 h at 1 Hz, 4 positions, 150 s dwells),
-start temperatures -32, 17, 54 and -5 C on an axis and N/4 seeds, each cell simulated and
-north-found (no compensation).
+instrument (its coil wound: 14 nodes) and scenario, one start-up per cell (2.5 h at 1 Hz, 4
+positions, 150 s dwells), start temperatures -32, 17, 54 and -5 C on an axis and N/4 seeds,
+each cell simulated and north-found (no compensation).  Beside it, the same cells with the
+coil of two lumped nodes (``instrument = "lumped"``, 7 nodes: the default instrument before
+its coil was wound), measured in the same process: the wound coil's cost per start-up
+(goal: at most 1.3x), and with ``--full`` both 10,000-start-up sweeps, in seconds and in
+units of the reference workload.
 
 Figures, all in this process's machine and load:
 
@@ -68,11 +72,15 @@ T0 = ([-32.0], [17.0], [54.0], [-5.0])
 REFWORK = Path(__file__).resolve().parents[2] / "shared" / "tools" / "refwork.py"
 
 
-def spec_for(cells: int):
-    """A sweep of ``cells`` single start-ups (rounded down to a multiple of 4, at least 4)."""
+def spec_for(cells: int, instrument: str | None = None):
+    """A sweep of ``cells`` single start-ups (rounded down to a multiple of 4, at least 4),
+    of the default instrument or of the built-in preset ``instrument``."""
     per = max(1, cells // len(T0))
+    axes = {"start_temperatures_c": [list(t) for t in T0]}
+    if instrument is not None:
+        axes["instrument"] = [instrument]
     return sweep_from_dict({"scenario": "default", "seeds": {"first": 0, "count": per},
-                            "axes": {"start_temperatures_c": [list(t) for t in T0]}})
+                            "axes": axes})
 
 
 def timed_sweep(spec, executor) -> float:
@@ -193,6 +201,16 @@ def main() -> None:
           f"{STACK_BYTES / 2 ** 20:.0f} MiB of marched state, this process: {t_stack:.1f} s, "
           f"{n / t_stack:.1f} start-ups/s; {t16 / t_stack:.2f}x batches of 16, "
           f"{t_base / alone * n / t_stack:.2f}x the baseline")
+    lumped = spec_for(args.startups, "lumped")
+    cpu = {}
+    for name, sp in (("wound", spec), ("lumped", lumped), ("wound", spec), ("lumped", lumped)):
+        c0 = time.process_time()
+        batched(sp, BATCH_CELLS)
+        cpu[name] = min(cpu.get(name, math.inf), (time.process_time() - c0) / sp.n_cells)
+    print(f"CPU per start-up, batches of {BATCH_CELLS} cells, this process (the faster of two): "
+          f"the wound coil (default, 14 nodes) {1e3 * cpu['wound']:.2f} ms, the lumped coil "
+          f"(7 nodes) {1e3 * cpu['lumped']:.2f} ms: {cpu['wound'] / cpu['lumped']:.2f}x "
+          f"(goal <= 1.3x)")
     t1 = timed_sweep(spec, LocalExecutor(1))
     print(f"nfs sweep, 1 worker:  {t1:.1f} s, {n / t1:.1f} start-ups/s; executor overhead "
           f"{1e3 * (t1 - t_stack) / n:.2f} ms per cell")
@@ -212,10 +230,16 @@ def main() -> None:
           f"of 2 cores; 10,000 start-ups would take {1e4 * t2 / n:.0f} s at this rate "
           f"(goal <= 30 s)")
     if args.full:
+        unit_before = refwork_s()
         big = spec_for(10_000)
         t_big = timed_sweep(big, LocalExecutor(2))
-        print(f"10,000 start-ups, nfs sweep on 2 workers: {t_big:.1f} s, "
-              f"{big.n_cells / t_big:.1f} start-ups/s (goal <= 30 s)")
+        t_lumped = timed_sweep(spec_for(10_000, "lumped"), LocalExecutor(2))
+        unit_full = min(unit_before, refwork_s())
+        print(f"10,000 start-ups, nfs sweep on 2 workers: the wound coil {t_big:.1f} s = "
+              f"{t_big / unit_full:.1f} units, {big.n_cells / t_big:.1f} start-ups/s (goal "
+              f"<= 30 s: 23.1 units at the reference workload's 1.3 s); the lumped coil "
+              f"{t_lumped:.1f} s = {t_lumped / unit_full:.1f} units; {t_big / t_lumped:.2f}x "
+              f"(reference workload {unit_full:.2f} s here)")
     if not args.no_dask:
         try:
             ex = None
