@@ -471,9 +471,7 @@ def _result(network, a, b, mats, steps, cls, t, amb, slope, linear, temp, inputs
     """The read-only :class:`ThermalResult` of one run: its rates now, its heat bookkeeping
     (6) when first read (:func:`_heat_ledger`; ``slope`` is recomputed then from the
     chamber, as it was made)."""
-    # B u with B = [C^-1 g | diag(C^-1)] (network.py (2)) taken as the two products it
-    # holds per node, element by element, not as a dense product with its zeros
-    rate = temp @ a.T + (inputs[:, :1] * b[:, 0] + inputs[:, 1:] * np.diagonal(b[:, 1:]))
+    rate = temp @ a.T + inputs @ b.T
     arrays = dict(time_s=t, capacity_j_per_k=network.capacity_j_per_k,
                   temperature_c=np.ascontiguousarray(temp), rate_c_per_s=rate,
                   power_w=inputs[:, 1:].copy(), ambient_c=amb)
