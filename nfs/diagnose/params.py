@@ -43,8 +43,8 @@ def default_bounds(path: str, value: float, unit: str | None = None) -> tuple[fl
     ======================================  =====================================================
     capacities, conductances                value/10 .. value*10 (> 0: a network stays physical),
                                             anchored (below); a zero conductance 0 .. 10 W/K
-    a wound coil's conductivity, volumetric value/10 .. value*10, anchored (below); its faces'
-    heat capacity and contacts              contacts as conductances
+    a wound coil's conductivity, heat       value/10 .. value*10, anchored (below), as
+    capacity and face contacts              capacities and conductances
     a wound coil's radii and height         value/2 .. value*2 (its drawing: rarely freed)
     node powers                             0 .. max(10 value, 1 W) (negative: 10 value .. 0)
     thermometer lag_s                       0 .. 300 s
