@@ -75,7 +75,9 @@ class WoundCoil:
     outer_contacts: tuple[tuple[str, float], ...]
     """(node, conductance [W/K]) from the outer face; none: adiabatic."""
     layers: int = 8
-    """N_th, the thermal layers the winding is cut into."""
+    """N_th, the thermal layers the winding is cut into, graded toward both faces (cosine
+    spacing, :class:`thermal.Annulus`): the Shupe bias of one coil over each dwell changes
+    by under 2 % from 8 to 16 layers (by 3.7 % with shells of equal thickness)."""
 
     def __post_init__(self) -> None:
         for face in COIL_FACES:
@@ -89,7 +91,8 @@ class WoundCoil:
         """The body (:class:`thermal.Annulus`) whose shells are the layers."""
         return Annulus(COIL_PREFIX, self.inner_radius_m, self.outer_radius_m, self.height_m,
                        self.conductivity_w_per_m_k, self.heat_capacity_j_per_m3_k,
-                       self.layers, dict(self.inner_contacts), dict(self.outer_contacts))
+                       self.layers, dict(self.inner_contacts), dict(self.outer_contacts),
+                       spacing="cosine")
 
     @property
     def layer_names(self) -> tuple[str, ...]:

@@ -2,10 +2,12 @@
 
 A body between radii r_i and r_o [m], of height h [m], conductivity k [W/(m K)] and
 volumetric heat capacity rho c [J/(m^3 K)], heated or cooled through its two faces, is cut
-into N coaxial shells of equal thickness delta = (r_o - r_i) / N, shell k (k = 1 .. N, from
-the inner face out) between r_(k-1) = r_i + (k - 1) delta and r_k = r_i + k delta.  Shell k
-is one node at its mid-radius rho_k = (r_(k-1) + r_k) / 2 with the heat capacity of its
-volume,
+into N coaxial shells, shell k (k = 1 .. N, from the inner face out) between r_(k-1) and
+r_k: of equal thickness, r_k = r_i + (r_o - r_i) k / N (``spacing="uniform"``), or graded
+toward both faces, r_k = r_i + (r_o - r_i) (1 - cos(pi k / N)) / 2 (``"cosine"``, the
+Chebyshev-Lobatto points: heat enters and leaves through the faces, where the gradients are
+steepest, so thinner shells there resolve them with fewer nodes).  Shell k is one node at
+its mid-radius rho_k = (r_(k-1) + r_k) / 2 with the heat capacity of its volume,
 
     C_k = rho c pi (r_k^2 - r_(k-1)^2) h,                                               (1)
 
@@ -51,7 +53,10 @@ import numpy as np
 from thermal.errors import ThermalError
 from thermal.network import Link, Node, finite_number
 
-__all__ = ["Annulus"]
+__all__ = ["Annulus", "SPACINGS"]
+
+#: How the shells' boundaries are spaced across the wall (module docstring).
+SPACINGS = ("uniform", "cosine")
 
 
 def _contacts(value: Mapping[str, float], what: str) -> dict[str, float]:
@@ -92,6 +97,8 @@ class Annulus:
     none: the face is adiabatic."""
     outer_contacts: Mapping[str, float] = field(default_factory=dict)
     """Conductances [W/K] from the outer face to nodes outside the body."""
+    spacing: str = "uniform"
+    """``"uniform"`` (shells of equal thickness) or ``"cosine"`` (graded toward both faces)."""
 
     def __post_init__(self) -> None:
         if not isinstance(self.prefix, str) or not self.prefix:
@@ -111,6 +118,9 @@ class Annulus:
             raise ThermalError(f"{where}: n_layers must be an integer >= 1, "
                                f"got {self.n_layers!r}")
         object.__setattr__(self, "n_layers", int(self.n_layers))
+        if self.spacing not in SPACINGS:
+            raise ThermalError(f"{where}: spacing must be one of {', '.join(SPACINGS)}, got "
+                               f"{self.spacing!r}")
         inner = _contacts(self.inner_contacts, f"{where}: inner_contacts")
         outer = _contacts(self.outer_contacts, f"{where}: outer_contacts")
         own = set(self.layer_names)
@@ -130,6 +140,10 @@ class Annulus:
     @property
     def edges_m(self) -> np.ndarray:
         """Shell boundaries r_0 = r_i, ..., r_N = r_o [m], shape (N + 1,)."""
+        if self.spacing == "cosine":
+            u = 0.5 * (1.0 - np.cos(np.pi * np.arange(self.n_layers + 1) / self.n_layers))
+            u[[0, -1]] = 0.0, 1.0
+            return self.inner_radius_m + (self.outer_radius_m - self.inner_radius_m) * u
         return np.linspace(self.inner_radius_m, self.outer_radius_m, self.n_layers + 1)
 
     @property
@@ -140,8 +154,9 @@ class Annulus:
 
     @property
     def centres(self) -> np.ndarray:
-        """Node positions across the wall, x_k = (rho_k - r_i) / (r_o - r_i) = (k - 1/2) / N."""
-        return (np.arange(self.n_layers) + 0.5) / self.n_layers
+        """Node positions across the wall, x_k = (rho_k - r_i) / (r_o - r_i) ((k - 1/2) / N
+        for equal shells)."""
+        return (self.centres_m - self.inner_radius_m) / (self.outer_radius_m - self.inner_radius_m)
 
     @property
     def capacities_j_per_k(self) -> np.ndarray:

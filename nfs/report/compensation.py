@@ -46,7 +46,9 @@ def shape_checks(table: HeadingTable) -> list[ShapeCheck]:
     - SSA-SVR's mean at most 0.6x the uncompensated mean (the FOG start-up paper: 0.0101 / 0.0209 =
     0.48),
       and, when the table has its paired comparisons, below it beyond the uncertainty;
-    - the SVR family ahead of BP (each SVR row's mean below BP's);
+    - the SVR family ahead of BP: no SVR row behind BP beyond the uncertainty when the table
+      has its paired comparisons (a crossing of the means inside the noise is a tie), else
+      each SVR row's mean below BP's;
     - every compensated mean above the white-noise floor;
     - no compensated row above ``before`` at any start temperature (a compensator that
       makes some start-up worse is not safe to switch on there);
@@ -70,8 +72,20 @@ def shape_checks(table: HeadingTable) -> list[ShapeCheck]:
         fam = [table.row(n) for n in SVR_FAMILY if n in names]
         if fam:
             worst = max(r.mean_deg for r in fam)
-            out.append(ShapeCheck("SVR family ahead of BP", worst < bp,
-                                  f"worst SVR-family mean {worst:.4f} vs BP {bp:.4f}"))
+            detail = f"worst SVR-family mean {worst:.4f} vs BP {bp:.4f}"
+            compared = [c for c in (table.comparison("BP", r.method) for r in fam)
+                        if c is not None]
+            if compared:
+                # where the table has its paired comparisons, a crossing of the means the
+                # noise cannot support is a tie, not BP ahead
+                beaten = [c for c in compared if c.distinguishable and c.difference_deg < 0]
+                ahead = not beaten
+                detail += ("; BP ahead beyond the uncertainty: "
+                           + "; ".join(c.sentence() for c in beaten) if beaten else
+                           "; no SVR row behind BP beyond the uncertainty")
+            else:
+                ahead = worst < bp
+            out.append(ShapeCheck("SVR family ahead of BP", ahead, detail))
     if "floor" in names and comp:
         floor = table.row("floor").mean_deg
         lowest = min(comp, key=lambda r: r.mean_deg)

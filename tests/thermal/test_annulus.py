@@ -24,22 +24,40 @@ def _wall(n, **kw):
     return Annulus(**args)
 
 
+@pytest.mark.parametrize("spacing", thermal.annulus.SPACINGS)
 @pytest.mark.parametrize("n", [1, 2, 8, 33])
-def test_capacities_add_up_to_the_volume(n):
-    wall = _wall(n)
+def test_capacities_add_up_to_the_volume(n, spacing):
+    wall = _wall(n, spacing=spacing)
     volume = math.pi * (0.05 ** 2 - 0.04 ** 2) * 0.01
     assert wall.capacities_j_per_k.sum() == pytest.approx(1.7e6 * volume, rel=1e-12)
     assert wall.capacity_j_per_k == pytest.approx(1.7e6 * volume, rel=1e-12)
-    # outer shells hold more (their volume grows with the radius)
-    assert np.all(np.diff(wall.capacities_j_per_k) > 0)
+    edges = wall.edges_m
+    assert edges[0] == 0.04 and edges[-1] == 0.05 and np.all(np.diff(edges) > 0)
+    if spacing == "uniform":
+        # outer shells hold more (their volume grows with the radius)
+        assert np.all(np.diff(wall.capacities_j_per_k) > 0)
+        assert np.allclose(wall.centres, (np.arange(n) + 0.5) / n, rtol=0, atol=1e-12)
+    else:
+        # graded toward both faces: symmetric thicknesses, thinnest at the faces
+        thick = np.diff(edges)
+        assert np.allclose(thick, thick[::-1], rtol=1e-12)
+        if n > 2:
+            assert thick[0] < thick[n // 2]
 
 
+def test_unknown_spacing_is_refused():
+    with pytest.raises(ThermalError, match="spacing"):
+        _wall(4, spacing="log")
+
+
+@pytest.mark.parametrize("spacing", thermal.annulus.SPACINGS)
 @pytest.mark.parametrize("n", [1, 3, 8, 16])
-def test_steady_conduction_is_the_thick_walled_cylinder(n):
+def test_steady_conduction_is_the_thick_walled_cylinder(n, spacing):
     # inner face held at the chamber by a huge contact, outer face fed 1 W: the steady rise
     # of the outer face over the inner one is 1 W / (2 pi k h / ln(r_o/r_i)) + 1 W / G_c
     g_c = 50.0
-    wall = _wall(n, inner_contacts={"chamber": g_c}, outer_contacts={"heater": g_c})
+    wall = _wall(n, inner_contacts={"chamber": g_c}, outer_contacts={"heater": g_c},
+                 spacing=spacing)
     net = Network(wall.nodes() + (Node("heater", 1.0, power_w=1.0),), wall.links())
     steady = net.steady_state(0.0)
     expected = 1.0 / wall.wall_conductance_w_per_k + 2.0 / g_c
