@@ -28,7 +28,9 @@ Initial node temperatures at power-on (the soak), node j:
 
 S is the soak, solved exactly (:func:`thermal.final_temperature`): the unpowered network, from
 ``soak_from_c`` (an unfinished soak: the unit brought from the laboratory) or from T0, left
-for t_soak (``soak_h``, scattered log-normally by ``soak_h_rel_std``) in the chamber air
+for t_soak (``soak_h``, scattered log-normally by ``soak_h_rel_std``, rounded up to the soak
+grid's :data:`SOAK_STEP_S`: every step of every soak the same, whose step matrices are
+computed once) in the chamber air
 T0 + w(t) + cycling(t) for -t_soak <= t < 0, the same wander and cycling that go on after
 power-on.  In still air S - T0 = expm(A t_soak) (T_from - T0) 1: the slowest mode (the
 housing's global time constant) remains, so the residual grows with |T_from - T0|; the
@@ -438,8 +440,11 @@ def start_up_state(inst: Instrument, var: Variability, start_temperature_c: floa
     terms = np.zeros(t.shape)
     if var.unfinished_soak or chamber:
         soak_s = 3600.0 * var.soak_h * float(lognormal_factor(z_soak, var.soak_h_rel_std))
+        # whole steps only (t_soak rounded up to the grid, under SOAK_STEP_S longer than
+        # drawn): a partial last step would be a step of its own, whose exponentials every
+        # start-up would compute anew
         n = max(int(np.ceil(soak_s / SOAK_STEP_S)), 1)
-        soak_t = t[0] - soak_s + SOAK_STEP_S * np.arange(n)
+        soak_t = t[0] - SOAK_STEP_S * np.arange(n, 0, -1)
         both = chamber_terms(var, np.concatenate([soak_t, t]), entropy)
         terms = both[n:]
         out = thermal.final_temperature(unpowered_network(net), np.append(soak_t, t[0]),
