@@ -282,11 +282,12 @@ def _heated(prep: _Prepared) -> tuple[int, ...] | None:
 
 
 #: Memory the stacked thermal march of :func:`iter_simulate_runs` may take [bytes]: the
-#: marched states of 262 start-ups of 2.5 h at 1 Hz on 7 nodes with one node heated (the
-#: default instrument: 8 rows of 9000 samples, 576 kB each), so that a sweep's batch of
-#: :data:`nfs.sweep.BATCH_CELLS` = 256 single start-ups is one march; 147 with every
-#: node heated.
-STACK_BYTES = 144 * 2 ** 20
+#: marched states of 262 start-ups of 2.5 h at 1 Hz on 14 nodes with one node heated (the
+#: default instrument, its coil wound: 15 rows of 9000 samples, 1.08 MB each), so that a
+#: sweep's batch of :data:`nfs.sweep.BATCH_CELLS` = 256 single start-ups is one march (the
+#: march's cost per sample is partly fixed: 128 runs at once cost 15 % more per run than
+#: 256); 140 with every node heated, 491 of the two-node coil's 8 rows.
+STACK_BYTES = 270 * 2 ** 20
 
 
 def _state_bytes(prep: _Prepared) -> int:

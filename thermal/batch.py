@@ -14,35 +14,12 @@ from collections.abc import Iterator
 import numpy as np
 
 from thermal.errors import ThermalError
-from thermal.march import heated_rows, march, state_buffer, step_maps
+from thermal.march import heated_rows, march, step_maps
 from thermal.network import Network
 from thermal.solve import (AMBIENT_HOLDS, PowerLaw, ThermalResult, _as_ambient, _as_time,
                            _result, _step_classes, fill_inputs, simulate, step_matrices)
 
 __all__ = ["simulate_many", "iter_simulate_many", "runs_per_batch"]
-
-#: The marched states are read out this many runs at a time: one pass that gathers their
-#: columns of the (n_t, n + m, R) array into contiguous per-run records (reading a run's
-#: column alone would stream the whole array through the cache for each run).
-_READ_RUNS = 16
-#: ... and this many samples at a time (:func:`_read_out`).
-_READ_SAMPLES = 512
-
-
-def _read_out(state: np.ndarray, part: slice, n: int) -> tuple[np.ndarray, np.ndarray]:
-    """The temperatures (R', n_t, n) and powers (R', n_t, m) of the runs ``part`` of the
-    marched states (n_t, n + m, R), each run's record contiguous: copied
-    :data:`_READ_SAMPLES` samples at a time (a block's source and destination stay in the
-    cache; a copy of the whole record at once walks the destination a page per run)."""
-    n_t, rows, _ = state.shape
-    r = len(range(*part.indices(state.shape[2])))
-    temps, powers = np.empty((r, n_t, n)), np.empty((r, n_t, rows - n))
-    for k0 in range(0, n_t, _READ_SAMPLES):
-        block = state[k0:k0 + _READ_SAMPLES, :, part].transpose(2, 0, 1)
-        temps[:, k0:k0 + _READ_SAMPLES] = block[:, :, :n]
-        powers[:, k0:k0 + _READ_SAMPLES] = block[:, :, n:]
-    return temps, powers
-
 
 def runs_per_batch(n_nodes: int, n_samples: int, max_bytes: int | None,
                    n_heated: int | None = None) -> int | None:
@@ -143,18 +120,14 @@ def iter_simulate_many(network: Network, time_s: np.ndarray, *, ambient_c, initi
         slopes = np.zeros(ambs.shape)
         if linear and n_t > 1:
             slopes[:, :-1] = np.diff(ambs, axis=1) / np.diff(t)
-        with state_buffer((n_t, n + nodes.size, len(batch))) as state:
-            march(maps, cls, t, t0_all[batch.start:batch.stop].T,
-                  np.ascontiguousarray(ambs.T),
-                  np.ascontiguousarray(slopes.T) if linear else None, None, law,
-                  stacked=True, heated=nodes, out=state)
-            for s0 in range(0, len(batch), _READ_RUNS):
-                part = slice(s0, min(len(batch), s0 + _READ_RUNS))
-                temps, powers = _read_out(state, part, n)
-                for q, k in enumerate(range(part.start, part.stop)):
-                    inputs = np.empty((n_t, 1 + n))
-                    inputs[:, 0] = ambs[k]
-                    fill_inputs(inputs, network.node_power_w, nodes, powers[q], t, names)
-                    yield _result(network, a, b, mats, steps, cls, t, ambs[k], slopes[k],
-                                  linear, temps[q], inputs, ambient_hold)
-                del temps, powers
+        temps, powers = march(maps, cls, t, t0_all[batch.start:batch.stop].T,
+                              np.ascontiguousarray(ambs.T),
+                              np.ascontiguousarray(slopes.T) if linear else None, None, law,
+                              stacked=True, heated=nodes)
+        for q in range(len(batch)):
+            inputs = np.empty((n_t, 1 + n))
+            inputs[:, 0] = ambs[q]
+            fill_inputs(inputs, network.node_power_w, nodes, powers[q], t, names)
+            yield _result(network, a, b, mats, steps, cls, t, ambs[q], slopes[q], linear,
+                          temps[q], inputs, ambient_hold)
+        del temps, powers

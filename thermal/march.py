@@ -22,74 +22,37 @@ involved.  The powers of nodes that are never heated (given as ``heated``) are l
 the sum and of the state: their terms M_j 0 are exact zeros, whose addition changes no
 non-zero sum, and the other terms keep their order.  The states of R runs lie side by side
 in the last axis, ``state[k]`` of shape (n + m, R) (m heated nodes), so each operation
-serves every run at once; the sum is one ``np.add.accumulate`` over j for a few runs
-(documented as the running sum r_j = r_{j-1} + a_j, the same order) and one
-``np.add.reduce`` over j for many (over the first axis of a C-ordered (n + m, n, R) array
-NumPy adds whole (n, R) blocks one after the other, j = 0, 1, ...: the same running sum; its
-pairwise summation applies only along a contiguous reduced axis, which this is not;
-tests/thermal/test_batch_independence.py checks the bits against runs marched alone).
+serves every run at once; the sum is one ``np.einsum("ji,jr->ir", M^T, s_k)`` without
+path optimisation: NumPy's own loops, which for each (i, r) add the products M_ji s_k,jr
+one after the other, j = 0, 1, ..., each product and sum rounded (no BLAS, no pairwise
+summation, no fused multiply-add), the running sum r_j = r_(j-1) + M_j s_k,j of (9)
+without forming the (n + m, n, R) array of products (tests/thermal/test_batch_independence.py
+checks the bits against the running sum written out and against runs marched alone).
 
-The drive d_k depends on no state; it is computed elementwise, in the order written in
-(9), into the slot of T_{k+1}: for every sample at once for a few runs, for blocks of
-:data:`_DRIVE_BLOCK` samples for many (no array of the record's size beside the states; the
-slope's products in one scratch block kept over the march).
+The march works through blocks of :data:`_BLOCK` samples in a buffer of every run's states
+(small enough to stay in the cache); after each block the states are copied into each run's
+own contiguous record, so no array of the runs' states side by side is ever as large as the
+records, and a run's record is read without a pass over the others'.  The drive d_k depends
+on no state; it is computed for a block at a time, elementwise, in the order written in (9),
+into the slots of T_{k+1} (the slope's products in one scratch block).
 """
 
 from __future__ import annotations
 
-import threading
-from collections.abc import Callable, Iterator
-from contextlib import contextmanager
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 
 from thermal.errors import ThermalError
 
-__all__ = ["StepMaps", "step_maps", "march", "heated_rows", "state_buffer", "release_buffers"]
+__all__ = ["StepMaps", "step_maps", "march", "heated_rows"]
 
-#: Up to this many runs the sum (9) is one ``np.add.accumulate`` (fewer calls); above it
-#: one ``np.add.reduce`` of whole blocks (less memory traffic).  The two give the same bits.
-_ACCUMULATE_UP_TO = 16
-#: Above _ACCUMULATE_UP_TO runs the drive d_k is computed for this many samples at once
-#: (elementwise, the order of (9)) into the slots of T_{k+1}: few calls, small temporaries.
-_DRIVE_BLOCK = 256
-
-
-#: Each thread's kept march buffer (``array``) and whether a march holds it (``busy``).
-_KEPT = threading.local()
-
-
-@contextmanager
-def state_buffer(shape: tuple[int, ...]) -> Iterator[np.ndarray]:
-    """An array of ``shape`` (float64, uninitialised) for a march's states, made from the
-    buffer this thread kept from its last march when that is large enough and free.
-
-    A fresh array of a chunk's states (a sweep's 256 start-ups: about 150 MB) costs its page
-    faults on first touch, as much time as the march itself on a virtual machine (0.17 s
-    for 138 MB here); the kept buffer is touched once per thread.  One march holds it at a
-    time (a march begun while another thread's or generator's holds it gets a fresh array);
-    :func:`release_buffers` gives it back to the system.
-    """
-    size = int(np.prod(shape))
-    kept = getattr(_KEPT, "array", None)
-    if getattr(_KEPT, "busy", False):
-        yield np.empty(shape)
-        return
-    if kept is None or kept.size < size:
-        kept = None
-        _KEPT.array = None
-        kept = _KEPT.array = np.empty(size)
-    _KEPT.busy = True
-    try:
-        yield kept[:size].reshape(shape)
-    finally:
-        _KEPT.busy = False
-
-
-def release_buffers() -> None:
-    """Free this thread's kept march buffer (:func:`state_buffer`)."""
-    _KEPT.array = None
+#: Samples marched between two writes of the states into the runs' records: the march
+#: works in a buffer of this many samples of every run (a few MB for hundreds of runs,
+#: which stays in the cache), whose block is then copied into each run's own contiguous
+#: record (the layout a run's result is read in).
+_BLOCK = 32
 
 
 @dataclass(frozen=True)
@@ -97,7 +60,7 @@ class StepMaps:
     """The matrices of (9) for each step class (distinct step h)."""
 
     columns: tuple[np.ndarray, ...]
-    """Per class, M^T as (2n, n, 1): row j is the column M_j of [Phi - I | Gamma_P]."""
+    """Per class, M^T as (2n, n): row j is the column M_j of [Phi - I | Gamma_P]."""
 
     ambient: np.ndarray
     """Gamma_amb per class [K/K], shape (n_classes, n)."""
@@ -116,7 +79,7 @@ def step_maps(steps, node_power_w: np.ndarray) -> StepMaps:
     if not steps:                           # one sample: nothing to step
         return StepMaps((), np.empty((0, n)), np.empty((0, n)), None)
     columns = tuple(np.ascontiguousarray(
-        np.column_stack([m.phi_minus_i, m.gamma[:, 1:]]).T[:, :, None]) for m in steps)
+        np.column_stack([m.phi_minus_i, m.gamma[:, 1:]]).T) for m in steps)
     ambient = np.array([m.gamma[:, 0] for m in steps])
     constant = np.array([m.gamma[:, 1:] @ node_power_w for m in steps])
     slope = None if steps[0].lam is None else np.array([m.lam for m in steps])
@@ -150,9 +113,10 @@ def heated_rows(n: int, heated) -> np.ndarray:
 def march(maps: StepMaps, cls: np.ndarray, time_s: np.ndarray, initial_c: np.ndarray,
           ambient_c: np.ndarray, slope_c_per_s: np.ndarray | None,
           extra_w: np.ndarray | None, law: Callable | None, *,
-          stacked: bool, heated=None, out: np.ndarray | None = None) -> np.ndarray:
-    """The states [T_k, p_k] of R runs at every sample by (9), shape (n_t, n + m, R): the n
-    node temperatures [degC], then the extra powers [W] of the m ``heated`` nodes.
+          stacked: bool, heated=None) -> tuple[np.ndarray, np.ndarray]:
+    """The temperatures T_k [degC] and the extra powers p_k [W] of the m ``heated`` nodes of
+    R runs at every sample by (9): arrays (R, n_t, n) and (R, n_t, m), each run's record
+    contiguous (``[i]`` is run i's).
 
     Parameters
     ----------
@@ -169,15 +133,13 @@ def march(maps: StepMaps, cls: np.ndarray, time_s: np.ndarray, initial_c: np.nda
     law : callable(t_s, temperature_c) -> array, optional
         p_k = law(t_k, T_k), called once per sample for every run: with ``stacked`` the
         temperatures of the runs (R, n) -> (R, n), else (one run) (n,) -> (n,).  It gets a
-        read-only view of T_k, which is never changed after.
+        read-only view of T_k, valid during the call.
     heated : sequence of int, optional
         The nodes whose extra power can be non-zero (the others' entries of ``extra_w`` or
         of the law's value are zero at every sample, which the caller guarantees); None:
         every node (m = n).  A node left out contributes M_j 0 = 0 to the sum (9), so
         carrying only the heated ones drops exact zeros from it and keeps every other term
         in its order: the same bits, fewer operations and a smaller state.
-    out : array (n_t, n + m, R), optional
-        Where to write the states (:func:`state_buffer`); None: a new array.
     """
     n, r = initial_c.shape
     n_t = time_s.size
@@ -185,12 +147,13 @@ def march(maps: StepMaps, cls: np.ndarray, time_s: np.ndarray, initial_c: np.nda
     m = nodes.size
     rows_used = np.concatenate([np.arange(n), n + nodes])
     every = m == n
-    state = np.empty((n_t, n + m, r)) if out is None else out
-    temp, power = state[:, :n], state[:, n:]
-    temp[0] = initial_c
-    if law is None:
-        power[...] = 0.0 if extra_w is None else extra_w[:, nodes, None]
-    frozen = state.view()
+    temps, powers = np.empty((r, n_t, n)), np.empty((r, n_t, m))
+    block = max(1, min(_BLOCK, n_t))
+    # the march's buffer: samples k0 .. k0 + block of every run, [T_k, p_k] as (n + m, R)
+    buf = np.empty((block + 1, n + m, r))
+    temp_b, power_b = buf[:, :n], buf[:, n:]
+    temp_b[0] = initial_c
+    frozen = buf.view()
     frozen.flags.writeable = False
     seen = list(frozen[:, :n].transpose(0, 2, 1)) if stacked else list(frozen[:, :n, 0])
     want = (r, n) if stacked else (n,)
@@ -200,39 +163,39 @@ def march(maps: StepMaps, cls: np.ndarray, time_s: np.ndarray, initial_c: np.nda
             if m and nodes[-1] - nodes[0] == m - 1 else nodes)
     columns = [np.ascontiguousarray(col[rows_used]) for col in maps.columns]
     classes = cls.tolist()
-    few = r <= _ACCUMULATE_UP_TO
-    prod = np.empty((n + m, n, r))
-    acc = np.empty((n + m, n, r)) if few else np.empty((n, r))
-    scratch = None if few else np.empty((_DRIVE_BLOCK, n, r))
+    acc = np.empty((n, r))
+    scratch = np.empty((block, n, r))
     times = time_s.tolist()
-    if few:
-        _drive(maps, cls, ambient_c, slope_c_per_s, temp[1:])
-    # per sample: the state as (n + m, 1, R) for the products, T_k and the slot of T_{k+1}
-    rows, temps, new_temps = list(state[:, :, None, :]), list(temp[:-1]), list(temp[1:])
-    last = acc[-1]                                  # the running sum's end (few runs)
-    powers = list(power.transpose(0, 2, 1)) if stacked else list(power[:, :, 0])
-    for k, t_s in enumerate(times):
-        if law is not None:
-            p = np.asarray(law(t_s, seen[k]), dtype=float)
-            if p.shape != want:
-                raise ThermalError(f"power_w(t_s, temperature_c) must return shape {want}"
-                                   f"{f' for {r} runs' if stacked else ''}, got shape "
-                                   f"{p.shape}")
-            powers[k][...] = p if every else p[..., pick]
-        if k == n_t - 1:
-            break
-        if not few and k % _DRIVE_BLOCK == 0:   # d_k of the next block, in the order of (9)
-            stop = min(k + _DRIVE_BLOCK, n_t - 1)
-            _drive(maps, cls[k:stop], ambient_c[k:stop + 1],
-                   None if slope_c_per_s is None else slope_c_per_s[k:stop + 1],
-                   temp[k + 1:stop + 1], scratch)
-        new = new_temps[k]
-        np.multiply(columns[classes[k]], rows[k], out=prod)
-        if few:
-            np.add.accumulate(prod, axis=0, out=acc)
-            new += last
-        else:
-            np.add.reduce(prod, axis=0, out=acc)
+    # per sample of the buffer: the state (n + m, R), T_k and the law's view of p_k
+    rows, temp_rows = list(buf), list(temp_b)
+    power_rows = list(power_b.transpose(0, 2, 1)) if stacked else list(power_b[:, :, 0])
+    for k0 in range(0, n_t, block):
+        size = min(block, n_t - k0)                 # samples k0 .. k0 + size - 1 here
+        steps = min(size, n_t - 1 - k0)             # steps k -> k + 1 taken from them
+        if steps:                                   # d_k of (9) into the slots of T_{k+1}
+            _drive(maps, cls[k0:k0 + steps], ambient_c[k0:k0 + steps + 1],
+                   None if slope_c_per_s is None else slope_c_per_s[k0:k0 + steps + 1],
+                   temp_b[1:steps + 1], scratch)
+        if law is None:
+            power_b[:size] = 0.0 if extra_w is None else extra_w[k0:k0 + size, nodes, None]
+        for i in range(size):
+            k = k0 + i
+            if law is not None:
+                p = np.asarray(law(times[k], seen[i]), dtype=float)
+                if p.shape != want:
+                    raise ThermalError(f"power_w(t_s, temperature_c) must return shape {want}"
+                                       f"{f' for {r} runs' if stacked else ''}, got shape "
+                                       f"{p.shape}")
+                power_rows[i][...] = p if every else p[..., pick]
+            if i == steps:
+                break
+            new = temp_rows[i + 1]
+            # sum_j M_j s_k,j, j in order (the module docstring)
+            np.einsum("ji,jr->ir", columns[classes[k]], rows[i], out=acc)
             new += acc
-        new += temps[k]
-    return state
+            new += temp_rows[i]
+        temps[:, k0:k0 + size] = temp_b[:size].transpose(2, 0, 1)
+        powers[:, k0:k0 + size] = power_b[:size].transpose(2, 0, 1)
+        if k0 + size < n_t:
+            temp_b[0] = temp_b[size]                # the next block starts where this ends
+    return temps, powers

@@ -439,12 +439,12 @@ def simulate(network: Network, time_s: np.ndarray, *,
     else:
         # the march of thermal/march.py with one run: a run's bits are those it gets in a
         # batch of any size (thermal.simulate_many)
-        state = march(step_maps(mats, network.node_power_w), cls, t, t0[:, None],
-                      amb[:, None], slope[:, None] if linear else None, None, law,
-                      stacked=False, heated=heated_nodes)
-        temp = np.ascontiguousarray(state[:, :n, 0])
-        fill_inputs(inputs, network.node_power_w, heated_rows(n, heated_nodes),
-                    state[:, n:, 0], t, names)
+        temps, powers = march(step_maps(mats, network.node_power_w), cls, t, t0[:, None],
+                              amb[:, None], slope[:, None] if linear else None, None, law,
+                              stacked=False, heated=heated_nodes)
+        temp = temps[0]
+        fill_inputs(inputs, network.node_power_w, heated_rows(n, heated_nodes), powers[0],
+                    t, names)
 
     return _result(network, a, b, mats, steps, cls, t, amb, slope, linear, temp, inputs,
                    ambient_hold)

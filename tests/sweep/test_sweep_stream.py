@@ -17,7 +17,6 @@ from nfs.sweep import LocalExecutor, cell_batches, cell_tasks, load_sweep, run_c
     run_sweep
 from nfs.sweep import cells
 from nfs.sweep.run import FIGURES_RECORD
-from thermal.march import _ACCUMULATE_UP_TO
 
 
 def _sweep(tmp_path, short_scenario, seeds):
@@ -29,11 +28,11 @@ def _sweep(tmp_path, short_scenario, seeds):
 
 def test_a_cell_has_its_record_beside_many_start_ups(tmp_path, short_scenario):
     # Oracle: run_cell, the cell alone (its two start-ups marched together); a batch of nine
-    # cells marches eighteen start-ups at once (the march's block reduction, above
-    # _ACCUMULATE_UP_TO), and a memory bound of three start-ups cuts the chunks inside cells.
+    # cells marches eighteen start-ups at once, and a memory bound of three start-ups cuts
+    # the chunks inside cells.
     spec = _sweep(tmp_path, short_scenario, list(range(9)))
     tasks = list(cell_tasks(spec))
-    assert 2 * len(tasks) > _ACCUMULATE_UP_TO
+    assert 2 * len(tasks) == 18
     alone = [json.dumps(run_cell(t), sort_keys=True) for t in tasks]
     (batch,) = list(cell_batches(tasks))
     assert [json.dumps(r, sort_keys=True) for r in run_cells(batch)] == alone

@@ -4,8 +4,9 @@ Oracle: invariance.  Every run of a batch goes through the same correctly rounde
 elementwise operations on its own numbers, so each run's temperatures, powers, rates and
 heat bookkeeping are equal (np.array_equal, every bit) whether it is marched alone
 (thermal.simulate), in batches of 1, 2, 7 or all R runs, in any order, beside any
-neighbours, and whether the step's sum is taken by ``np.add.accumulate`` (few runs) or by
-one ``np.add.reduce`` of whole blocks (many).
+neighbours, the march's blocks of samples included (a record of many blocks and one that
+ends inside a block); and the step's sum, NumPy's ``einsum`` without path optimisation, is
+the running sum of rounded products written out, whatever the shape.
 """
 
 import numpy as np
@@ -13,10 +14,10 @@ import pytest
 
 from thermal import ThermalError, iter_simulate_many, simulate, simulate_many
 from thermal.batch import runs_per_batch
-from thermal.march import _ACCUMULATE_UP_TO
+from thermal.march import _BLOCK
 from thermal_networks import seven_nodes
 
-R = 40          # above _ACCUMULATE_UP_TO: np.add.reduce; batches of 1, 2, 7 accumulate
+R = 40
 FIELDS = ("temperature_c", "power_w", "rate_c_per_s", "heat_in_j", "heat_lost_j")
 
 
@@ -51,7 +52,7 @@ def _same(a, b):
 @pytest.mark.parametrize("hold", ["zero-order", "first-order"])
 def test_every_run_has_its_bits_in_any_batch(case, hold):
     net, t, ambient, initial, law = case
-    assert R > _ACCUMULATE_UP_TO >= 7
+    assert t.size > 10 * _BLOCK and t.size % _BLOCK     # many blocks, the last one partial
     all_runs = simulate_many(net, t, ambient_c=ambient, initial_c=initial, power_w=law,
                              ambient_hold=hold)
     for size in (1, 2, 7):
@@ -120,7 +121,7 @@ def test_uneven_steps_keep_batch_independence(case):
 def test_carrying_only_the_heated_nodes_changes_no_bit(case, hold):
     """The law heats one node: marched with ``heated_nodes`` naming it (the other powers'
     exact-zero terms left out of the sum (9)), every run has the bits of the march over every
-    node, alone and in batches on either side of _ACCUMULATE_UP_TO."""
+    node, alone and in batches."""
     net, t, ambient, initial, law = case
     j = net.node_names.index("electronics")
     every = simulate_many(net, t, ambient_c=ambient, initial_c=initial, power_w=law,
@@ -150,3 +151,23 @@ def test_a_batch_by_memory_counts_only_the_heated_nodes(case):
     assert runs_per_batch(n, t.size, 8 * (n + 1) * t.size * 5, 1) == 5
     assert runs_per_batch(n, t.size, 8 * 2 * n * t.size * 5) == 5
     assert runs_per_batch(n, t.size, None) is None
+
+
+def test_the_step_sum_is_the_running_sum_of_rounded_products():
+    """thermal/march.py's sum of (9) by ``np.einsum("ji,jr->ir", M^T, s)``: for every run
+    r, ((0 + M_0 s_0r) + M_1 s_1r) + ..., each product and sum rounded, whatever the number
+    of runs beside it (NumPy's einsum loops; no BLAS, no pairwise sum, no fused
+    multiply-add): the arithmetic the march's batch independence rests on."""
+    rng = np.random.default_rng(11)
+    for _ in range(200):
+        n, m, r = int(rng.integers(2, 40)), int(rng.integers(0, 4)), int(rng.integers(1, 300))
+        mt = rng.standard_normal((n + m, n)) * 10.0 ** rng.uniform(-8, 2, (n + m, n))
+        s = rng.standard_normal((n + m, r)) * 10.0 ** rng.uniform(-3, 3, (n + m, 1))
+        running = np.zeros((n, r))
+        for j in range(n + m):
+            running = running + mt[j][:, None] * s[j][None, :]
+        got = np.einsum("ji,jr->ir", mt, s, out=np.empty((n, r)))
+        assert np.array_equal(got, running), (n, m, r)
+        k = int(rng.integers(0, r))
+        alone = np.einsum("ji,jr->ir", mt, s[:, k:k + 1].copy(), out=np.empty((n, 1)))
+        assert np.array_equal(alone[:, 0], running[:, k]), (n, m, r)
