@@ -4,9 +4,9 @@ The runs: the default scenario's 7 start temperatures (2.5 h at 1 Hz, the nomina
 from the default instrument with a turn-on transient of 0.1 deg/h, 120 s, and the model
 without it (the tie of tests/design/test_loop.py).  Timed in one process, in order:
 
-1. one fit of the model (:func:`nfs.diagnose.fit_model`, both stages): the baseline;
+1. one fit of the model (:func:`nfs.fit.fit_model`, both stages): the baseline;
 2. the two rivals fitted (``turn_on_transient`` and ``a rate term on every node``,
-   :func:`nfs.design.rival_models`);
+   :func:`nfs.rivals.rival_models`);
 3. the search over the default experiment space (:func:`nfs.design.design_experiment`:
    the runs taken replayed, the grid, the local refinement).
 
@@ -27,9 +27,10 @@ import time
 from pathlib import Path
 
 from nfs.config.scenario import load_scenario
-from nfs.design import design_experiment, rival_models
+from nfs.design import design_experiment
+from nfs.rivals import rival_models
 from nfs.design.space import base_conditions, default_space
-from nfs.diagnose import fit_model
+from nfs.fit import fit_model
 from nfs.effects import make_effect
 from nfs.experiment import simulate_run
 from nfs.instrument import load_instrument

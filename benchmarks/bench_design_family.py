@@ -7,9 +7,9 @@ as in ``bench_independent.py``, whose cases, answers and hit rule this benchmark
 every set the package does what a user does when a diagnosis ends in a tie:
 
 1. the 7 start temperatures x 2.5 h at 1 Hz (:func:`generate_family_set`), read back, fitted
-   (:func:`nfs.diagnose.fit_unit` on :func:`bench_independent.independent_model`) and
+   (:func:`nfs.fit.fit_unit` on :func:`bench_independent.independent_model`) and
    diagnosed (:func:`nfs.diagnose.diagnose`);
-2. a tie is put to the runs (:func:`nfs.design.decide.settle_tie`, as ``nfs diagnose
+2. a tie is put to the runs (:func:`nfs.rivals.decide.settle_tie`, as ``nfs diagnose
    --decide`` does): the *before* answer is the settlement's when the diagnosis tied, else the
    diagnosis's own;
 3. if the before answer is still a tie: the rivals of the settlement get a designed run
@@ -58,9 +58,10 @@ from joblib import Parallel, delayed
 from threadpoolctl import threadpool_limits
 
 from nfs.design import design_experiment
-from nfs.design.decide import settle_tie
+from nfs.rivals.decide import settle_tie
 from nfs.design.space import base_conditions, default_space
-from nfs.diagnose import diagnose, fit_unit
+from nfs.diagnose import diagnose
+from nfs.fit import fit_unit
 from nfs.io.measurement import read_runs
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
@@ -171,7 +172,7 @@ def _one_set(case: str, seed: int) -> dict:
             if kind == "tie":
                 # a diagnosis without an answer of its own (answer_of read the tie from
                 # the ranking): its labels put to the runs
-                settle = settle_tie(d.to_dict(), fit.instrument, runs,
+                settle = settle_tie(d, fit.instrument, runs,
                                     labels=None if d.answer is not None else list(labels))
                 if settle is not None:
                     kind, labels = _answer(settle.answer)
@@ -207,7 +208,7 @@ def _one_set(case: str, seed: int) -> dict:
             d2 = diagnose(fit2.instrument, runs2)
             lap(step)
             step = "settle2"
-            after = settle_tie(d2.to_dict(), fit2.instrument, runs2,
+            after = settle_tie(d2, fit2.instrument, runs2,
                                labels=[r.label for r in design.rivals])
             lap(step)
             kind2, labels2 = _answer(after.answer)

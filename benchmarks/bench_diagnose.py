@@ -10,7 +10,7 @@ Run as ``python benchmarks/bench_diagnose.py [--family 3]``.  Sets:
   seeds 1..N), fitted from the default instrument with the effects those units have in kind
   (as ``benchmarks/bench_independent.py`` does).
 
-Each set: :func:`nfs.diagnose.fit_unit` (what ``nfs fit`` runs: both stages, then the
+Each set: :func:`nfs.fit.fit_unit` (what ``nfs fit`` runs: both stages, then the
 structure check on held-out runs and its refinement where a thermometer is missed by more
 than 2x) and :func:`nfs.diagnose.diagnose` with the fitted model, each timed once (the
 reference workload of ``../shared/tools/refwork.py``, timed in the same process, puts the
@@ -27,7 +27,8 @@ import time
 import warnings
 from pathlib import Path
 
-from nfs.diagnose import diagnose, fit_unit
+from nfs.diagnose import diagnose
+from nfs.fit import fit_unit
 from nfs.experiment import simulate_run
 from nfs.io.measurement import read_runs
 from nfs.config.scenario import load_scenario

@@ -8,9 +8,9 @@ variability (unfinished soaks from a 23 C laboratory, a chamber that wanders and
 the unit's parameters scattered: :mod:`nfs.variability`), the scenario seed varied
 (``--seed0``, ``--seed0 + 1``, ...), exactly what ``nfs simulate
 scenarios/startup_7temps.toml -o runs --seed S`` writes.  Then what a user does: fit the
-default model to the runs (:func:`nfs.diagnose.fit_unit`, as `nfs fit` does), diagnose with the fitted model
+default model to the runs (:func:`nfs.fit.fit_unit`, as `nfs fit` does), diagnose with the fitted model
 (:func:`nfs.diagnose.diagnose`) and, with ``--compare``, set the fitted model beside the runs
-(:func:`nfs.diagnose.compare`).  The model's structure is the truth's, so any named effect is
+(:func:`nfs.comparison.compare`).  The model's structure is the truth's, so any named effect is
 a false alarm.  ``--nominal`` runs the world without variability instead.
 
 Printed:
@@ -38,7 +38,9 @@ import numpy as np
 from joblib import Parallel, delayed
 from scipy.stats import binomtest
 
-from nfs.diagnose import compare, diagnose, fit_unit
+from nfs.comparison import compare
+from nfs.diagnose import diagnose
+from nfs.fit import fit_unit
 from nfs.experiment import simulate_run
 from nfs.config.scenario import load_scenario
 

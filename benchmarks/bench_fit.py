@@ -15,7 +15,7 @@ fitted from the default instrument with the effects the generator's unit has in 
 thermal stage's residual then stays above its noise, so the extra starts run and the
 forward-difference Jacobians are most of the work; beside the fit's time, one Jacobian of
 the thermal residual solved as one stack of the n + 1 parameter vectors (as the fit does,
-:mod:`nfs.diagnose.thermal_residual`) against the same n + 1 residuals solved one by one.
+:mod:`nfs.fit.thermal_residual`) against the same n + 1 residuals solved one by one.
 """
 
 from __future__ import annotations
@@ -28,10 +28,10 @@ from pathlib import Path
 
 from timing import best_of
 
-from nfs.diagnose.fit import fit_model
-from nfs.diagnose.free_set import default_free
-from nfs.diagnose.params import get_param, set_params
-from nfs.diagnose.thermal_residual import prepare_thermal, thermal_residual_parts
+from nfs.fit.calibration import fit_model
+from nfs.fit.free_set import default_free
+from nfs.fit.params import get_param, set_params
+from nfs.fit.thermal_residual import prepare_thermal, thermal_residual_parts
 from nfs.experiment import simulate_run
 from nfs.instrument import load_instrument
 from nfs.io.measurement import read_runs

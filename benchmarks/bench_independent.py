@@ -11,7 +11,7 @@ part a fitted model cannot take up).  A rule tuned to one structure then shows u
 
 Each set holds the 7 start temperatures x 2.5 h at 1 Hz with one hidden effect, none, or one
 outside the library (``outside``: a quadrantal bias).  For every set the package does what a
-user does with a real unit's chamber runs: fit the lumped model (:func:`nfs.diagnose.fit_unit`, as `nfs fit` does,
+user does with a real unit's chamber runs: fit the lumped model (:func:`nfs.fit.fit_unit`, as `nfs fit` does,
 default free set), then diagnose (:func:`nfs.diagnose.diagnose`) and read its one answer
 (:func:`answer_of`):
 
@@ -50,7 +50,8 @@ from pathlib import Path
 
 from joblib import Parallel, delayed
 
-from nfs.diagnose import diagnose, fit_unit
+from nfs.diagnose import diagnose
+from nfs.fit import fit_unit
 from nfs.instrument import load_instrument
 from nfs.io.measurement import read_runs
 

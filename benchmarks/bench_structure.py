@@ -1,4 +1,4 @@
-"""Speed of the thermal structure check (nfs.diagnose.adequacy.thermal_adequacy).
+"""Speed of the thermal structure check (nfs.fit.adequacy.thermal_adequacy).
 
 Run as ``python benchmarks/bench_structure.py``.  Simulates the 7 default runs (2.5 h each at
 1 Hz) from the default instrument with a hidden link electronics-coil_inner of 0.3 W/K, then
@@ -17,9 +17,9 @@ from __future__ import annotations
 
 import time
 
-from nfs.diagnose.fit import fit_model
-from nfs.diagnose.adequacy import thermal_adequacy
-from nfs.diagnose.structure import free_link
+from nfs.fit.calibration import fit_model
+from nfs.fit.adequacy import thermal_adequacy
+from nfs.fit.structure import free_link
 from nfs.experiment import simulate_run
 from nfs.config.scenario import load_scenario
 

@@ -3,10 +3,11 @@
 A unit whose electronics have a turn-on transient (a = 0.1 deg/h, tau = 120 s) that the
 model lacks.  Seven soak-and-start runs (the default scenario, 2.5 h at 1 Hz) cannot tell
 the transient from a rate term on every node: right after power-on every node's rate decays
-like a transient, at every start temperature.  ``nfs design`` finds the cheapest chamber run
+like a transient, at every start temperature.  The design finds the cheapest chamber run
 that would (a warm restart: the transient restarts at full amplitude while the nodes have
 barely cooled), the run is made (here: simulated from the same unit), and the rivals are
-put to all the runs.  From the command line::
+put to all the runs.  In Python, with :class:`nfs.UnitChain` (every step's result is typed
+and saves itself as JSON with ``to_dict``); from the command line, the same::
 
     nfs fit runs/ --model model.toml -o fitted.toml --start soaked
     nfs diagnose runs/ --model fitted.toml --json diagnosis.json --start soaked --decide
@@ -16,40 +17,24 @@ put to all the runs.  From the command line::
     nfs diagnose runs/ --model fitted2.toml --start soaked --rivals turn_on_transient \\
         "a rate term on every node"
 
-(the rivals the tie left standing: the runs taken already rule out heat inside the coil
-and the model as it is).
-
-``--start soaked``: these simulated runs are soaked exactly at T0.  Run as
-``python examples/design_tie.py [OUT_DIR]`` (about two minutes on two cores).
+``start_state=None`` (``--start soaked``): these simulated runs are soaked exactly at T0.
+Run as ``python examples/design_tie.py [OUT_DIR]`` (about two minutes on two cores).
 """
 
 from __future__ import annotations
 
-import contextlib
 import dataclasses
-import io
 import json
-import shutil
 import sys
 import tempfile
 from pathlib import Path
 
 import nfs
-from nfs.cli import main as nfs_main
 from nfs.effects import make_effect
+from nfs.report.design_report import write_design
 
 TRUTH = {"a": 0.1, "tau": 120.0}
 SEED = 11
-
-
-def _nfs(*argv: str) -> str:
-    """Run one nfs command, return what it printed (exit code checked)."""
-    out = io.StringIO()
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(io.StringIO()):
-        code = nfs_main([str(a) for a in argv])
-    if code != 0:
-        raise RuntimeError(f"nfs {' '.join(map(str, argv))} exited {code}")
-    return out.getvalue()
 
 
 def main(out_dir: str | Path | None = None) -> dict:
@@ -58,43 +43,33 @@ def main(out_dir: str | Path | None = None) -> dict:
     default = nfs.load_instrument("default")
     model = default.with_effects([e for e in default.effects if e.name != "turn_on_transient"])
     truth = model.with_effects(list(model.effects) + [make_effect("turn_on_transient", TRUTH)])
-    (out / "model.toml").write_text(model.to_toml(), encoding="utf-8")
     scenario = dataclasses.replace(nfs.load_scenario().nominal(), duration_s=9000.0, seed=SEED)
-    runs = out / "runs"
-    shutil.rmtree(runs, ignore_errors=True)
-    for cond in scenario.conditions():
-        nfs.write_run(nfs.simulate_run(truth, cond).run, runs)
+    runs = [nfs.simulate_run(truth, cond).run for cond in scenario.conditions()]
     print(f"0. 7 runs of a unit with turn_on_transient {TRUTH} that the model lacks")
 
-    _nfs("fit", runs, "--model", out / "model.toml", "-o", out / "fitted.toml",
-         "--start", "soaked", "--overwrite", "-q")
-    _nfs("diagnose", runs, "--model", out / "fitted.toml", "--json", out / "diagnosis.json",
-         "--start", "soaked", "--overwrite", "-q", "--decide")
-    diag = json.loads((out / "diagnosis.json").read_text(encoding="utf-8"))
-    print("1. nfs diagnose:", diag["verdict"])
+    chain = nfs.UnitChain(model, runs, start_state=None)
+    chain.fit()
+    finding = chain.diagnose(decide=True)
+    (out / "diagnosis.json").write_text(json.dumps(finding.to_dict(), indent=1))
+    print("1. diagnose:", finding.verdict)
 
-    printed = _nfs("design", runs, "--model", out / "fitted.toml", "--diagnosis",
-                   out / "diagnosis.json", "-o", out / "design", "--start", "soaked",
-                   "--overwrite", "-q")
-    design = json.loads((out / "design" / "design.json").read_text(encoding="utf-8"))
-    print("2. nfs design:", printed.strip())
+    design = chain.design()                  # the rivals the finding could not tell apart
+    write_design(design, out / "design", runs, model.name)
+    print("2. design:", design.verdict)
 
     # the chamber run, made by the same unit (simulated from the truth, its own noise)
-    sc = nfs.load_scenario(out / "design" / "scenario.toml")
-    cond = dataclasses.replace(sc.conditions()[0], seed=(SEED, 99))
-    nfs.write_run(nfs.simulate_run(truth, cond).run, runs)
-    print(f"3. the designed run made: {design['experiment']['description']}")
+    cond = dataclasses.replace(design.experiment.conditions(nfs.design.base_conditions(runs)),
+                               seed=(SEED, 99))
+    runs2 = runs + [nfs.simulate_run(truth, cond).run]
+    print(f"3. the designed run made: {design.experiment.describe()}")
 
-    _nfs("fit", runs, "--model", out / "model.toml", "-o", out / "fitted2.toml",
-         "--start", "soaked", "--overwrite", "-q")
-    rivals = [r["label"] for r in design["rivals"]]
-    _nfs("diagnose", runs, "--model", out / "fitted2.toml", "--json", out / "after.json",
-         "--start", "soaked", "--overwrite", "-q", "--rivals", *rivals)
-    after = json.loads((out / "after.json").read_text(encoding="utf-8"))
-    print("4. nfs diagnose --rivals ...:", after["verdict"])
-    return {"tie": diag.get("tie", diag["answer"]), "before": diag["answer"],
-            "design": design, "after": after["answer"],
-            "interval": after["settlement"]["interval"], "truth": TRUTH, "out": out}
+    after_chain = nfs.UnitChain(model, runs2, start_state=None)
+    after_chain.fit()
+    after = after_chain.diagnose(rivals=[r.label for r in design.rivals])
+    print("4. diagnose with the designed run's rivals:", after.verdict)
+    return {"tie": finding.tie or finding.answer, "before": finding.answer,
+            "design": design, "after": after.answer, "interval": after.settlement.interval,
+            "truth": TRUTH, "out": out}
 
 
 if __name__ == "__main__":

@@ -27,7 +27,8 @@ import tempfile
 from pathlib import Path
 
 import nfs
-from nfs.diagnose import apply_candidate, diagnose, write_fitted_model
+from nfs.diagnose import apply_candidate, diagnose
+from nfs.fit import write_fitted_model
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests" / "independent"))

@@ -6,9 +6,10 @@ What a user scripts with is here, at the top (the ``nfs`` command calls the same
     scenario = nfs.load_scenario("startup_7temps")            # a file or a built-in name
     result = nfs.ModelChain(scenario).run_model()             # simulate -> north-find ->
     print(result.markdown)                                    #   compensate -> table
-    runs = nfs.read_runs("runs/")                             # measured runs
-    fit = nfs.fit_model(nfs.load_instrument("default"), runs) # the model fitted to them
-    found = nfs.diagnose.diagnose(fit.instrument, runs)       # which effect is missing
+    chain = nfs.UnitChain("default", "runs/")                 # a model and a unit's runs
+    fit = chain.fit()                                         # the model fitted to them
+    finding = chain.diagnose(decide=True)                     # which effect is missing
+    print(finding.verdict)                                    #   (then chain.apply, design)
 
 The pipeline, by subpackage (each imports only those before it): :mod:`thermal` (lumped
 network) -> :mod:`nfs.sensors`, :mod:`nfs.effects` (named drift effects), :mod:`nfs.noise` ->
@@ -16,7 +17,8 @@ network) -> :mod:`nfs.sensors`, :mod:`nfs.effects` (named drift effects), :mod:`
 (simulate runs, :class:`nfs.run.Run`) -> :mod:`nfs.northfind`, :mod:`nfs.denoise` ->
 :mod:`nfs.learners`, :mod:`nfs.compensate` -> :mod:`nfs.scenario`, :mod:`nfs.config` ->
 :mod:`nfs.scoring` -> :mod:`nfs.studies` -> :mod:`nfs.report` -> :mod:`nfs.chain`,
-:mod:`nfs.sweep`; beside them, measurements -> :mod:`nfs.diagnose` (fit, compare, diagnose).
+:mod:`nfs.sweep`; beside them, measurements -> :mod:`nfs.fit` -> :mod:`nfs.comparison` ->
+:mod:`nfs.diagnose` -> :mod:`nfs.rivals` -> :mod:`nfs.design`.
 :mod:`nfs.io` reads and writes files; :mod:`nfs.cli` is the ``nfs`` command.
 
 The names below load on first use (SPEC 1 lazy loading, as SciPy and scikit-image do):
@@ -53,8 +55,10 @@ _PUBLIC = {
     "ModelChain": "nfs.chain", "ModelChainResult": "nfs.chain",
     "HeadingTable": "nfs.scoring.heading_table",
     # measurements against the model
-    # (the diagnosis itself is nfs.diagnose.diagnose: the name nfs.diagnose is its subpackage)
-    "fit_model": "nfs.diagnose", "fit_unit": "nfs.diagnose", "compare": "nfs.diagnose",
+    "fit_model": "nfs.fit", "fit_unit": "nfs.fit", "compare": "nfs.comparison",
+    "UnitChain": "nfs.unit", "FitResult": "nfs.fit", "Comparison": "nfs.comparison",
+    "Diagnosis": "nfs.diagnose", "Finding": "nfs.rivals", "Settlement": "nfs.rivals",
+    "Applied": "nfs.unit", "Design": "nfs.design",
     # many cells
     "load_sweep": "nfs.sweep", "run_sweep": "nfs.sweep",
 }
@@ -63,8 +67,16 @@ __all__ = ["__version__", "NfsError", "InputError", "MeasurementError", "Scenari
            "EffectError", "ThermalError", "USER_ERRORS", *_PUBLIC]
 
 
+#: Subpackages reachable as attributes (``nfs.design.default_space``) without an import.
+_SUBPACKAGES = ("fit", "comparison", "diagnose", "rivals", "design", "unit", "effects",
+                "compensate", "northfind", "denoise", "learners", "scoring", "report",
+                "studies", "sweep", "io", "noise", "sensors", "config")
+
+
 def __getattr__(name: str):
-    """Load a public name from its module on first use (PEP 562)."""
+    """Load a public name from its module, or a subpackage, on first use (PEP 562)."""
+    if name in _SUBPACKAGES:
+        return import_module(f"nfs.{name}")
     module = _PUBLIC.get(name)
     if module is None:
         raise AttributeError(f"module 'nfs' has no attribute {name!r}")

@@ -59,7 +59,7 @@ class RunConditions:
     marker); not recorded."""
     initial_c: np.ndarray | None = None
     """Node temperatures at the start of the record [degC] (n_nodes,), when known (a
-    measured run's start estimated from its thermometers, :mod:`nfs.diagnose.start_state`);
+    measured run's start estimated from its thermometers, :mod:`nfs.fit.start_state`);
     None: soaked at T0 (and ``variability``'s soak)."""
     power_off_s: tuple[tuple[float, float], ...] = ()
     """Power cycles: (switched off, switched on again) from power-on [s] (a chamber

@@ -28,7 +28,7 @@ either order (``coil_outer-coil_inner`` or
 some numbers changed (the original is untouched), :func:`list_params` lists every path and
 :func:`expand_paths` expands glob patterns (``thermal.nodes.*.capacity_j_per_k``).  The
 simulator draws a unit's parameters through these paths (:mod:`nfs.variability`), the fit
-frees them and bounds them (:mod:`nfs.diagnose.params`).
+frees them and bounds them (:mod:`nfs.fit.params`).
 """
 
 from __future__ import annotations

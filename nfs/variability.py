@@ -43,7 +43,7 @@ each scaled to max |v_i| = 1), mode i with a standard deviation s_i, s_i^2 propo
 tau_i (a mode driven by the air's white fluctuations holds a variance proportional to its
 time constant), the slowest soak_node_c.  Parts that equalise within seconds (a wound coil's
 layers, its outer face and the shield) then start together, as no soak leaves them apart,
-and the estimators' start model (:mod:`nfs.diagnose.start_state`, the smoother's prior)
+and the estimators' start model (:mod:`nfs.fit.start_state`, the smoother's prior)
 describes what the world draws.
 
 Per unit (unit-to-unit, drawn once per unit)

@@ -34,7 +34,7 @@ def _scenario_text(name, seed, start_temperatures_c, duration_s, *, latitude_deg
             + extra)
 
 
-@pytest.fixture
+@pytest.fixture(scope="session")
 def scenario_text():
     """Text of a small scenario file for the command-line tests:
     ``scenario_text(name, seed, temps, duration_s, latitude_deg=30, true_heading_deg=40,

@@ -27,7 +27,7 @@ import dataclasses
 import numpy as np
 import pytest
 
-from nfs.diagnose.comparison import noise_free
+from nfs.comparison.compare_runs import noise_free
 from nfs.experiment import simulate_run
 from nfs.studies.scenario_runs import northfind_runs, run_scenario, stage_errors
 from nfs.studies.scenario_runs import uncompensated_table

@@ -6,7 +6,7 @@ import pydoc
 import pytest
 
 from nfs.studies.startup_study import CompensationStudy, MethodResult, SeedResult
-from nfs.diagnose.fit_result import FitResult
+from nfs.fit.fit_result import FitResult
 from nfs.diagnose.result import CandidateScore, Diagnosis
 from nfs.docfields import document_fields, field_docs
 from nfs.experiment import SimulationResult

@@ -43,11 +43,11 @@ def test_design_tie_example(tmp_path):
     """A hidden turn-on transient (a = 0.1 deg/h, tau = 120 s).  Oracle: the first diagnosis
     ties it with a rate term on every node; the design is a power cycle; after its run the
     rivals put to the runs name the transient, its intervals holding a and tau (the loop of
-    tests/design/test_loop.py, through the command line)."""
+    tests/design/test_loop.py, through nfs.UnitChain)."""
     r = load("design_tie").main(tmp_path)
-    assert r["before"]["kind"] == "tie", r["before"]
-    assert r["design"]["experiment"]["event"] == "power_off" and r["design"]["met"]
-    assert r["after"]["kind"] == "add" and r["after"]["labels"] == ["turn_on_transient"]
+    assert r["before"].kind == "tie", r["before"]
+    assert r["design"].experiment.event == "power_off" and r["design"].met
+    assert r["after"].kind == "add" and r["after"].labels == ("turn_on_transient",)
     for k in ("a", "tau"):
         lo, hi = r["interval"][k]
         assert lo <= r["truth"][k] <= hi, (k, r["interval"])

@@ -413,7 +413,7 @@ def fit_runs(inst, conds):
 
 
 def _drift_rms_z(inst, rd) -> float:
-    from nfs.diagnose.drift_residual import drift_context, model_drift_dph, window_means
+    from nfs.fit.drift_residual import drift_context, model_drift_dph, window_means
 
     ctx = drift_context(inst, rd)
     model = window_means(rd, model_drift_dph(inst, ctx, rd.cond.latitude_deg))
@@ -422,7 +422,7 @@ def _drift_rms_z(inst, rd) -> float:
 
 
 def test_truth_replays_its_power_cycled_run(inst, fit_runs):
-    from nfs.diagnose.drift_residual import prepare_drift
+    from nfs.fit.drift_residual import prepare_drift
 
     run = fit_runs[-1]
     rd = prepare_drift(run, 60.0, False, "raw")
@@ -438,7 +438,7 @@ def test_truth_replays_its_power_cycled_run(inst, fit_runs):
 
 
 def test_fit_on_runs_with_a_power_cycle(inst, fit_runs):
-    from nfs.diagnose.fit import fit_model
+    from nfs.fit.calibration import fit_model
 
     res = fit_model(inst, fit_runs, start_state=None)
     for ch, v in res.rms_after.items():

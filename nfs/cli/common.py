@@ -107,6 +107,6 @@ def fmt(v: float) -> str:
 
 
 def start_model(args):
-    """The start model of ``--start`` (nfs.diagnose.start_state)."""
-    from ..diagnose.thermal_residual import DEFAULT_START
+    """The start model of ``--start`` (nfs.fit.start_state)."""
+    from ..fit.thermal_residual import DEFAULT_START
     return DEFAULT_START if args.start == "estimated" else None

@@ -1,57 +1,82 @@
 """``nfs fit``, ``nfs compare``, ``nfs diagnose``: the model beside measured runs.
 
-Each command imports the library inside its function (lazily), so that ``nfs --help`` and
-a mistyped option answer without loading scikit-learn and matplotlib.
+Each command is :class:`nfs.UnitChain` on files: it reads the model and the runs, runs the
+chain's step and writes the step's result (the fitted model's TOML, the comparison's
+report, the finding's JSON: ``to_dict``), and reads an earlier result with ``from_dict``.
+The library is imported inside each function (lazily), so that ``nfs --help`` and a
+mistyped option answer without loading scikit-learn and matplotlib.
 """
 
 from __future__ import annotations
 
 import json
-import math
 import sys
 from pathlib import Path
 
 from ..errors import NfsError
 from .common import finish, output_file, output_folder, start_model
 
-__all__ = ["cmd_fit", "cmd_compare", "cmd_diagnose"]
+__all__ = ["cmd_fit", "cmd_compare", "cmd_diagnose", "read_finding"]
+
+
+def read_finding(path: str, option: str = "--diagnosis"):
+    """The finding an earlier ``nfs diagnose --json`` wrote (:class:`nfs.rivals.Finding`)."""
+    from ..records import RecordError
+    from ..rivals import Finding
+    try:
+        data = json.loads(Path(path).read_text(encoding="utf-8"))
+    except (OSError, ValueError) as exc:
+        raise NfsError(f"{option} {path}: not a readable JSON file written by nfs diagnose "
+                       f"--json ({exc})") from None
+    try:
+        return Finding.from_dict(data)
+    except RecordError as exc:
+        raise NfsError(f"{option} {path}: not a finding written by nfs diagnose --json "
+                       f"({exc})") from None
+
+
+def _chain(args, check=None):
+    """The unit's chain on the command's model and runs; ``check(model, runs)`` runs before
+    any work (a rival's label, an effect's name)."""
+    from .. import UnitChain, load_instrument, read_runs
+    inst = load_instrument(args.model)
+    runs = read_runs(args.data)
+    if check is not None:
+        check(inst, runs)
+    return UnitChain(inst, runs, start_state=start_model(args),
+                     decimate_s=getattr(args, "decimate_s", 10.0))
 
 
 def cmd_fit(args) -> int:
-    from .. import fit_unit, load_instrument, read_runs
-    from ..diagnose import write_fitted_model
-    inst = load_instrument(args.model)
     output_file(args.output, "-o", args.overwrite)
-    runs = read_runs(args.data)
+    chain = _chain(args)
     if not args.quiet:
-        print(f"fitting {inst.name} to {len(runs)} run(s)...", file=sys.stderr)
-    res = fit_unit(inst, runs, refine=not args.no_refine, free=args.free,
-                   stages=tuple(args.stages), decimate_s=args.decimate_s,
-                   prior=None if args.no_prior else "default", prior_scale=args.prior_scale,
-                   n_starts=args.starts, fit_noise=not args.no_noise_fit,
-                   start_state=start_model(args))
-    write_fitted_model(res, args.output)
+        print(f"fitting {chain.model.name} to {len(chain.runs)} run(s)...", file=sys.stderr)
+    res = chain.fit(refine=not args.no_refine, free=args.free, stages=tuple(args.stages),
+                    prior=None if args.no_prior else "default", prior_scale=args.prior_scale,
+                    n_starts=args.starts, fit_noise=not args.no_noise_fit)
+    chain.write_model(args.output)
     print(res.summary())
     print(f"wrote {args.output}")
     return 0
 
 
 def cmd_compare(args) -> int:
-    from .. import compare, load_instrument, read_runs
-    from ..diagnose import write_report
+    from ..report.compare_report import write_report
     from ..io.atomic import atomic_write_text
     from ..io.provenance import output_provenance
-    inst = load_instrument(args.model)
     output_file(args.json, "--json", args.overwrite)
-    runs = read_runs(args.data)
+    chain = _chain(args)
     folder = output_folder(args, "compare")
     if not args.quiet:
-        print(f"simulating {inst.name} beside {len(runs)} run(s)...", file=sys.stderr)
-    c = compare(inst, runs, seed=args.seed, startup_end_s=args.startup_end_s,
-                stable_start_s=args.stable_start_s, start_state=start_model(args))
+        print(f"simulating {chain.model.name} beside {len(chain.runs)} run(s)...",
+              file=sys.stderr)
+    c = chain.compare(seed=args.seed, startup_end_s=args.startup_end_s,
+                      stable_start_s=args.stable_start_s)
     paths = write_report(c, args.output)
     # the runs are hashed once, for the JSON and the folder's manifest
-    prov = output_provenance(instrument=inst, runs=runs, seeds={"model_noise": args.seed})
+    prov = output_provenance(instrument=chain.model, runs=chain.runs,
+                             seeds={"model_noise": args.seed})
     if args.json:
         atomic_write_text(args.json, json.dumps({**c.to_dict(), "provenance": prov}, indent=1)
                           + "\n")
@@ -64,13 +89,10 @@ def cmd_compare(args) -> int:
     return 0
 
 
-def cmd_diagnose(args) -> int:
-    from ..diagnose import apply_candidate, candidate_finding, diagnose
+def _check_diagnose(args):
+    """What ``nfs diagnose``'s options ask, checked before any work."""
     from ..effects import get_effect
-    from ..io.atomic import atomic_write_text
-    from ..scoring.intervals import json_number
-    from .. import load_instrument, read_runs
-    inst = load_instrument(args.model)
+    from ..rivals.models import check_label
     if args.rivals is not None and len(args.rivals) < 2:
         raise NfsError(f"--rivals: a decision needs at least two explanations, got "
                        f"{len(args.rivals)}")
@@ -78,75 +100,74 @@ def cmd_diagnose(args) -> int:
         raise NfsError("--rivals puts explanations to the runs, --apply adds one: give one")
     if args.apply and args.output is None:
         raise NfsError("--apply needs -o FILE for the new model")
+
+    def check(inst, runs):
+        for label in args.rivals or ():
+            check_label(inst, runs, label)
+        if args.apply:
+            get_effect(args.apply.partition(":")[0])   # an unknown name fails before work
+    return check
+
+
+def cmd_diagnose(args) -> int:
+    from ..io.atomic import atomic_write_text
+    from ..io.provenance import output_provenance
+    from ..scoring.intervals import json_number
+    check = _check_diagnose(args)
     output_file(args.output, "-o", args.overwrite)
     output_file(args.json, "--json", args.overwrite)
-    runs = read_runs(args.data)
-    if args.rivals:
-        from ..design.rivals import check_label
-        for label in args.rivals:          # before the diagnosis's work
-            check_label(inst, runs, label)
+    chain = _chain(args, check)
+    say = (lambda m: None) if args.quiet else (lambda m: print(m, file=sys.stderr))
     if args.apply:
-        name, _, target = args.apply.partition(":")
-        get_effect(name)  # an unknown name fails before any work
         if args.diagnosis is not None:
-            try:
-                found = json.loads(Path(args.diagnosis).read_text(encoding="utf-8"))
-            except (OSError, ValueError) as exc:
-                raise NfsError(f"--diagnosis {args.diagnosis}: not a readable JSON file "
-                               f"written by nfs diagnose --json ({exc})") from None
-            source = f"the diagnosis in {args.diagnosis}"
+            found, source = read_finding(args.diagnosis), f"the diagnosis in {args.diagnosis}"
         else:
-            if not args.quiet:
-                print(f"diagnosing {inst.name} on {len(runs)} run(s) before adding "
-                      f"{args.apply}...", file=sys.stderr)
-            found = diagnose(inst, runs, random_state=args.seed, alpha=args.alpha,
-                             node_temperatures=args.node_temperatures,
-                             check_structure=not args.no_structure,
-                             start_state=start_model(args)).to_dict()
+            say(f"diagnosing {chain.model.name} on {len(chain.runs)} run(s) before adding "
+                f"{args.apply}...")
+            found = _diagnose(chain, args)
             source = "the diagnosis of these runs"
-        significant, finding = candidate_finding(found, name, target or None)
-        if not significant:
-            print(f"nfs: warning: {source} does not support this effect: {finding}; "
+        applied = chain.apply(args.apply, finding=found)
+        if not applied.supported:
+            print(f"nfs: warning: {source} does not support this effect: {applied.support}; "
                   "adding it as asked", file=sys.stderr)
-        new, fit, report = apply_candidate(inst, runs, name, target or None,
-                                           start_state=start_model(args))
-        from ..diagnose import write_fitted_model
-        write_fitted_model(fit, args.output)
-        print(f"added {args.apply} ({source}: {finding}); refitted:")
-        print(fit.summary())
-        for ch, after in report.get("rms_after", {}).items():
-            before = report.get("rms_before", {}).get(ch, math.nan)
-            print(f"- {ch}: residual RMS {before:.4g} -> {after:.4g}")
-        hb, ha = report.get("heading_rmse_before_deg"), report.get("heading_rmse_after_deg")
-        if hb is not None and ha is not None:
-            print(f"- start-up heading RMSE {hb:.4f} -> {ha:.4f} deg")
+        chain.write_model(args.output)
+        print(applied.summary(source))
         print(f"wrote {args.output}")
         return 0
-    if not args.quiet:
-        print(f"diagnosing {inst.name} on {len(runs)} run(s)...", file=sys.stderr)
-    d = diagnose(inst, runs, random_state=args.seed, alpha=args.alpha,
-                 node_temperatures=args.node_temperatures,
-                 check_structure=not args.no_structure, start_state=start_model(args))
+    say(f"diagnosing {chain.model.name} on {len(chain.runs)} run(s)...")
+    if args.decide or args.rivals:
+        say("then, " + ("on a tie, " if not args.rivals else "")
+            + "fitting each explanation and putting them to the runs...")
+    finding = _diagnose(chain, args)
+    d = finding.diagnosis
     print("| rank | effect | target | channel | significant | CV RMS before | after | "
           "coefficient |")
     print("|---:|---|---|---|---|---:|---:|---|")
     for i, sc in enumerate(d.ranking[:args.top], 1):
-        row = sc.to_dict()
-        coef = ", ".join(f"{k} = {v:.3g}" for k, v in (row.get("coefficient") or {}).items())
-        sig = "yes" if row["significant"] else "no"
-        if row["explained_by"]:
-            sig += f" (explained by {row['explained_by']})"
-        print(f"| {i} | {row['effect']} | {row['target'] or ''} | {row['channel']} | {sig} | "
-              f"{row['cv_rms_before']:.4g} | {row['cv_rms_after']:.4g} | {coef} |")
-    settled = None
-    if (d.answer.kind == "tie" and args.decide) or args.rivals:
-        from ..design.decide import settle_tie
-        if not args.quiet:
-            print(f"{'a tie: ' if not args.rivals else ''}fitting each explanation and "
-                  "putting them to the runs...", file=sys.stderr)
-        settled = settle_tie(d.to_dict(), inst, runs, labels=args.rivals,
-                             start_state=start_model(args))
-    print(d.verdict if settled is None else settled.answer.text)
+        coef = ", ".join(f"{k} = {v:.3g}" for k, v in sc.coefficient.items())
+        sig = "yes" if sc.significant else "no"
+        if sc.explained_by:
+            sig += f" (explained by {sc.explained_by})"
+        print(f"| {i} | {sc.effect} | {sc.target or ''} | {sc.channel} | {sig} | "
+              f"{sc.cv_rms_before:.4g} | {sc.cv_rms_after:.4g} | {coef} |")
+    print(finding.verdict)
+    _print_checks(d)
+    if args.json:
+        prov = output_provenance(instrument=chain.model, runs=chain.runs,
+                                 seeds={"bootstrap": args.seed})
+        doc = type(finding)(d, finding.settlement, prov).to_dict()
+        atomic_write_text(args.json, json.dumps(doc, indent=1, default=json_number) + "\n")
+    return 0
+
+
+def _diagnose(chain, args):
+    return chain.diagnose(decide=args.decide, rivals=args.rivals, alpha=args.alpha,
+                          seed=args.seed, node_temperatures=args.node_temperatures,
+                          check_structure=not args.no_structure)
+
+
+def _print_checks(d) -> None:
+    """The residual's whiteness and the structure checks, a line each."""
     w = d.unexplained["ljung_box"]
     what = "against the gyro noise model" if w["whitened"] else "(plain: the model has no noise)"
     print(f"residual {what}: Ljung-Box p = {w['p_value']:.2g}, variance ratio "
@@ -160,16 +181,3 @@ def cmd_diagnose(args) -> int:
         print("drift structure: " + d.drift_structure.message)
     if d.not_tried:
         print(f"{len(d.not_tried)} candidate(s) not scored (reasons in --json 'not_tried')")
-    if args.json:
-        from ..io.provenance import output_provenance
-        doc = {**d.to_dict(), "provenance": output_provenance(
-            instrument=inst, runs=runs, seeds={"bootstrap": args.seed})}
-        if settled is not None:
-            # the one answer: the tie put to the runs (the diagnosis's own tie stays in
-            # "settlement" for nfs design --diagnosis)
-            doc["settlement"] = settled.to_dict()
-            doc["tie"] = doc["answer"]
-            doc["answer"] = settled.answer.to_dict()
-            doc["verdict"] = settled.answer.text
-        atomic_write_text(args.json, json.dumps(doc, indent=1, default=json_number) + "\n")
-    return 0

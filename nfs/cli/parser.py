@@ -175,7 +175,7 @@ def build_parser() -> argparse.ArgumentParser:
     fi.add_argument("-o", "--output", required=True, help="fitted model TOML to write")
     fi.add_argument("--overwrite", action="store_true", help="replace an existing -o file")
     fi.add_argument("--free", nargs="+", default=None,
-                    help="free parameter paths or patterns (default: nfs.diagnose.default_free)")
+                    help="free parameter paths or patterns (default: nfs.fit.default_free)")
     fi.add_argument("--stages", nargs="+", default=["thermal", "drift"],
                     choices=["thermal", "drift"],
                     help="what to fit: thermal (network against the thermometers), drift "
@@ -184,7 +184,7 @@ def build_parser() -> argparse.ArgumentParser:
     fi.add_argument("--decimate-s", type=float, default=10.0,
                     help="time step of the fit [s] (default 10)")
     fi.add_argument("--prior-scale", type=float, default=1.0,
-                    help="multiply every prior width of nfs.diagnose.prior by this (default 1; "
+                    help="multiply every prior width of nfs.fit.prior by this (default 1; "
                          "inf: no prior)")
     fi.add_argument("--no-prior", action="store_true",
                     help="plain least squares: no prior on the parameters, no soak anchor")
@@ -259,7 +259,7 @@ def build_parser() -> argparse.ArgumentParser:
                          "structural alternative's name")
     dg.add_argument("--decide", action="store_true",
                     help="on a tie, fit the tied explanations and the model as it is and "
-                         "put them to the runs (nfs.design.decide: a likelihood ratio of e^2 "
+                         "put them to the runs (nfs.rivals.decide: a likelihood ratio of e^2 "
                          "after the price of the numbers a rival adds, and Vuong's Z 1.645 "
                          "with the model error along the runs counted); its rates on units "
                          "the model does not describe: docs/design.md, Limits")

@@ -1,29 +1,39 @@
 """Design the run that tells rival explanations apart (model discrimination).
 
 When a diagnosis ends in a tie (:mod:`nfs.diagnose`), the runs taken cannot tell two
-explanations apart.  This package finds the cheapest chamber run that would:
+explanations apart. The rivals and what each predicts are :mod:`nfs.rivals`; this package
+finds the cheapest chamber run that would separate them:
 
-- :mod:`~nfs.design.rivals`: each explanation becomes a fitted model with its parameter
-  uncertainty (:class:`Rival`);
 - :mod:`~nfs.design.space`: the experiments a chamber and a turntable can run (start
   temperature, a power cycle or a chamber ramp, the run's length) and their chamber hours;
-- :mod:`~nfs.design.predict`: what a rival predicts a run records, and the noise of each
-  recorded number;
-- :mod:`~nfs.design.separation`: how far apart two rivals' predictions are in noise
-  standard deviations (the expected log-likelihood ratio, with parameter uncertainty);
 - :mod:`~nfs.design.search`: the grid, then a local refinement, for the cheapest run that
-  separates every pair by the margin (:func:`design_experiment`);
-- :mod:`~nfs.design.report`: the designed run as a scenario file, a report with its figure
-  and ``design.json``.
+  separates every pair by the margin (:func:`design_experiment`).
+
+The designed run's scenario file, report and figure are written by
+:mod:`nfs.report.design_report`. The names of :mod:`nfs.rivals` that were importable from
+here before still are, with a :class:`DeprecationWarning`, for one release.
 """
 
-from .predict import Prediction, noise_sigma, predict, quiet
-from .rivals import MODEL, RATE_ALTERNATIVE, Rival, rival_model, rival_models, rivals_from_diagnosis
-from .search import Design, Trial, current_separation, design_experiment
-from .separation import MARGIN_SIGMA, RivalPrediction, Separation, separation
-from .space import Experiment, Space, default_space
+import warnings
+from importlib import import_module
 
-__all__ = ["Prediction", "noise_sigma", "predict", "quiet", "MODEL", "RATE_ALTERNATIVE",
-           "Rival", "rival_model", "rival_models", "rivals_from_diagnosis", "Design", "Trial",
-           "current_separation", "design_experiment", "MARGIN_SIGMA", "RivalPrediction",
-           "Separation", "separation", "Experiment", "Space", "default_space"]
+from .search import Design, Trial, current_separation, design_experiment
+from .space import Experiment, Space, base_conditions, default_space
+
+__all__ = ["Design", "Trial", "current_separation", "design_experiment", "Experiment", "Space",
+           "base_conditions", "default_space"]
+
+_MOVED = dict.fromkeys(["Prediction", "noise_sigma", "predict", "quiet", "MODEL",
+                        "RATE_ALTERNATIVE", "Rival", "rival_model", "rival_models",
+                        "rivals_from_diagnosis", "MARGIN_SIGMA", "RivalPrediction",
+                        "Separation", "separation"], "nfs.rivals")
+
+
+def __getattr__(name: str):
+    """A name that moved to :mod:`nfs.rivals`: warn and hand it over (PEP 562)."""
+    module = _MOVED.get(name)
+    if module is None:
+        raise AttributeError(f"module 'nfs.design' has no attribute {name!r}")
+    warnings.warn(f"nfs.design.{name} moved to {module}.{name}; import it from there "
+                  "(the old name goes in the next release)", DeprecationWarning, stacklevel=2)
+    return getattr(import_module(module), name)

@@ -2,7 +2,7 @@
 
 For every experiment of the grid (:class:`nfs.design.space.Space`) each rival predicts the
 run at its fitted parameters and at ``n_draws`` draws of them
-(:mod:`nfs.design.predict`), and every pair's separation (:mod:`nfs.design.separation`)
+(:mod:`nfs.rivals.predict`), and every pair's separation (:mod:`nfs.rivals.separation`)
 is computed on every prefix of the record (a run of length T is the first T of a longer
 one): the experiment's cost is the chamber hours of the shortest prefix on which the
 *worst* pair reaches the margin.  The cheapest experiment of the grid is then refined
@@ -28,16 +28,20 @@ import numpy as np
 from ..errors import NfsError
 from ..experiment import RunConditions
 from ..ranges import TEMPERATURE_RANGE_C
+from ..records import RecordError, encode, from_record
 from ..run import Run
-from .noise_level import scaled
-from .predict import PREDICT_STEP_S, noise_sigma
-from .replay import predict_rival, replay_runs_taken
-from .rivals import Rival
-from .separation import MARGIN_SIGMA, RivalPrediction, Separation, separation
-from .space import Experiment, Space
+from ..rivals.noise_level import scaled
+from ..rivals.predict import PREDICT_STEP_S, noise_sigma
+from ..rivals.replay import predict_rival, replay_runs_taken
+from ..rivals.models import Rival
+from ..rivals.separation import MARGIN_SIGMA, RivalPrediction, Separation, separation
+from .space import Experiment, Space, base_conditions, default_space
 
 __all__ = ["Design", "Trial", "design_experiment", "current_separation",
-           "N_DRAWS"]
+           "N_DRAWS", "DESIGN_SCHEMA"]
+
+#: The JSON schema of :meth:`Design.to_dict`.
+DESIGN_SCHEMA = "nfs-design/1"
 
 #: Parameter draws per rival and experiment.
 N_DRAWS = 8
@@ -73,7 +77,7 @@ class Design:
     """The margin asked for [noise standard deviations]."""
     noise_factors: dict[str, float]
     """The factor each channel's sensor noise is raised by, from the runs taken
-    (:mod:`nfs.design.noise_level`)."""
+    (:mod:`nfs.rivals.noise_level`)."""
     open_pairs: tuple[tuple[int, int], ...]
     """The pairs the run had to separate: those the runs taken leave below the margin
     (every pair when the runs taken separate them all)."""
@@ -81,9 +85,11 @@ class Design:
     """Every pair reaches the margin on the proposed run."""
     trials: tuple[Trial, ...]
     """Every experiment tried, grid and refinement."""
-    predictions: dict[str, RivalPrediction] = field(default_factory=dict, repr=False)
+    predictions: dict[str, RivalPrediction] = field(default_factory=dict, repr=False,
+                                                    metadata={"record": False})
     """Each rival's prediction of the proposed run (label -> prediction), for the figure."""
-    sigma: dict[str, np.ndarray] = field(default_factory=dict, repr=False)
+    sigma: dict[str, np.ndarray] = field(default_factory=dict, repr=False,
+                                         metadata={"record": False})
     """The noise of the proposed run's numbers, by channel."""
     time_s: float = 0.0
     """Wall time of the search [s]."""
@@ -121,7 +127,12 @@ class Design:
                 "the space (longer runs, other start temperatures) or accept the tie")
 
     def to_dict(self) -> dict:
+        """JSON-ready form (``design.json``): the run, the separations by pair and the
+        verdict for a reader, and under ``record`` every field for :meth:`from_dict`
+        (:mod:`nfs.records`; the rivals' predictions for the figure are left out).  Schema
+        :data:`DESIGN_SCHEMA`."""
         return {
+            "schema": DESIGN_SCHEMA,
             "rivals": [r.to_dict() for r in self.rivals],
             "experiment": self.experiment.to_dict(), "hours": self.experiment.hours,
             "margin_sigma": self.margin_sigma, "met": self.met, "verdict": self.verdict,
@@ -133,7 +144,16 @@ class Design:
                                     for k, v in self.proposed.items()},
             "trials": [{"stage": t.stage, "worst_sigma": t.worst_sigma, "met": t.met,
                         **t.experiment.to_dict()} for t in self.trials],
-            "time_s": self.time_s}
+            "time_s": self.time_s,
+            "record": encode(self)}
+
+    @classmethod
+    def from_dict(cls, data: dict) -> "Design":
+        """The design :meth:`to_dict` wrote (``design.json``), without the predictions."""
+        if not isinstance(data, dict) or "record" not in data:
+            raise RecordError("not a design written by nfs design (no 'record')")
+        return from_record(cls, {"schema": data.get("schema"), **data["record"]},
+                           DESIGN_SCHEMA)
 
 
 def _pairs(n: int) -> list[tuple[int, int]]:
@@ -151,7 +171,7 @@ def current_separation(rivals: Sequence[Rival], runs: Sequence[Run], *, n_draws:
                                                dict[str, float]]:
     """Every pair's separation on the runs already taken, each rival replaying them from
     its own start states, in the noise the runs show; and that noise's factors
-    (:func:`nfs.design.replay.replay_runs_taken`)."""
+    (:func:`nfs.rivals.replay.replay_runs_taken`)."""
     taken = replay_runs_taken(rivals, runs, n_draws=n_draws, rng=np.random.default_rng(seed))
     return _separations(taken.predictions, taken.sigma), taken.factors
 
@@ -231,14 +251,19 @@ def _neighbours(e: Experiment, space: Space, t_range: tuple[float, float],
             if x.event_end_s < space.max_duration_s and space.durations_s(x).size]
 
 
-def design_experiment(rivals: Sequence[Rival], runs: Sequence[Run], base: RunConditions,
-                      space: Space, *, margin_sigma: float = MARGIN_SIGMA,
-                      n_draws: int = N_DRAWS, seed: int = 0, refine_rounds: int = 2,
+def design_experiment(rivals: Sequence[Rival], runs: Sequence[Run],
+                      base: RunConditions | None = None, space: Space | None = None, *,
+                      margin_sigma: float = MARGIN_SIGMA, n_draws: int = N_DRAWS,
+                      seed: int = 0, refine_rounds: int = 2,
                       progress: Callable[[str], None] | None = None) -> Design:
     """The cheapest experiment of ``space`` separating every pair of ``rivals`` by
     ``margin_sigma`` (module docstring).  ``base``: the site, heading, schedule and sample
-    rate of the proposed run (those of the runs taken)."""
+    rate of the proposed run (default: those of the runs taken,
+    :func:`~nfs.design.space.base_conditions`); ``space``: the experiments searched
+    (default: :func:`~nfs.design.space.default_space` of the runs)."""
     t_start = time.perf_counter()
+    base = base_conditions(runs) if base is None else base
+    space = default_space(runs) if space is None else space
     rivals = list(rivals)
     if len(rivals) < 2:
         raise NfsError("a design needs at least two rivals, got "

@@ -7,7 +7,7 @@ while the accelerometer itself reads it directly against a white-noise floor of 
 10 s window.  So an accelerometer candidate is scored on its axis's readings at rest.
 
 At rest, the axis of azimuth A on a turntable tilted by alpha_N (north edge up) and alpha_E
-reads (docs/physics.md section 4; :mod:`nfs.diagnose.sensor_fit`)
+reads (docs/physics.md section 4; :mod:`nfs.fit.sensor_fit`)
 
     f = sin(e) + b + sum_j c_j g_j(T) + n,    e = alpha_N cos A + alpha_E sin A     [g]
 
@@ -17,7 +17,7 @@ temperatures as the drift candidates).  Averaged over a window of ``decimate_s``
 this is linear in (alpha_N, alpha_E, b, c_j) once sin(e) - e is taken at the model's tilts
 (below 1e-6 g for a table levelled within 1 deg): the model's columns are
 (pi/180 <cos A>, pi/180 <sin A>, 1, <g_j>), the candidate's <g> of its effect with unit
-coefficient.  The statistics are those of the drift channel (:mod:`nfs.diagnose.stats`).
+coefficient.  The statistics are those of the drift channel (:mod:`nfs.scoring.run_stats`).
 """
 
 from __future__ import annotations
@@ -32,7 +32,7 @@ from ..instrument import Instrument
 from ..run import Run
 from ..sensors import axis_elevation_deg
 from .candidates import Candidate, effect_of, shape_grid, split_parameters
-from .drift_residual import prepare_drift, window_means
+from ..fit.drift_residual import prepare_drift, window_means
 
 __all__ = ["ACC_AXES", "AccRun", "acc_channel", "model_acc_paths", "prepare_acc",
            "acc_candidate_columns", "acc_grid_columns"]
@@ -49,7 +49,7 @@ class AccRun:
 
     rd: Any
     """Its preparation with the accelerometer channels
-    (:func:`nfs.diagnose.drift_residual.prepare_drift`)."""
+    (:func:`nfs.fit.drift_residual.prepare_drift`)."""
     ctx: Any
     """Effect context of the run (the drift candidates' node temperatures)."""
     y: np.ndarray

@@ -14,12 +14,12 @@ from .candidates import (FAST_KINDS, SHAPE_GRID, Candidate, effect_of, split_par
                          targets)
 from .columns import (PreparedRun, bare_instrument, fit_shapes, model_drift_paths,
                      prepare_runs, startup_heading_rmse)
-from .start_state import StartModel
-from .thermal_residual import DEFAULT_START, start_states
-from .drift_residual import drift_context, model_drift_dph, prepare_drift
-from .fit import DEFAULT_DECIMATE_S, fit_model
-from .fit_result import FitResult
-from .free_set import default_free
+from ..fit.start_state import StartModel
+from ..fit.thermal_residual import DEFAULT_START, start_states
+from ..fit.drift_residual import drift_context, model_drift_dph, prepare_drift
+from ..fit.calibration import DEFAULT_DECIMATE_S, fit_model
+from ..fit.fit_result import FitResult
+from ..fit.free_set import default_free
 
 __all__ = ["apply_candidate", "fit_candidate"]
 

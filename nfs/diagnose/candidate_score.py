@@ -1,7 +1,7 @@
 """One candidate scored on one residual channel, with run-level statistics.
 
 Each candidate is a linear least-squares problem over runs, y_r = [X_r, C_r] beta + e_r
-(:mod:`nfs.diagnose.stats`): y_r the channel's residual of run r, X_r the model's own columns
+(:mod:`nfs.scoring.run_stats`): y_r the channel's residual of run r, X_r the model's own columns
 and C_r the candidate's, at fixed shape parameters.  :func:`score_candidate` gives
 
 - the clustered test of its coefficients against zero (CR2, one cluster per run; one-sided
@@ -30,7 +30,7 @@ from ..instrument import Instrument
 from .candidates import Candidate
 from .columns import PreparedRun, candidate_columns, fit_shapes
 from .result import CandidateScore
-from .stats import RunGrams, augmented_grams, clustered_fit, group_cv_rms, run_grams, solve
+from ..scoring.run_stats import RunGrams, augmented_grams, clustered_fit, group_cv_rms, run_grams, solve
 
 __all__ = ["ONE_SIDED", "ScoredCandidate", "ResidualChannel", "residual_channel",
            "one_sided_sign", "score_candidate", "best_grid_point", "score_with_shapes"]

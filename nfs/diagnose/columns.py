@@ -1,16 +1,16 @@
 """Design matrices of the candidate scores: the drift window means and the thermometers.
 
 Drift channel.  The thermal solution of every run is computed once from the model's
-(already fitted) thermal parameters (:func:`nfs.diagnose.drift_residual.drift_context`) and
+(already fitted) thermal parameters (:func:`nfs.fit.drift_residual.drift_context`) and
 the measured drift is reduced to means over windows of ``decimate_s`` at rest
-(:func:`nfs.diagnose.drift_residual.prepare_drift`).  The model drift
-(:func:`~nfs.diagnose.drift_residual.model_drift_dph`) is linear in ``gyro.bias_dph`` and in the
+(:func:`nfs.fit.drift_residual.prepare_drift`).  The model drift
+(:func:`~nfs.fit.drift_residual.model_drift_dph`) is linear in ``gyro.bias_dph`` and in the
 coefficients of the gyro effects (b1, b2, k_r, k_s, k_p, k_m, a, m, A_p, k, s1), so each is a
 column of a design matrix on the window means (:class:`PreparedRun`); a candidate adds its
 own columns, one per coefficient, at fixed shape parameters (:func:`candidate_columns`).
 
 Thermometer channel.  The residual is the three thermometers at the knots of the thermal
-stage (:func:`nfs.diagnose.fit.fit_model`); the model's own columns are the Jacobian of the
+stage (:func:`nfs.fit.calibration.fit_model`); the model's own columns are the Jacobian of the
 readings in its free thermal parameters (forward differences), the candidate's the
 derivatives of the readings in its parameters at 0 (a power step of 0.05 W, a TEC slope of
 0.005 W/K, an extra lag of 5 s: ``thermometer_lag``'s tau is a coefficient of the
@@ -33,13 +33,13 @@ from ..instrument import Instrument
 from ..run import Run
 from ..northfind import heading_rmse, north_find
 from .candidates import Candidate, SHAPE_GRID, effect_of, shape_grid, split_parameters
-from .drift_residual import (DriftRun, drift_context, drift_context_on, model_drift_dph,
+from ..fit.drift_residual import (DriftRun, drift_context, drift_context_on, model_drift_dph,
                              prepare_drift, window_means)
-from .free_set import default_free
-from .start_state import StartModel
-from .thermal_residual import DEFAULT_START, prepare_thermal, thermal_residual_parts
-from .params import fit_bounds, get_param, set_params
-from .stats import run_grams, solve
+from ..fit.free_set import default_free
+from ..fit.start_state import StartModel
+from ..fit.thermal_residual import DEFAULT_START, prepare_thermal, thermal_residual_parts
+from ..fit.params import fit_bounds, get_param, set_params
+from ..scoring.run_stats import run_grams, solve
 
 __all__ = ["PreparedRun", "prepare_runs", "bare_instrument", "model_drift_paths",
            "candidate_columns", "grid_columns", "fit_shapes", "startup_heading_rmse",
@@ -54,7 +54,7 @@ class PreparedRun:
     run: Run
     """The measured run."""
     rd: DriftRun
-    """Its drift-stage preparation (:func:`nfs.diagnose.drift_residual.prepare_drift`)."""
+    """Its drift-stage preparation (:func:`nfs.fit.drift_residual.prepare_drift`)."""
     ctx: Any
     """Effect context: on the model's open-loop thermal solution or on smoothed node
     temperatures (:func:`prepare_runs`)."""
@@ -238,7 +238,7 @@ class ThermalDesign:
     """The thermometer channel of every run, linearised at the model's thermal parameters."""
 
     data: list[Any]
-    """:func:`nfs.diagnose.thermal_residual.prepare_thermal` of each run."""
+    """:func:`nfs.fit.thermal_residual.prepare_thermal` of each run."""
     paths: list[str]
     """The model's free thermal parameters."""
     values: np.ndarray
@@ -248,7 +248,7 @@ class ThermalDesign:
     X: list[np.ndarray]
     """d model / d parameter, per run."""
     start: StartModel | None = DEFAULT_START
-    """How each run's start was profiled (:mod:`nfs.diagnose.start_state`)."""
+    """How each run's start was profiled (:mod:`nfs.fit.start_state`)."""
 
 
 def _thermal_resid(models: Sequence[Instrument], data, start: StartModel | None
@@ -262,8 +262,8 @@ def _thermal_resid(models: Sequence[Instrument], data, start: StartModel | None
 def thermal_design(inst: Instrument, runs: Sequence[Run], decimate_s: float,
                    start: StartModel | None = DEFAULT_START) -> ThermalDesign:
     """The thermometer residual of the model and its Jacobian in the free thermal parameters
-    (:func:`~nfs.diagnose.free_set.default_free`, thermal stage), by forward differences, each
-    run's start profiled (``start``, :mod:`nfs.diagnose.start_state`)."""
+    (:func:`~nfs.fit.free_set.default_free`, thermal stage), by forward differences, each
+    run's start profiled (``start``, :mod:`nfs.fit.start_state`)."""
     data = [prepare_thermal(r, decimate_s) for r in runs]
     paths = default_free(inst, ("thermal",))
     values = np.array([get_param(inst, p) for p in paths])

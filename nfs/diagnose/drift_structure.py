@@ -35,8 +35,8 @@ import numpy as np
 
 from ..docfields import document_fields
 from .columns import PreparedRun
-from .drift_residual import window_means
-from .stats import RunGrams, augmented_grams, clustered_fit, group_cv_rms
+from ..fit.drift_residual import window_means
+from ..scoring.run_stats import RunGrams, augmented_grams, clustered_fit, group_cv_rms
 
 __all__ = ["DriftStructure", "rate_columns", "beyond_alternative"]
 

@@ -17,13 +17,13 @@ rate (X_r: the turntable tilts, the axis bias and the model's effects on the axi
 :mod:`nfs.diagnose.acc_columns`); on the thermometer channel y_r are the three thermometers,
 X_r and C_r their Jacobians (:mod:`nfs.diagnose.columns`).  Window means within a run are
 strongly autocorrelated, runs are independent, so every statistic is run-level
-(:mod:`nfs.diagnose.stats`), from the per-run Gram matrices:
+(:mod:`nfs.scoring.run_stats`), from the per-run Gram matrices:
 
 - **Test.**  The candidate's coefficients are tested against zero with the cluster-robust
   CR2 covariance, one cluster per run (Liang & Zeger 1986; Bell & McCaffrey 2002; Cameron &
   Miller 2015, J. Human Resources 50(2) 317), t with Bell-McCaffrey degrees of freedom
   (at most G - 1, G runs) for one coefficient, Hotelling's F for k (denominator dof from
-  the smallest of theirs, at most G - k; :meth:`~nfs.diagnose.stats.ClusteredFit.test`).
+  the smallest of theirs, at most G - k; :meth:`~nfs.scoring.run_stats.ClusteredFit.test`).
   ``heat_source`` and ``motor_heat`` powers and an extra ``thermometer_lag`` cannot be
   negative: their test is one-sided (:data:`~nfs.diagnose.candidate_score.ONE_SIDED`).
 - **Shape search paid for.**  A candidate with shape parameters (tau, D_mag, T_p, phi) is
@@ -37,7 +37,7 @@ strongly autocorrelated, runs are independent, so every statistic is run-level
 - **Cross-validation.**  ``cv_rms_before`` / ``cv_rms_after``: the held-out RMS when each
   start temperature's runs (``run.meta.start_temperature_c``) are left out in turn, pooled
   over folds, model alone / model + candidate; in each fold the shape grid point is chosen
-  on the training runs only (:func:`~nfs.diagnose.stats.group_cv_rms`).
+  on the training runs only (:func:`~nfs.scoring.run_stats.group_cv_rms`).
 - **Significant** = Holm rejects the candidate AND its cross-validated RMS drops.
 
 Reported beside the test: ``coefficient`` / ``interval``, fitted at shapes refined from the
@@ -68,10 +68,10 @@ node, ``thermometer_lag`` on each thermometer) are scored on the thermometers (`
 columns lie in the span of the model's (a heat source at a node whose power the model fits)
 is listed under ``not_tried`` with the model parameter it duplicates.  A thermal candidate
 must also beat the generic structural alternatives of the network (one more node, a free
-link, a thermometer that sits elsewhere; :mod:`nfs.diagnose.structure`), scored with it on
+link, a thermometer that sits elsewhere; :mod:`nfs.fit.structure`), scored with it on
 the same leave-one-start-temperature-out thermometer residual within its physical bounds
-(a power >= 0 W, a lag >= 0 s; :func:`nfs.diagnose.adequacy.thermal_adequacy`), pooled and
-run by run (:func:`nfs.diagnose.adequacy.beats_structure`): a named heat source that only
+(a power >= 0 W, a lag >= 0 s; :func:`nfs.fit.adequacy.thermal_adequacy`), pooled and
+run by run (:func:`nfs.fit.adequacy.beats_structure`): a named heat source that only
 fits because the network is wrong is then not significant, and the verdict says the
 thermal structure does not fit, where, and what to change.
 
@@ -110,7 +110,7 @@ from ..errors import USER_ERRORS, NfsError
 from ..instrument import Instrument
 from ..run import Run
 from .acc_columns import acc_grid_columns, model_acc_paths, prepare_acc
-from .adequacy import ThermalAdequacy, thermal_adequacy
+from ..fit.adequacy import ThermalAdequacy, thermal_adequacy
 from .candidate_heading import ThermalDrift, with_heading
 from .candidate_score import (ResidualChannel, ScoredCandidate, best_grid_point,
                               one_sided_sign, residual_channel, score_candidate,
@@ -119,14 +119,15 @@ from .candidates import Candidate, candidates
 from .columns import (PreparedRun, bare_instrument, grid_columns, model_drift_paths, prepare_runs,
                      same_signature, thermal_candidate_columns, thermal_design)
 from .drift_structure import DriftStructure, beyond_alternative, rate_columns
-from .fit import DEFAULT_DECIMATE_S, fit_model, one_blas_thread
+from ..fit.calibration import DEFAULT_DECIMATE_S, fit_model, one_blas_thread
+from ..fit.fit_result import FitResult
 from .ranking import beyond_rate_terms, explained_by_top, rank, significance, structure_rivals
 from .result import Diagnosis
 from .smoother import smooth_runs
-from .start_state import StartModel
-from .stats import RunGrams, group_cv_rms, run_grams
-from .structure import effect_alternative, structural_alternatives
-from .thermal_residual import DEFAULT_START, start_states
+from ..fit.start_state import StartModel
+from ..scoring.run_stats import RunGrams, group_cv_rms, run_grams
+from ..fit.structure import effect_alternative, structural_alternatives
+from ..fit.thermal_residual import DEFAULT_START, start_states
 from .unexplained import unexplained
 
 __all__ = ["diagnose", "diagnose_candidates", "NODE_TEMPERATURES"]
@@ -313,7 +314,7 @@ def _score_fast_candidates(inst: Instrument, runs: Sequence[Run], cands: Sequenc
 def _structure_check(inst: Instrument, runs: Sequence[Run], thermal_cands: Sequence[Candidate],
                      start_state: StartModel | None) -> ThermalAdequacy:
     """The model's thermal structure against its generic alternatives, every thermal
-    candidate scored alike (:func:`nfs.diagnose.adequacy.thermal_adequacy`)."""
+    candidate scored alike (:func:`nfs.fit.adequacy.thermal_adequacy`)."""
 
     def alternatives(model: Instrument):
         """The generic alternatives and every thermal candidate, scored alike."""
@@ -373,10 +374,15 @@ def _significant(scored: list[ScoredCandidate], beyond: Mapping[str, tuple[float
 # ---------------------------------------------------------------------------------------------
 # Diagnose
 
-def diagnose(inst: Instrument, runs: Sequence[Run], **kwargs) -> Diagnosis:
+def diagnose(inst: Instrument, runs: Sequence[Run], *, n_boot: int = 20, alpha: float = 0.05,
+             random_state=0, decimate_s: float = DEFAULT_DECIMATE_S,
+             node_temperatures: str = "smoothed", check_structure: bool = True,
+             start_state: StartModel | None = DEFAULT_START,
+             start_c: Mapping[str, np.ndarray] | None = None,
+             baseline: FitResult | None = None) -> Diagnosis:
     """Score every candidate effect the model lacks (module docstring for the method).
 
-    Keywords are those of :func:`diagnose_candidates`.  A linear algebra that these runs
+    The keywords are those of :func:`diagnose_candidates`.  A linear algebra that these runs
     leave ill-conditioned (a singular or non-finite system in a candidate's refit) does not
     end in a traceback: the diagnosis comes back with its ``failure`` set and the answer
     "cannot be determined from these runs", with the reason.
@@ -389,10 +395,14 @@ def diagnose(inst: Instrument, runs: Sequence[Run], **kwargs) -> Diagnosis:
     t0 = time.perf_counter()
     try:
         # one BLAS thread, as the fit: the answer must not depend on the core count
-        return one_blas_thread(diagnose_candidates)(inst, runs, **kwargs)
+        return one_blas_thread(diagnose_candidates)(
+            inst, runs, n_boot=n_boot, alpha=alpha, random_state=random_state,
+            decimate_s=decimate_s, node_temperatures=node_temperatures,
+            check_structure=check_structure, start_state=start_state, start_c=start_c,
+            baseline=baseline)
     except (np.linalg.LinAlgError, FloatingPointError) as exc:
         return Diagnosis(ranking=(), not_tried=(), unexplained={}, baseline=None,
-                         time_s=time.perf_counter() - t0, alpha=kwargs.get("alpha", 0.05),
+                         time_s=time.perf_counter() - t0, alpha=alpha,
                          failure=f"a least-squares system of these runs is ill-conditioned "
                                  f"({exc}); more runs, longer runs or runs at other start "
                                  "temperatures would condition it")
@@ -402,7 +412,9 @@ def diagnose_candidates(inst: Instrument, runs: Sequence[Run], *, n_boot: int = 
                         alpha: float = 0.05,
                         random_state=0, decimate_s: float = DEFAULT_DECIMATE_S,
                         node_temperatures: str = "smoothed", check_structure: bool = True,
-                        start_state: StartModel | None = DEFAULT_START) -> Diagnosis:
+                        start_state: StartModel | None = DEFAULT_START,
+                        start_c: Mapping[str, np.ndarray] | None = None,
+                        baseline: FitResult | None = None) -> Diagnosis:
     """Score every candidate effect the model lacks (:func:`diagnose` without its net for
     ill-conditioned runs).
 
@@ -410,7 +422,7 @@ def diagnose_candidates(inst: Instrument, runs: Sequence[Run], *, n_boot: int = 
     ----------
     inst : Instrument
         The model, its thermal part already fitted; its drift coefficients are refitted
-        here (:func:`~nfs.diagnose.fit.fit_model`, drift stage).
+        here (:func:`~nfs.fit.calibration.fit_model`, drift stage).
     runs : sequence of Run
         Measured runs (at least 2).
     n_boot : int
@@ -425,11 +437,17 @@ def diagnose_candidates(inst: Instrument, runs: Sequence[Run], *, n_boot: int = 
         Node temperatures the drift candidates are evaluated on (:data:`NODE_TEMPERATURES`).
     check_structure : bool
         Set the model's thermal structure against generic alternatives
-        (:func:`nfs.diagnose.adequacy.thermal_adequacy`); a thermal candidate is then
+        (:func:`nfs.fit.adequacy.thermal_adequacy`); a thermal candidate is then
         significant only if it also beats every structural alternative.
     start_state : StartModel or None
         How each run's node temperatures at power-on are estimated
-        (:mod:`nfs.diagnose.start_state`); None: the runs were soaked exactly at T0.
+        (:mod:`nfs.fit.start_state`); None: the runs were soaked exactly at T0.
+    start_c : mapping {run name: node temperatures [degC]}, optional
+        The start states already estimated for this model (a fit's
+        :attr:`~nfs.fit.FitResult.start_c`): used as they are, not estimated again.
+    baseline : FitResult, optional
+        The fit that made ``inst`` (its ``instrument`` is ``inst``): kept as the diagnosis's
+        baseline instead of refitting the model's drift stage.
 
     The cross-validation leaves one start temperature out (one run, when all runs start
     at the same temperature).  Raises NfsError for fewer than 2 runs.
@@ -444,9 +462,11 @@ def diagnose_candidates(inst: Instrument, runs: Sequence[Run], *, n_boot: int = 
         raise NfsError(f"diagnose: node_temperatures must be one of "
                        f"{', '.join(NODE_TEMPERATURES)}, got {node_temperatures!r}")
     # each run's start (an unfinished soak), estimated once for every step below
-    start_c = start_states(inst, runs, decimate_s, start_state)
-    baseline = fit_model(inst, runs, free=model_drift_paths(inst), stages=("drift",),
-                         decimate_s=decimate_s, start_state=start_state, start_c=start_c)
+    if start_c is None:
+        start_c = start_states(inst, runs, decimate_s, start_state)
+    if baseline is None or baseline.instrument is not inst:
+        baseline = fit_model(inst, runs, free=model_drift_paths(inst), stages=("drift",),
+                             decimate_s=decimate_s, start_state=start_state, start_c=start_c)
     smoothed, node_info = _node_temperatures(inst, runs, node_temperatures, decimate_s,
                                              start_c)
     preps, paths = prepare_runs(inst, runs, decimate_s, thermal=smoothed, start_c=start_c)

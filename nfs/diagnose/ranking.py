@@ -8,7 +8,7 @@
   :func:`beyond_rate_terms`); a significant one that does not stand beyond it is *tied*
   with that alternative.
 - A significant thermal candidate must also beat the model's generic structural
-  alternatives, pooled and run by run (:func:`nfs.diagnose.adequacy.structure_rival`,
+  alternatives, pooled and run by run (:func:`nfs.fit.adequacy.structure_rival`,
   :func:`structure_rivals`); otherwise it is not significant and the rival is named.
 - Order (:func:`rank`): significant thermometer candidates first (a missing thermal effect
   also shows in the drift, a missing gyro effect never shows in the thermometers), then the
@@ -30,16 +30,16 @@ from typing import Mapping, Sequence
 import numpy as np
 
 from ..instrument import Instrument
-from .adequacy import MODEL_RIVAL, ThermalAdequacy, structure_rival
-from .alternative_score import AlternativeScore
+from ..fit.adequacy import MODEL_RIVAL, ThermalAdequacy, structure_rival
+from ..fit.alternative_score import AlternativeScore
 from .candidate_heading import ThermalDrift
 from .candidate_score import ResidualChannel, ScoredCandidate
 from .columns import candidate_columns
 from .drift_structure import DriftStructure
 from .result import CandidateScore
 from ..scoring.intervals import holm
-from .stats import group_cv_rms, run_grams
-from .structure import physical_lower
+from ..scoring.run_stats import group_cv_rms, run_grams
+from ..fit.structure import physical_lower
 
 __all__ = ["CV_DROP", "significance", "beyond_rate_terms", "structure_rivals", "is_physical",
            "rank_key", "rank", "explained_by_top"]
@@ -92,7 +92,7 @@ def structure_rivals(scored: Sequence[ScoredCandidate], adequacy: ThermalAdequac
                      ) -> list[ScoredCandidate]:
     """Every significant thermal candidate held to the structure's rivals: significant only
     when it beats the model and every structural alternative pooled and run by run
-    (:func:`nfs.diagnose.adequacy.structure_rival`, scored as ``effect_alternatives`` by
+    (:func:`nfs.fit.adequacy.structure_rival`, scored as ``effect_alternatives`` by
     label), else ``structure_tie`` names the alternative it does not beat."""
     out = list(scored)
     for i, s in enumerate(out):

@@ -6,13 +6,20 @@ from dataclasses import dataclass
 from typing import Any
 
 from ..docfields import document_fields
-from .adequacy import ThermalAdequacy
+from ..records import encode, from_record, to_record
+from ..fit.adequacy import ThermalAdequacy
 from .candidates import Candidate
 from .drift_structure import DriftStructure
-from .fit_result import FitResult
+from ..fit.fit_result import FitResult
 
 __all__ = ["ANSWER_KINDS", "Answer", "CandidateScore", "Diagnosis", "candidate_finding",
-           "label_of"]
+           "label_of", "DIAGNOSIS_SCHEMA", "DESIGN_ADVICE"]
+
+#: The JSON schema of :meth:`Diagnosis.to_dict`.
+DIAGNOSIS_SCHEMA = "nfs-diagnosis/1"
+
+#: What a tie's answer advises: the run that would break it.
+DESIGN_ADVICE = "a run that would tell them apart: nfs design"
 
 #: The kinds of :class:`Answer`, one per diagnosis.
 ANSWER_KINDS = ("add", "tie", "nothing", "unexplained", "undetermined")
@@ -33,9 +40,25 @@ class Answer:
     """Effect labels (``name`` or ``name:target``) or structural alternatives' names."""
     text: str
     """One sentence in words."""
+    reason: str = ""
+    """The finding alone, without the advice that follows it in ``text`` (a tie's "these
+    runs cannot tell apart: ..." without "a run that would ...: nfs design"); empty when
+    ``text`` is all finding."""
+
+    @property
+    def finding(self) -> str:
+        """What the runs say, without the advice (``reason``, else ``text``)."""
+        return self.reason or self.text
 
     def to_dict(self) -> dict[str, Any]:
-        return {"kind": self.kind, "labels": list(self.labels), "text": self.text}
+        return {"kind": self.kind, "labels": list(self.labels), "text": self.text,
+                "reason": self.reason}
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> "Answer":
+        """The answer :meth:`to_dict` wrote."""
+        return cls(str(data["kind"]), tuple(data.get("labels") or ()), str(data["text"]),
+                   str(data.get("reason") or ""))
 
 
 #: The drift's generic structural alternative (:mod:`nfs.diagnose.drift_structure`).
@@ -57,6 +80,9 @@ def label_of(effect: str, target: str | None) -> str:
 @dataclass(frozen=True)
 class CandidateScore:
     """What one candidate explains."""
+
+    #: Properties written beside the fields (:mod:`nfs.records`).
+    DERIVED = ("cv_drop",)
 
     effect: str
     """Registry name."""
@@ -104,11 +130,11 @@ class CandidateScore:
     tied with that alternative; None when not checked."""
     structure_tie: str | None = None
     """A thermal candidate significant against the model that does not beat this structural
-    alternative pooled and run by run (:func:`nfs.diagnose.adequacy.structure_rival`): the
+    alternative pooled and run by run (:func:`nfs.fit.adequacy.structure_rival`): the
     runs cannot tell the two apart, and the candidate is not significant; None otherwise."""
     physical: bool = True
     """False when a coefficient lies below its physical bound (a negative heat power or
-    lag, :func:`nfs.diagnose.structure.physical_lower`): never ranked above a physical one."""
+    lag, :func:`nfs.fit.structure.physical_lower`): never ranked above a physical one."""
 
     @property
     def cv_drop(self) -> float:
@@ -116,25 +142,17 @@ class CandidateScore:
         return 1.0 - self.cv_rms_after / self.cv_rms_before
 
     def to_dict(self) -> dict[str, Any]:
-        return {"effect": self.effect, "target": self.target, "significant": self.significant,
-                "cv_rms_before": self.cv_rms_before, "cv_rms_after": self.cv_rms_after,
-                "cv_drop": self.cv_drop, "channel": self.channel,
-                "explained_by": self.explained_by,
-                "correlation": self.correlation,
-                "coefficient": dict(self.coefficient),
-                "interval": {k: list(v) for k, v in self.interval.items()},
-                "wald_p": self.wald_p, "holm_p": self.holm_p, "dof": self.dof,
-                "n_grid": self.n_grid, "inclusion_frequency": self.inclusion_frequency,
-                "heading_rmse_before_deg": self.heading_rmse_before_deg,
-                "heading_rmse_after_deg": self.heading_rmse_after_deg,
-                "beyond_structure_p": self.beyond_structure_p,
-                "structure_tie": self.structure_tie, "physical": self.physical}
+        """Every field, and the CV drop, as JSON-ready data (:mod:`nfs.records`)."""
+        return encode(self)
 
 
 @document_fields
 @dataclass(frozen=True)
 class Diagnosis:
     """The ranked candidates and what is left unexplained."""
+
+    #: Properties written beside the fields (:mod:`nfs.records`): the one answer in words.
+    DERIVED = ("answer", "verdict")
 
     ranking: tuple[CandidateScore, ...]
     """Scored candidates: significant thermometer ones first, then the other significant
@@ -144,7 +162,7 @@ class Diagnosis:
     unexplained: dict[str, Any]
     """Ljung-Box test of the baseline residual and its cross-correlation with every channel."""
     baseline: FitResult | None
-    """The model's own drift refit (:func:`~nfs.diagnose.fit.fit_model`, drift stage); None
+    """The model's own drift refit (:func:`~nfs.fit.calibration.fit_model`, drift stage); None
     when the diagnosis failed."""
     time_s: float
     """Wall time [s]."""
@@ -153,7 +171,7 @@ class Diagnosis:
     thermal_structure: ThermalAdequacy | None = None
     """Does the model's thermal structure fit the thermometers (per thermometer and stage,
     against its noise floor), and the generic structural alternatives it was set against
-    (:func:`nfs.diagnose.adequacy.thermal_adequacy`); None when not checked."""
+    (:func:`nfs.fit.adequacy.thermal_adequacy`); None when not checked."""
     node_temperatures: dict[str, Any] | None = None
     """Where the drift candidates' node temperatures came from (``source``: ``smoothed`` or
     ``model``) and, smoothed, the unmodelled-heat scale q [W^2/s], whether it is
@@ -194,21 +212,20 @@ class Diagnosis:
                 also = ("" if heat is None else
                         f", nor from heat released inside the coil ({heat}), where no "
                         "thermometer sits")
-                return Answer("tie", (lab, RATE_ALTERNATIVE) + ((heat,) if heat else ()),
-                              f"these runs cannot tell apart: {lab} ({_coef(top)}; Holm p "
-                              f"{top.holm_p:.2g} against the model) and {RATE_ALTERNATIVE} "
-                              f"(p beyond it {top.beyond_structure_p:.2g}){also}: right "
-                              "after power-on every node's rate decays like a transient; a "
-                              "run that would tell them apart: nfs design")
+                return _tie((lab, RATE_ALTERNATIVE) + ((heat,) if heat else ()),
+                            f"these runs cannot tell apart: {lab} ({_coef(top)}; Holm p "
+                            f"{top.holm_p:.2g} against the model) and {RATE_ALTERNATIVE} "
+                            f"(p beyond it {top.beyond_structure_p:.2g}){also}: right "
+                            "after power-on every node's rate decays like a transient")
             if top.effect == "turn_on_transient" and self.coil_nodes:
                 heat = f"heat_source:{self.coil_nodes[-1]}"
-                return Answer("tie", (lab, heat),
-                              f"these runs cannot tell apart: {lab} ({_coef(top)}; Holm p "
-                              f"{top.holm_p:.2g}) and heat released inside the coil "
-                              f"({heat}), where no thermometer sits: both give the gyro the "
-                              "same decay after power-on at every start temperature, so no "
-                              "soak-and-start run separates them; a run that would (a power "
-                              "cycle): nfs design")
+                return _tie((lab, heat),
+                            f"these runs cannot tell apart: {lab} ({_coef(top)}; Holm p "
+                            f"{top.holm_p:.2g}) and heat released inside the coil "
+                            f"({heat}), where no thermometer sits: both give the gyro the "
+                            "same decay after power-on at every start temperature, so no "
+                            "soak-and-start run separates them",
+                            "a run that would (a power cycle): nfs design")
             text = (f"add {lab} ({_coef(top)}; Holm p {top.holm_p:.2g}, CV RMS "
                     f"-{100 * top.cv_drop:.0f} % on {top.channel})")
             if len(own) > 1:
@@ -219,11 +236,10 @@ class Diagnosis:
         if ties:
             s = ties[0]
             lab = label_of(s.effect, s.target)
-            return Answer("tie", (lab, s.structure_tie),
-                          f"these runs cannot tell apart: {lab} ({_coef(s)}; Holm p "
-                          f"{s.holm_p:.2g} against the model) and {s.structure_tie}, which "
-                          "fits the thermometers as well run by run; a run that would tell "
-                          "them apart: nfs design")
+            return _tie((lab, s.structure_tie),
+                        f"these runs cannot tell apart: {lab} ({_coef(s)}; Holm p "
+                        f"{s.holm_p:.2g} against the model) and {s.structure_tie}, which "
+                        "fits the thermometers as well run by run")
         why = self._not_noise()
         if not why:
             return Answer("nothing", (), "nothing beyond noise: no candidate is significant, "
@@ -250,50 +266,51 @@ class Diagnosis:
         """The answer in one sentence (:attr:`answer`)."""
         return self.answer.text
 
+    def finding(self, effect: str, target: str | None = None) -> tuple[bool | None, str]:
+        """What this diagnosis found for one candidate: (significant, a sentence);
+        significant is None when it was not scored (:func:`candidate_finding`)."""
+        return candidate_finding(self, effect, target)
+
     def to_dict(self) -> dict[str, Any]:
-        return {"ranking": [s.to_dict() for s in self.ranking],
-                "answer": self.answer.to_dict(), "verdict": self.verdict,
-                "failure": self.failure,
-                "not_tried": [{"effect": c.effect, "target": c.target, "reason": c.reason}
-                              for c in self.not_tried],
-                "thermal_structure": (None if self.thermal_structure is None
-                                      else self.thermal_structure.to_dict()),
-                "node_temperatures": self.node_temperatures,
-                "drift_structure": (None if self.drift_structure is None
-                                    else self.drift_structure.to_dict()),
-                "unexplained": self.unexplained, "alpha": self.alpha, "time_s": self.time_s}
+        """Every field as JSON-ready data, with the answer and verdict beside them
+        (:mod:`nfs.records`; schema :data:`DIAGNOSIS_SCHEMA`)."""
+        return to_record(self, DIAGNOSIS_SCHEMA)
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> "Diagnosis":
+        """The diagnosis :meth:`to_dict` wrote (``nfs diagnose --json``); its answer is
+        recomputed from the fields."""
+        return from_record(cls, data, DIAGNOSIS_SCHEMA)
 
 
-def candidate_finding(diagnosis: dict[str, Any], effect: str, target: str | None
+def _tie(labels: tuple[str, ...], reason: str, advice: str = DESIGN_ADVICE) -> Answer:
+    """A tie: the finding, then the advice of the run that would break it."""
+    return Answer("tie", labels, f"{reason}; {advice}", reason)
+
+
+def candidate_finding(diagnosis: Diagnosis, effect: str, target: str | None
                       ) -> tuple[bool | None, str]:
-    """What a diagnosis (:meth:`Diagnosis.to_dict`, or the JSON of ``nfs diagnose --json``)
-    found for one candidate: (significant, a sentence).
+    """What a diagnosis found for one candidate: (significant, a sentence).
 
     ``significant`` is None when the candidate was not scored (the sentence gives the
     reason, or says that the diagnosis did not consider it).
     """
     label = effect + (f":{target}" if target else "")
-    ranking = diagnosis.get("ranking") or []
+    ranking = diagnosis.ranking
     for rank, row in enumerate(ranking, 1):
-        if row.get("effect") == effect and row.get("target") == target:
-            sig = bool(row.get("significant"))
-            p = row.get("holm_p")
-            ptxt = f"Holm p = {p:.2g}, " if isinstance(p, (int, float)) else ""
+        if row.effect == effect and row.target == target:
+            sig = bool(row.significant)
             what = "significant" if sig else "not significant"
-            extra = ""
-            if row.get("explained_by"):
-                extra = f"; explained by {row['explained_by']}"
-            bs = row.get("beyond_structure_p")
-            alpha = diagnosis.get("alpha", 0.05)
-            if sig and isinstance(bs, (int, float)) and bs > alpha:
-                extra += (f"; tied with a rate term on every node (p beyond it "
-                          f"{bs:.2g})")
-            return sig, (f"'{label}' is {what} ({ptxt}CV RMS {row['cv_rms_before']:.4g} -> "
-                         f"{row['cv_rms_after']:.4g} {_unit(row.get('channel'))}, rank {rank} "
-                         f"of {len(ranking)}{extra})")
-    for row in diagnosis.get("not_tried") or []:
-        if row.get("effect") == effect and row.get("target") == target:
-            return None, f"'{label}' was not scored: {row.get('reason')}"
+            extra = f"; explained by {row.explained_by}" if row.explained_by else ""
+            bs = row.beyond_structure_p
+            if sig and bs is not None and bs > diagnosis.alpha:
+                extra += f"; tied with a rate term on every node (p beyond it {bs:.2g})"
+            return sig, (f"'{label}' is {what} (Holm p = {row.holm_p:.2g}, CV RMS "
+                         f"{row.cv_rms_before:.4g} -> {row.cv_rms_after:.4g} "
+                         f"{_unit(row.channel)}, rank {rank} of {len(ranking)}{extra})")
+    for c in diagnosis.not_tried:
+        if c.effect == effect and c.target == target:
+            return None, f"'{label}' was not scored: {c.reason}"
     return None, f"'{label}' was not among the candidates the diagnosis scored"
 
 

@@ -297,7 +297,7 @@ def smooth_runs(inst: Instrument, runs: Sequence[Run], *,
         Estimate the unmodelled heat's standard deviation at power-on by maximum likelihood
         within these bounds [W] too (with q; about three times the filter runs).
     start_c : mapping {run name: node temperatures [degC]}, optional
-        Each run's start (:func:`nfs.diagnose.thermal_residual.start_states`: an unfinished
+        Each run's start (:func:`nfs.fit.thermal_residual.start_states`: an unfinished
         soak); a run not in it starts at its T0 everywhere.
 
     Returns

@@ -23,7 +23,7 @@ from ..effects.thermometer import THERMOMETERS
 from ..instrument import Instrument
 from ..noise import rest_window_segments, whiteness_test, window_mean_covariance
 from .columns import PreparedRun
-from .drift_residual import window_means
+from ..fit.drift_residual import window_means
 
 __all__ = ["unexplained"]
 

@@ -1,4 +1,4 @@
-"""nfs.design.decide and nfs.design.evidence: the rule's rates, closed form and Monte Carlo.
+"""nfs.rivals.decide and nfs.rivals.evidence: the rule's rates, closed form and Monte Carlo.
 
 Oracles: right = Phi(s/2 - max(L/s, z)), wrong = Phi(-s/2 - max(L/s, z)) (scipy.stats.norm),
 L = LAMBDA_NAME, z = Z_NAME; on the linear-Gaussian model y = mu_b + e, e ~ N(0, sigma^2),
@@ -18,11 +18,11 @@ import numpy as np
 import pytest
 from scipy.stats import norm
 
-from nfs.design.decide import LAMBDA_NAME, Z_NAME, Decision, decision_rates
-from nfs.design.evidence import Evidence, bartlett_bandwidth, evidence, long_run_variance
-from nfs.design.noise_level import excess_factors, scaled
-from nfs.design.predict import Prediction
-from nfs.design.separation import RivalPrediction, separation
+from nfs.rivals.decide import LAMBDA_NAME, Z_NAME, Decision, decision_rates
+from nfs.rivals.evidence import Evidence, bartlett_bandwidth, evidence, long_run_variance
+from nfs.rivals.noise_level import excess_factors, scaled
+from nfs.rivals.predict import Prediction
+from nfs.rivals.separation import RivalPrediction, separation
 
 CHANS = ("drift_dph", "temp_fog_c", "acc_x_g")
 
@@ -223,7 +223,7 @@ def _ar1(rng, n, rho, scale):
 def test_neither_rival_the_unit_false_alarm_rate():
     """y = the rivals' midpoint + slow model error (AR(1), rho 0.95) that the sensor noise
     does not describe, the noise raised by the excess the residuals show as the decision
-    does (nfs.design.noise_level): both rivals equally close, Z ~ N(0, 1).  The rule names
+    does (nfs.rivals.noise_level): both rivals equally close, Z ~ N(0, 1).  The rule names
     one in at most 10 % of draws (two one-sided 5 % tests; measured 5 %); the likelihood
     ratio alone (Lambda >= 2) names one far more often."""
     rng = np.random.default_rng(11)

@@ -29,9 +29,10 @@ import pytest
 
 from nfs.config.scenario import load_scenario
 from nfs.design import design_experiment
-from nfs.design.decide import settle_tie
+from nfs.rivals.decide import settle_tie
 from nfs.design.space import base_conditions, default_space
-from nfs.diagnose import diagnose, fit_model
+from nfs.diagnose import diagnose
+from nfs.fit import fit_model
 from nfs.effects import make_effect
 from nfs.experiment import simulate_run
 from nfs.instrument import load_instrument
@@ -50,7 +51,7 @@ def _designed_and_after(model, truth, runs, seed):
     """Fit, diagnose, design, run the design on the truth, fit, diagnose, settle."""
     fr = fit_model(model, runs, start_state=None)
     d = diagnose(fr.instrument, runs, start_state=None)
-    before = settle_tie(d.to_dict(), fr.instrument, runs, start_state=None)
+    before = settle_tie(d, fr.instrument, runs, start_state=None)
     # the run designed for the diagnosis's tie (nfs design --rivals, its labels)
     tied = [r for r in before.rivals if r.label in d.answer.labels]
     design = design_experiment(tied, runs, base_conditions(runs), default_space(runs),
@@ -61,7 +62,7 @@ def _designed_and_after(model, truth, runs, seed):
     fr2 = fit_model(model, runs2, start_state=None)
     d2 = diagnose(fr2.instrument, runs2, start_state=None)
     # the question the run was designed for: its rivals, put to the runs
-    after = settle_tie(d2.to_dict(), fr2.instrument, runs2,
+    after = settle_tie(d2, fr2.instrument, runs2,
                        labels=[r.label for r in design.rivals], start_state=None)
     return d, before, design, d2, after
 

@@ -1,4 +1,4 @@
-"""nfs.design.noise_level.excess_factors on hand-made residuals.
+"""nfs.rivals.noise_level.excess_factors on hand-made residuals.
 
 Oracles: white residuals of the stated sigma give a factor of 1, of twice the stated sigma 2;
 an AR(1) residual of lag-1 correlation rho and the stated marginal sigma carries the
@@ -14,9 +14,9 @@ import math
 import numpy as np
 import pytest
 
-from nfs.design.noise_level import excess_factors, scaled
-from nfs.design.predict import CHANNELS, Prediction
-from nfs.design.separation import RivalPrediction
+from nfs.rivals.noise_level import excess_factors, scaled
+from nfs.rivals.predict import CHANNELS, Prediction
+from nfs.rivals.separation import RivalPrediction
 
 N_RUN = 1000          # numbers per channel and run; two runs: 2000 per channel
 

@@ -1,4 +1,4 @@
-"""nfs.design.report: the designed run on disk, and its scenario run by ``nfs simulate``.
+"""nfs.report.design_report: the designed run on disk, and its scenario run by ``nfs simulate``.
 
 A small design, built cheaply: two rivals without fits (the default instrument and the same
 with a larger turn-on transient), two one-hour runs of the nominal default scenario, a grid of
@@ -17,12 +17,12 @@ import numpy as np
 import pytest
 
 from nfs.config.scenario import load_scenario
-from nfs.diagnose import set_params
+from nfs.fit import set_params
 from nfs.experiment import simulate_run
 from nfs.instrument import load_instrument
 from nfs.io.measurement import read_runs
-from nfs.design.report import scenario_toml, to_markdown, write_design
-from nfs.design.rivals import Rival
+from nfs.report.design_report import scenario_toml, to_markdown, write_design
+from nfs.rivals.models import Rival
 from nfs.design.search import design_experiment
 from nfs.design.space import Space, base_conditions
 

@@ -16,9 +16,11 @@ import numpy as np
 import pytest
 
 import nfs
-from nfs.design import MODEL, RATE_ALTERNATIVE, rival_model, rivals_from_diagnosis
-from nfs.design.rivals import _drift_cost, unseen_nodes
-from nfs.diagnose.stage import StageReport
+from nfs.diagnose import Answer
+from nfs.rivals import MODEL, RATE_ALTERNATIVE, rival_model
+from nfs.rivals.finding import rivals_of
+from nfs.rivals.models import _drift_cost, unseen_nodes
+from nfs.fit.stage import StageReport
 from nfs.effects import make_effect
 from nfs.errors import NfsError
 
@@ -76,7 +78,7 @@ def test_draws_follow_the_fit_s_covariance(world):
     paths = [p for p in stage.free if np.isfinite(r.fit.stderr.get(p, np.inf))
              and r.fit.stderr[p] > 0][:4]
     draws = r.draws(2000, np.random.default_rng(5))
-    x = np.array([[nfs.diagnose.get_param(d, p) for p in paths] for d in draws])
+    x = np.array([[nfs.fit.get_param(d, p) for p in paths] for d in draws])
     sd = np.array([r.fit.stderr[p] for p in paths])
     np.testing.assert_allclose(x.std(axis=0), sd, rtol=0.1)
     idx = [list(stage.free).index(p) for p in paths]
@@ -88,14 +90,13 @@ def test_draws_follow_the_fit_s_covariance(world):
 
 
 def test_rivals_from_a_diagnosis():
-    tie = {"answer": {"kind": "tie", "labels": ["a", "b"], "text": "..."}}
-    assert rivals_from_diagnosis(tie) == ["a", "b"]
+    tie = Answer("tie", ("a", "b"), "...")
+    assert rivals_of(tie) == ["a", "b"]
     # the diagnosis's own tie when nfs diagnose went on to decide it
-    decided = {"answer": {"kind": "add", "labels": ["a"]}, "tie": tie["answer"]}
-    assert rivals_from_diagnosis(decided) == ["a", "b"]
-    assert rivals_from_diagnosis({"answer": {"kind": "add", "labels": ["m"]}}) == [MODEL, "m"]
+    assert rivals_of(Answer("add", ("a",), "add a"), tie) == ["a", "b"]
+    assert rivals_of(Answer("add", ("m",), "add m")) == [MODEL, "m"]
     with pytest.raises(NfsError, match="no tie"):
-        rivals_from_diagnosis({"answer": {"kind": "nothing", "labels": [], "text": "quiet"}})
+        rivals_of(Answer("nothing", (), "quiet"))
 
 
 def test_drift_cost_is_compared_in_the_stated_noise():

@@ -1,4 +1,4 @@
-"""Closed forms of nfs.design.separation.separation on hand-made predictions.
+"""Closed forms of nfs.rivals.separation.separation on hand-made predictions.
 
 Oracles: D = sum (d_i / s_i)^2 without draws or nuisance; the (1/s^2-weighted) mean of each
 channel and run removed with the nuisance; for draws, the Woodbury form against the dense
@@ -15,8 +15,8 @@ import math
 import numpy as np
 import pytest
 
-from nfs.design.predict import CHANNELS, Prediction
-from nfs.design.separation import RivalPrediction, separation
+from nfs.rivals.predict import CHANNELS, Prediction
+from nfs.rivals.separation import RivalPrediction, separation
 
 
 def _pred(values: dict[str, np.ndarray]) -> Prediction:

@@ -1,4 +1,4 @@
-"""nfs.design.decide.settlement: one answer from the decisions between rivals.
+"""nfs.rivals.decide.settlement: one answer from the decisions between rivals.
 
 Oracle: the rule of the module docstring, on decisions made by hand (Evidence with chosen
 Lambda and variance, so that each pair's winner is known): a rival that wins every pair it
@@ -14,10 +14,10 @@ from itertools import combinations
 
 import pytest
 
-from nfs.design.decide import DWELL_CHANNELS, Decision, pair_channels, settlement
-from nfs.design.evidence import Evidence
-from nfs.design.predict import CHANNELS
-from nfs.design.rivals import MODEL, RATE_ALTERNATIVE, Rival
+from nfs.rivals.decide import DWELL_CHANNELS, Decision, pair_channels, settlement
+from nfs.rivals.evidence import Evidence
+from nfs.rivals.predict import CHANNELS
+from nfs.rivals.models import MODEL, RATE_ALTERNATIVE, Rival
 from nfs.instrument import load_instrument
 
 TRANSIENT = "turn_on_transient"

@@ -20,7 +20,7 @@ from nfs.diagnose.acc_columns import model_acc_paths, prepare_acc
 from nfs.diagnose.columns import prepare_runs
 from nfs.diagnose.candidates import candidates
 from nfs.diagnose.missing_effect import diagnose
-from nfs.diagnose.stats import clustered_fit, run_grams
+from nfs.scoring.run_stats import clustered_fit, run_grams
 from nfs.experiment import simulate_run
 from nfs.instrument import load_instrument
 from nfs.config.scenario import load_scenario

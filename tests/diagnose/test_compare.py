@@ -1,4 +1,4 @@
-"""Tests of nfs.diagnose.comparison: the model set beside measured runs, channel by channel.
+"""Tests of nfs.comparison.compare_runs: the model set beside measured runs, channel by channel.
 
 "Measured" runs are simulated (nfs.experiment.simulate_run) from the default scenario at a
 few start temperatures, 2.5 h at 1 Hz; the model is the default instrument.  Oracles:
@@ -19,12 +19,12 @@ import math
 import numpy as np
 import pytest
 
-from nfs.diagnose.channel_residual import CHANNELS
-from nfs.diagnose.channel_summary import CONSISTENT_RATIO, POSITION_RATIO
-from nfs.diagnose.comparison import Comparison, compare
-from nfs.diagnose.heading import RunHeading, heading_comparison
-from nfs.diagnose.compare_report import write_report
-from nfs.diagnose.fit import fit_model
+from nfs.comparison.channel_residual import CHANNELS
+from nfs.comparison.channel_summary import CONSISTENT_RATIO, POSITION_RATIO
+from nfs.comparison.compare_runs import Comparison, compare
+from nfs.comparison.heading import RunHeading, heading_comparison
+from nfs.report.compare_report import write_report
+from nfs.fit.calibration import fit_model
 from nfs.effects import make_effect
 from nfs.errors import NfsError
 from nfs.experiment import simulate_run

@@ -66,7 +66,7 @@ from nfs.diagnose.apply import apply_candidate
 from nfs.diagnose.candidates import candidates
 from nfs.diagnose.missing_effect import diagnose
 from nfs.diagnose.ranking import CV_DROP
-from nfs.diagnose.fit import fit_model
+from nfs.fit.calibration import fit_model
 from nfs.effects import make_effect
 from nfs.errors import NfsError
 from nfs.experiment import simulate_run

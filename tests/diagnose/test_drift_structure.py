@@ -20,7 +20,7 @@ from __future__ import annotations
 import numpy as np
 
 from nfs.diagnose.drift_structure import DriftStructure, beyond_alternative
-from nfs.diagnose.stats import clustered_fit, run_grams
+from nfs.scoring.run_stats import clustered_fit, run_grams
 
 T = np.arange(0.0, 9000.0, 10.0)
 GROUPS = np.arange(7)

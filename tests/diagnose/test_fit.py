@@ -1,4 +1,4 @@
-"""Calibration of a model to runs (nfs.diagnose.fit).
+"""Calibration of a model to runs (nfs.fit.calibration).
 
 Oracle: runs simulated from a known instrument (the default with some parameters perturbed by
 +20 %, noise as usual) -- the fit started from the unperturbed default must recover the
@@ -15,10 +15,10 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from nfs.diagnose.fit import fit_model
-from nfs.diagnose.fit_result import write_fitted_model
-from nfs.diagnose.free_set import default_free
-from nfs.diagnose.params import get_param, set_params
+from nfs.fit.calibration import fit_model
+from nfs.fit.fit_result import write_fitted_model
+from nfs.fit.free_set import default_free
+from nfs.fit.params import get_param, set_params
 from nfs.errors import NfsError
 from nfs.experiment import simulate_run
 from nfs.instrument import load_instrument
@@ -106,7 +106,7 @@ def test_write_fitted_model(fitted, tmp_path):
 
 
 def test_fitted_name_says_where_the_model_came_from(tmp_path):
-    from nfs.diagnose.fit import fitted_name
+    from nfs.fit.calibration import fitted_name
     from nfs.run import Run
     mk = lambda name, path=None: Run(name=name, columns={}, meta=None, path=path)  # noqa: E731
     assert fitted_name("default", [mk("a", tmp_path / "chamber" / "a.csv"),
@@ -174,7 +174,7 @@ def test_model_drift_dph_is_the_simulators_drift(scenario):
     # Oracle: simulate_run's own terms. The model drift on the simulator's context equals
     # bias + sum of the gyro terms - Omega_ie sin L (b_x + x accelerometer terms), exactly.
     from nfs.constants import OMEGA_IE_DPH
-    from nfs.diagnose.drift_residual import model_drift_dph
+    from nfs.fit.drift_residual import model_drift_dph
     inst = scenario.instrument
     cond = replace(scenario.conditions()[0], duration_s=600.0)
     sim = simulate_run(inst, cond)
@@ -213,7 +213,7 @@ def test_a_run_without_a_chamber_record_says_what_is_assumed(scenario, runs):
 def test_far_from_start():
     """The rule of a parameter pushed far: 3x its start or a third of it, a change of sign
     (for a parameter with a scale), or 3 prior widths away (for any)."""
-    from nfs.diagnose.fit_warnings import far_from_start
+    from nfs.fit.fit_warnings import far_from_start
     assert far_from_start(0.008, 0.061, 0.28) == "from 0.008 to 0.061 (7.6 times; +0.3 prior widths)"
     assert far_from_start(380.0, 1636.0, 6.1).startswith("from 380 to 1636 (4.3 times")
     assert far_from_start(1.0, 2.9, 1.0) == ""

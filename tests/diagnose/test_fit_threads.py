@@ -17,8 +17,8 @@ import dataclasses
 from threadpoolctl import threadpool_info, threadpool_limits
 
 import nfs
-from nfs.diagnose import fit_model
-from nfs.diagnose.fit import one_blas_thread
+from nfs.fit import fit_model
+from nfs.fit.calibration import one_blas_thread
 
 
 def _blas_threads() -> int:

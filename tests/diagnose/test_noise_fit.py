@@ -1,4 +1,4 @@
-"""Gyro noise from the Allan deviation of a residual at rest (nfs.diagnose.noise_fit).
+"""Gyro noise from the Allan deviation of a residual at rest (nfs.fit.noise_fit).
 
 Oracle: the package's own noise generator (nfs.noise.gyro_noise_dph) with N = 0.0003
 deg/sqrt(h) and B = 0.002 deg/h, cut into dwells of 150 s with 10 s gaps and concatenated as
@@ -8,7 +8,7 @@ the fit does: the fitted N and B come back within 20 %.
 import numpy as np
 import pytest
 
-from nfs.diagnose.noise_fit import NOISE_FROM_S, gyro_noise_from_residual, noise_record
+from nfs.fit.noise_fit import NOISE_FROM_S, gyro_noise_from_residual, noise_record
 from nfs.errors import NfsError
 from nfs.noise import gyro_noise_dph
 

@@ -1,4 +1,4 @@
-"""Parameter paths into an instrument (nfs.diagnose.params).
+"""Parameter paths into an instrument (nfs.fit.params).
 
 Oracles: invariants (get after set returns what was set; the original instrument is
 unchanged; a TOML round trip keeps the set value), the instrument's own TOML form (the path
@@ -11,7 +11,7 @@ import math
 
 import pytest
 
-from nfs.diagnose.params import (ParameterError, default_bounds, expand_paths, fit_bounds,
+from nfs.fit.params import (ParameterError, default_bounds, expand_paths, fit_bounds,
                                  get_param, list_params, set_params)
 from nfs.errors import NfsError
 from nfs.instrument import instrument_from_dict, load_instrument

@@ -1,4 +1,4 @@
-"""The preset as a Gaussian prior of the fit (nfs.diagnose.prior, fit_model's prior=).
+"""The preset as a Gaussian prior of the fit (nfs.fit.prior, fit_model's prior=).
 
 Oracles: the documented table (a capacity's width is 50 % of its preset, an offset's 1 K),
 the closed form of the prior rows (x - p0) / sigma; a node no thermometer sees (a bracket
@@ -18,10 +18,10 @@ from scipy.optimize import least_squares
 
 from thermal import Link, Network, Node
 
-from nfs.diagnose.fit import fit_model
-from nfs.diagnose.thermal_residual import prepare_thermal, thermal_residual_parts
-from nfs.diagnose.params import get_param, set_params
-from nfs.diagnose.prior import PRIOR_WIDTHS, build_prior
+from nfs.fit.calibration import fit_model
+from nfs.fit.thermal_residual import prepare_thermal, thermal_residual_parts
+from nfs.fit.params import get_param, set_params
+from nfs.fit.prior import PRIOR_WIDTHS, build_prior
 from nfs.errors import NfsError
 from nfs.experiment import simulate_run
 from nfs.config.scenario import load_scenario

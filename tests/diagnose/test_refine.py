@@ -1,4 +1,4 @@
-"""A thermal structure refined in a chain (nfs.diagnose.refine).
+"""A thermal structure refined in a chain (nfs.fit.refine).
 
 Oracle: we know the truth's structure.  The runs come from the default instrument whose FOG
 thermometer reads 30 % of coil_inner (it sits deeper in the coil than the model says), the
@@ -16,8 +16,8 @@ import dataclasses
 
 import pytest
 
-from nfs.diagnose.refine import REFINE_FACTOR, fit_unit
-from nfs.diagnose.structure import thermometer_weight
+from nfs.fit.refine import REFINE_FACTOR, fit_unit
+from nfs.fit.structure import thermometer_weight
 from nfs.experiment import simulate_run
 from nfs.config.scenario import load_scenario
 

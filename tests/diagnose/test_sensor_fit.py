@@ -1,4 +1,4 @@
-"""Turntable tilt and accelerometer biases from the means at rest (nfs.diagnose.sensor_fit),
+"""Turntable tilt and accelerometer biases from the means at rest (nfs.fit.sensor_fit),
 and the drift stage's sensor parameters on simulated runs.
 
 Oracles: (1) noise-free window means made from known tilts and biases with the exact sin(e)
@@ -16,9 +16,9 @@ import math
 import numpy as np
 import pytest
 
-from nfs.diagnose.fit import fit_model
-from nfs.diagnose.params import get_param, set_params
-from nfs.diagnose.sensor_fit import LEVEL_PATHS, LevelData, level_from_means
+from nfs.fit.calibration import fit_model
+from nfs.fit.params import get_param, set_params
+from nfs.fit.sensor_fit import LEVEL_PATHS, LevelData, level_from_means
 from nfs.experiment import simulate_run
 from nfs.config.scenario import load_scenario
 from nfs.sensors import axis_elevation_deg

@@ -44,7 +44,7 @@ import numpy as np
 import pytest
 
 import thermal
-from nfs.diagnose.params import set_params
+from nfs.fit.params import set_params
 from nfs.diagnose.smoother import SmoothedThermal, smooth_runs, thermometer_sensors
 from nfs.effects import make_effect
 from nfs.errors import NfsError

@@ -1,4 +1,4 @@
-"""Thermometer offsets anchored by the soak at power-on (nfs.diagnose.soak).
+"""Thermometer offsets anchored by the soak at power-on (nfs.fit.soak).
 
 Oracle: runs simulated with known thermometer offsets (the hidden truth); every node sits at
 T0 at power-on, so the first minute's readings minus the model's (offset-free) reading give
@@ -11,9 +11,9 @@ from dataclasses import replace
 
 import pytest
 
-from nfs.diagnose.fit import fit_model
-from nfs.diagnose.params import set_params
-from nfs.diagnose.soak import soak_offsets
+from nfs.fit.calibration import fit_model
+from nfs.fit.params import set_params
+from nfs.fit.soak import soak_offsets
 from nfs.errors import NfsError
 from nfs.experiment import simulate_run
 from nfs.config.scenario import load_scenario

@@ -1,4 +1,4 @@
-"""Each run's start estimated with the fit (nfs.diagnose.start_state).
+"""Each run's start estimated with the fit (nfs.fit.start_state).
 
 Oracles: the free modes of a network satisfy A v = -v / tau (an eigenvector), and the fast
 remainder u is C-orthogonal to the slow modes with 1 in the span of [v_1, u]; an unpowered
@@ -21,11 +21,11 @@ import pytest
 from scipy.linalg import expm
 
 from nfs.diagnose.missing_effect import diagnose
-from nfs.diagnose.fit import fit_model
-from nfs.diagnose.refine import fit_unit
-from nfs.diagnose.start_state import (FAST_WIDTH_C, SLOW_WIDTH_C, StartModel, solve_amplitudes,
+from nfs.fit.calibration import fit_model
+from nfs.fit.refine import fit_unit
+from nfs.fit.start_state import (FAST_WIDTH_C, SLOW_WIDTH_C, StartModel, solve_amplitudes,
                                       soak_history, start_basis, start_prior)
-from nfs.diagnose.thermal_residual import (prepare_thermal, start_states, thermal_residual,
+from nfs.fit.thermal_residual import (prepare_thermal, start_states, thermal_residual,
                                            thermometer_floors)
 from nfs.errors import InputError
 from nfs.experiment import simulate_run

@@ -1,4 +1,4 @@
-"""Tests of nfs.diagnose.stats: clustered inference from per-run Gram matrices.
+"""Tests of nfs.scoring.run_stats: clustered inference from per-run Gram matrices.
 
 Oracles: the N-space formulas of CR2 and of the Bell-McCaffrey degrees of freedom (Bell &
 McCaffrey 2002; Cameron & Miller 2015, sec. VI), evaluated directly with the n x n hat
@@ -13,7 +13,7 @@ import pytest
 from scipy.linalg import sqrtm
 from scipy.signal import lfilter
 
-from nfs.diagnose.stats import clustered_fit, group_cv_rms, run_grams, solve
+from nfs.scoring.run_stats import clustered_fit, group_cv_rms, run_grams, solve
 from nfs.scoring.intervals import holm
 
 

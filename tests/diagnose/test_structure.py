@@ -1,4 +1,4 @@
-"""Tests of nfs.diagnose.structure: is the model's thermal structure adequate?
+"""Tests of nfs.fit.structure: is the model's thermal structure adequate?
 
 "Measured" runs: the default scenario's conditions, with the lumped-coil preset (``nfs preset
 lumped``, two coil nodes, on which these figures were measured; the wound coil's structure
@@ -21,14 +21,14 @@ import math
 import numpy as np
 import pytest
 
-from nfs.diagnose.adequacy import ADEQUACY_FACTOR, beats_structure, thermal_adequacy
-from nfs.diagnose.structure import (effect_alternative, free_link, insert_node, physical_lower,
+from nfs.fit.adequacy import ADEQUACY_FACTOR, beats_structure, thermal_adequacy
+from nfs.fit.structure import (effect_alternative, free_link, insert_node, physical_lower,
                                     set_thermometer_fraction, split_node,
                                     structural_alternatives, thermometer_weight)
-from nfs.diagnose.fit import fit_model
-from nfs.diagnose.free_set import default_free
-from nfs.diagnose.stats import one_sided
-from nfs.diagnose.thermal_residual import prepare_thermal, thermal_residual_parts
+from nfs.fit.calibration import fit_model
+from nfs.fit.free_set import default_free
+from nfs.scoring.run_stats import one_sided
+from nfs.fit.thermal_residual import prepare_thermal, thermal_residual_parts
 from nfs.errors import NfsError
 from nfs.experiment import simulate_run
 from nfs.config.scenario import load_scenario

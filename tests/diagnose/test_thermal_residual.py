@@ -19,10 +19,10 @@ from scipy.optimize._numdiff import approx_derivative
 
 import thermal
 from independent import generator as g
-from nfs.diagnose.free_set import default_free
-from nfs.diagnose.params import get_param, set_params
-from nfs.diagnose.stage import FTOL, XTOL, forward_jacobian, solve_stage
-from nfs.diagnose.thermal_residual import (StatefulLaw, prepare_thermal, simulate_knots,
+from nfs.fit.free_set import default_free
+from nfs.fit.params import get_param, set_params
+from nfs.fit.stage import FTOL, XTOL, forward_jacobian, solve_stage
+from nfs.fit.thermal_residual import (StatefulLaw, prepare_thermal, simulate_knots,
                                            thermal_residual_parts)
 from nfs.effects import make_effect
 from nfs.errors import NfsError
@@ -179,7 +179,7 @@ def test_forward_jacobian_is_scipys_two_point():
 def test_solve_stage_with_a_batch_lands_where_scipy_lands():
     """The same minimum as least_squares with its own finite differences (a bounded
     exponential fit with a prior-free stage), with the stage's termination tolerances
-    (xtol = ftol = nfs.diagnose.stage.FTOL) on the same path to 1e-7."""
+    (xtol = ftol = nfs.fit.stage.FTOL) on the same path to 1e-7."""
     t = np.linspace(0.0, 5.0, 60)
     rng = np.random.default_rng(0)
     y = 2.0 * np.exp(-0.8 * t) + 0.3 + 0.01 * rng.standard_normal(t.size)

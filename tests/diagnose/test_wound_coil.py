@@ -5,7 +5,7 @@ exactly at T0, the tools told so with ``start_state=None``), 2.5 h at 1 Hz, simu
 the default instrument (a wound coil of 8 thermal layers, ``shupe_winding``) with one effect
 it lacks, or none.  Oracle: the generating instrument.  The coil is one body to these tools:
 its interior layers are no candidate's target and no structural alternative splits or cuts
-them (nfs.instrument.Instrument.target_nodes, nfs.diagnose.structure).
+them (nfs.instrument.Instrument.target_nodes, nfs.fit.structure).
 
 Measured with noise seed 11 (the strengths of tests/diagnose/test_diagnose.py): clean runs
 give "nothing beyond noise"; magnetic m = 0.01 deg/h is named with m = 0.0097 [0.0093,
@@ -20,9 +20,9 @@ import pytest
 
 from nfs.config.scenario import load_scenario
 from nfs.diagnose import diagnose
-from nfs.diagnose.adequacy import thermal_adequacy
+from nfs.fit.adequacy import thermal_adequacy
 from nfs.diagnose.candidates import candidates
-from nfs.diagnose.structure import structural_alternatives
+from nfs.fit.structure import structural_alternatives
 from nfs.effects import make_effect
 from nfs.experiment import simulate_run
 from nfs.instrument import load_instrument

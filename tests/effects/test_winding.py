@@ -144,7 +144,7 @@ def test_two_lumped_nodes_are_shupe_gradient_and_stress():
     # is the line through their rates, i.e. k_r = n (dn/dT + n alpha) sum_j W_j x_j /
     # (L D (x_o - x_i)) per K/s, and k_m alike
     from nfs.config.scenario import load_scenario
-    from nfs.diagnose.comparison import noise_free
+    from nfs.comparison.compare_runs import noise_free
     from nfs.experiment import simulate_run
     from nfs.instrument import load_instrument
     inst = noise_free(load_instrument("lumped"))
@@ -203,7 +203,7 @@ def test_one_physical_coil_converges_between_8_and_16_layers():
     # face, thinner than a layer); the layered network keeps its energy balance to 1e-9
     from nfs.coil import with_coil
     from nfs.config.scenario import load_scenario
-    from nfs.diagnose.comparison import noise_free
+    from nfs.comparison.compare_runs import noise_free
     from nfs.experiment import simulate_run
     from nfs.instrument import load_instrument
     inst = noise_free(load_instrument("default"))

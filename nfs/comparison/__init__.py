@@ -1,0 +1,14 @@
+"""The model beside a unit's measured runs, channel by channel, and where it fails.
+
+- :mod:`~nfs.comparison.compare_runs`: the model simulated on each run's conditions beside the
+  measurement (:func:`compare`, :class:`Comparison`);
+- :mod:`~nfs.comparison.channel_residual`: the residual of each channel and its RMS;
+- :mod:`~nfs.comparison.channel_summary`: "where it fails" in words;
+- :mod:`~nfs.comparison.heading`: the heading's verdict with its interval.
+
+The report and figures are rendered by :mod:`nfs.report.compare_report`.
+"""
+
+from .compare_runs import Comparison, compare
+
+__all__ = ["Comparison", "compare"]
