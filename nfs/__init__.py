@@ -47,7 +47,7 @@ _PUBLIC = {
     "write_run": "nfs.io.measurement",
     # the chain and its stages
     "simulate_run": "nfs.experiment", "simulate_runs": "nfs.experiment",
-    "RunConditions": "nfs.experiment", "SimulationResult": "nfs.experiment",
+    "RunConditions": "nfs.conditions", "SimulationResult": "nfs.experiment",
     "run_scenario": "nfs.studies.scenario_runs", "north_find": "nfs.northfind",
     "separate_drift": "nfs.denoise",
     "CompensationSettings": "nfs.compensate.settings",

@@ -23,20 +23,17 @@ from .docfields import document_fields
 from .effects import EffectContext, Geometry, apply_geometry, check_geometry
 from .effects.thermometer import THERMOMETERS
 from .errors import EffectError
-# the heat input lives in nfs.heat; these names stay importable from here for its callers
-from .heat import HeatLaw, fixed_thermal_power, thermal_effects, thermal_power  # noqa: F401
+from .heat import HeatLaw, thermal_power
 from .instrument import Instrument
 from .power import POWERED_COLUMN, since_power_on_s
 from .run import Run, RunMeta
 from .noise import gyro_noise_dph, white_noise
 from .sensors import earth_rate_along_axis_dph, thermometer_reading
-# the conditions of a run live in nfs.conditions; exported from here with the simulation
-from .conditions import RunConditions, chamber_assumption, conditions_from_run
+from .conditions import RunConditions
 from .variability import drawn_soak, start_up_state, unit_instrument, unpowered_network
 
-__all__ = ["RunConditions", "SimulationResult", "simulate_run", "simulate_runs",
-           "iter_simulate_runs", "effect_context", "OPTIONAL_COLUMNS",
-           "conditions_from_run", "chamber_assumption"]
+__all__ = ["SimulationResult", "simulate_run", "simulate_runs", "iter_simulate_runs",
+           "effect_context", "OPTIONAL_COLUMNS"]
 
 _UG = 1e-6
 

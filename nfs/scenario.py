@@ -14,7 +14,7 @@ import numpy as np
 from .chamber import ChamberProgram
 from .docfields import document_fields
 from .errors import NfsError
-from .experiment import RunConditions
+from .conditions import RunConditions
 from .instrument import Instrument
 from .sensors import Schedule
 from .variability import NO_VARIABILITY, Variability

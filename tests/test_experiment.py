@@ -6,7 +6,8 @@ import pytest
 
 from nfs.effects import available_effects, make_effect
 from nfs.errors import ScenarioError
-from nfs.experiment import RunConditions, simulate_run
+from nfs.conditions import RunConditions
+from nfs.experiment import simulate_run
 from nfs.instrument import load_instrument
 from nfs.io.measurement import read_run, write_run
 from nfs.config.scenario import TRUST_EFFECTS_ENV, load_scenario
@@ -124,7 +125,7 @@ def test_replaying_a_runs_own_conditions_reproduces_it(tmp_path, inst):
     """Invariant: a run simulated again from its own file (time base, turntable motion, T0,
     latitude, heading, chamber; same seed) is the same run - the basis of putting a model
     beside a measurement."""
-    from nfs.experiment import conditions_from_run
+    from nfs.conditions import conditions_from_run
     r0 = simulate_run(inst, cond(seed=(4, 4)))
     run = read_run(write_run(r0.run, tmp_path))
     r1 = simulate_run(inst, conditions_from_run(run, seed=(4, 4)))

@@ -33,7 +33,8 @@ import thermal
 from nfs.chamber import parse_program
 from nfs.config.scenario import load_scenario
 from nfs.errors import ScenarioError
-from nfs.experiment import conditions_from_run, simulate_run, simulate_runs
+from nfs.conditions import conditions_from_run
+from nfs.experiment import simulate_run, simulate_runs
 from nfs.instrument import load_instrument, parse_effects
 from nfs.power import POWERED_COLUMN, off_spans_s, powered_mask, since_power_on_s
 from nfs.variability import unpowered_network

@@ -17,7 +17,8 @@ import pytest
 
 import thermal
 from nfs.errors import ScenarioError
-from nfs.experiment import RunConditions, simulate_run
+from nfs.conditions import RunConditions
+from nfs.experiment import simulate_run
 from nfs.io.measurement import write_run
 from nfs.config.scenario import load_scenario
 from nfs.parameters import get_param

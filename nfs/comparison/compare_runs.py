@@ -53,7 +53,8 @@ from ..docfields import document_fields
 from ..denoise import separate_drift
 from ..effects.thermometer import THERMOMETERS
 from ..errors import MeasurementError, NfsError
-from ..experiment import chamber_assumption, conditions_from_run, simulate_run
+from ..conditions import chamber_assumption, conditions_from_run
+from ..experiment import simulate_run
 from ..instrument import Instrument
 from ..run import Run
 from ..northfind import heading_rmse, north_find

@@ -26,7 +26,7 @@ from typing import Callable, Sequence
 import numpy as np
 
 from ..errors import NfsError
-from ..experiment import RunConditions
+from ..conditions import RunConditions
 from ..ranges import TEMPERATURE_RANGE_C
 from ..records import RecordError, encode, from_record
 from ..run import Run

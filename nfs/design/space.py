@@ -29,7 +29,7 @@ import numpy as np
 
 from ..chamber import parse_program
 from ..errors import NfsError
-from ..experiment import RunConditions
+from ..conditions import RunConditions
 from ..ranges import TEMPERATURE_RANGE_C
 from ..run import Run
 from ..sensors import Schedule

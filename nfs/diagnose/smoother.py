@@ -55,7 +55,8 @@ from thermal.network import index_of
 from ..docfields import document_fields
 from ..effects.thermometer import THERMOMETERS
 from ..errors import InputError, NfsError, ThermalError
-from ..experiment import conditions_from_run, fixed_thermal_power, thermal_power
+from ..conditions import conditions_from_run
+from ..heat import fixed_thermal_power, thermal_power
 from ..instrument import Instrument
 from ..run import Run
 

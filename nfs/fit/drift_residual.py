@@ -43,7 +43,9 @@ import thermal
 from ..constants import OMEGA_IE_DPH
 from ..denoise import earth_rate_projection_dph, separate_drift
 from ..errors import InputError, NfsError
-from ..experiment import conditions_from_run, effect_context, thermal_power
+from ..conditions import conditions_from_run
+from ..experiment import effect_context
+from ..heat import thermal_power
 from ..instrument import Instrument
 from ..run import Run
 from ..sensors import axis_elevation_deg

@@ -6,7 +6,7 @@ from __future__ import annotations
 import math
 from typing import Mapping, Sequence
 
-from ..experiment import chamber_assumption
+from ..conditions import chamber_assumption
 from ..run import Run
 from .soak import SoakAnchor
 from .stage import StageReport

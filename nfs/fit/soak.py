@@ -30,7 +30,8 @@ import thermal
 
 from ..effects.thermometer import THERMOMETERS
 from ..errors import InputError
-from ..experiment import conditions_from_run, thermal_power
+from ..conditions import conditions_from_run
+from ..heat import thermal_power
 from ..instrument import Instrument
 from ..run import Run
 from ..sensors import thermometer_reading

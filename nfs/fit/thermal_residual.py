@@ -36,7 +36,8 @@ from thermal.solve import step_matrices
 
 from ..effects.thermometer import THERMOMETERS
 from ..errors import InputError, NfsError
-from ..experiment import conditions_from_run, thermal_effects, thermal_power
+from ..conditions import conditions_from_run
+from ..heat import thermal_effects, thermal_power
 from ..instrument import Instrument
 from ..power import POWERED_COLUMN
 from ..run import Run

@@ -40,7 +40,8 @@ import numpy as np
 
 from ..denoise import earth_rate_projection_dph
 from ..effects.thermometer import THERMOMETERS
-from ..experiment import RunConditions, simulate_run
+from ..conditions import RunConditions
+from ..experiment import simulate_run
 from ..instrument import Instrument
 
 __all__ = ["Prediction", "CHANNELS", "predict", "reduce_run", "quiet", "noise_sigma",

@@ -15,7 +15,7 @@ from typing import Sequence
 
 import numpy as np
 
-from ..experiment import RunConditions, conditions_from_run
+from ..conditions import RunConditions, conditions_from_run
 from ..run import Run
 from .noise_level import excess_factors, scaled
 from .predict import Prediction, noise_sigma, predict, reduce_run

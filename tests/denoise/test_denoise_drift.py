@@ -23,7 +23,8 @@ import pytest
 
 from nfs.denoise import earth_rate_projection_dph, separate_drift, wavelet_denoise
 from nfs.errors import NfsError
-from nfs.experiment import RunConditions, simulate_run
+from nfs.conditions import RunConditions
+from nfs.experiment import simulate_run
 from nfs.instrument import load_instrument
 from nfs.sensors import Schedule, axis_elevation_deg, earth_rate_along_axis_dph
 

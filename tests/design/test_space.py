@@ -14,7 +14,7 @@ import pytest
 
 from nfs.chamber import parse_program
 from nfs.errors import NfsError
-from nfs.experiment import RunConditions
+from nfs.conditions import RunConditions
 from nfs.ranges import TEMPERATURE_RANGE_C
 from nfs.run import Run, RunMeta
 from nfs.sensors import Schedule

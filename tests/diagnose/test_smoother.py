@@ -48,7 +48,9 @@ from nfs.fit.params import set_params
 from nfs.diagnose.smoother import SmoothedThermal, smooth_runs, thermometer_sensors
 from nfs.effects import make_effect
 from nfs.errors import NfsError
-from nfs.experiment import conditions_from_run, effect_context, simulate_run, thermal_power
+from nfs.conditions import conditions_from_run
+from nfs.experiment import effect_context, simulate_run
+from nfs.heat import thermal_power
 from nfs.run import Run
 from nfs.config.scenario import load_scenario
 from nfs.instrument import load_instrument

@@ -26,7 +26,7 @@ from nfs.fit.thermal_residual import (StatefulLaw, prepare_thermal, simulate_kno
                                            thermal_residual_parts)
 from nfs.effects import make_effect
 from nfs.errors import NfsError
-from nfs.experiment import thermal_power
+from nfs.heat import thermal_power
 from nfs.instrument import load_instrument
 from nfs.io.measurement import read_runs
 

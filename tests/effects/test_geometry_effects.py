@@ -14,7 +14,8 @@ from nfs.constants import OMEGA_IE_DPH
 from nfs.effects import Geometry, make_effect
 from nfs.effects.geometry import azimuth_elevation_deg, table_axes_ned, tilt_matrix
 from nfs.errors import EffectError
-from nfs.experiment import RunConditions, _pointing, simulate_run, simulate_runs
+from nfs.conditions import RunConditions
+from nfs.experiment import _pointing, simulate_run, simulate_runs
 from nfs.instrument import load_instrument
 from nfs.northfind import (indexing_error_deg, north_find, tilt_model_error_deg,
                            wrap_deg_180)

@@ -10,7 +10,8 @@ import pytest
 
 from nfs.errors import ScenarioError
 from nfs.instrument import preset_path
-from nfs.experiment import conditions_from_run, simulate_run
+from nfs.conditions import conditions_from_run
+from nfs.experiment import simulate_run
 from nfs.studies.scenario_runs import run_scenario
 from nfs.io.measurement import read_run, write_run
 from nfs.config.scenario import load_scenario
