@@ -58,8 +58,8 @@ from ..denoise.wavelet import wavelet_denoise
 from ..constants import POSITION_TOL_DEG
 from ..effects import check_geometry, load_effects_file
 from ..errors import EffectError, NfsError, ScenarioError
-from ..instrument import (Instrument, _aux, _check_effect_targets, _check_heating,
-                          load_instrument, parse_effects)
+from ..instrument import (Instrument, check_effect_targets, check_heating, load_instrument,
+                          parse_aux, parse_effects)
 from ..io.tomlio import (boolean, check_keys, integer, load_toml, number, number_list, string,
                          table)
 from ..ranges import check_tree, deferred_warnings, find, warn_unusual
@@ -320,7 +320,7 @@ def _load(path: Path, overrides, chain: tuple[Path, ...]) -> tuple[Scenario, dic
             raise ScenarioError(exc.message, file=f, key="instrument") from None
         raise
     if "aux" in d:
-        extra = _aux(d["aux"], inst.network, f)
+        extra = parse_aux(d["aux"], inst.network, f)
         have = {a.name for a in inst.aux}
         dup = next((a.name for a in extra if a.name in have), None)
         if dup is not None:
@@ -332,8 +332,8 @@ def _load(path: Path, overrides, chain: tuple[Path, ...]) -> tuple[Scenario, dic
         if "added_effects" in d:
             effects = effects + parse_effects(d["added_effects"], f, "added_effects")
         inst = Instrument(**{**inst.__dict__, "effects": effects})
-        _check_effect_targets(inst, f)
-        _check_heating(inst.network, f, inst.effects)
+        check_effect_targets(inst, f)
+        check_heating(inst.network, f, inst.effects)
 
     sch = table(d, "schedule", "", f)
     check_keys(sch, _SCHEDULE, "schedule", f, required=("positions_deg", "dwell_s"))

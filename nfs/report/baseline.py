@@ -45,7 +45,8 @@ import numpy as np
 from ..docfields import document_fields
 from ..errors import InputError
 from ..io.atomic import atomic_write_text
-from ..scoring.intervals import (DEFAULT_N_BOOT, _nanmean, bc_interval, cluster_bootstrap, json_number)
+from ..scoring.intervals import (DEFAULT_N_BOOT, bc_interval, cluster_bootstrap, finite_mean,
+                                 json_number)
 from ..scoring.tablefile import TableData, check_common, common_columns, read_table
 
 __all__ = ["TOLERANCE", "CellChange", "BaselineComparison", "compare_tables",
@@ -271,8 +272,9 @@ def compare_tables(table, baseline, *, tolerance: float = TOLERANCE,
             if j < len(temps):
                 a, b, ra, rb = c_new[m_i, j], c_old[m_i, j], r_new[m_i, j], r_old[m_i, j]
             else:                                       # the mean over compared columns
-                a, b = float(_nanmean(c_new[m_i], axis=0)), float(_nanmean(c_old[m_i], axis=0))
-                ra, rb = _nanmean(r_new[m_i], axis=0), _nanmean(r_old[m_i], axis=0)
+                a = float(finite_mean(c_new[m_i], axis=0))
+                b = float(finite_mean(c_old[m_i], axis=0))
+                ra, rb = finite_mean(r_new[m_i], axis=0), finite_mean(r_old[m_i], axis=0)
             out.append(_cell(m, temps[j] if j < len(temps) else None, b, a, ra - rb,
                              tolerance))
     notes = [why] + ([] if given else _provenance_notes(new, old)) + \
