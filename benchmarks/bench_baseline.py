@@ -3,7 +3,7 @@ cries wolf.
 
 Speed.  Baseline, timed in the same process: ``nfs table --no-compensation`` on the default
 scenario (7 start temperatures x 5 test start-ups).  Figure: the comparison of that table with
-its own JSON (:func:`nfs.report.baseline.compare_tables`, paired, 4000 replicates), and of a
+its own JSON (:func:`nfs.scoring.baseline.compare_tables`, paired, 4000 replicates), and of a
 table of the full default shape (16 rows: before, 14 compensated rows, stable; plus the
 floor), the largest the default scenario writes.  With ``--full``, the full ``nfs table`` is
 timed as well, with and without ``--baseline`` (about a minute each on two cores).
@@ -31,7 +31,7 @@ import warnings
 import numpy as np
 
 from nfs.cli import main as nfs_main
-from nfs.report.baseline import compare_tables
+from nfs.scoring.baseline import compare_tables
 
 TARGET_S = 1.0
 

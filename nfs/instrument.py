@@ -182,7 +182,7 @@ class Instrument:
     def with_effects(self, effects) -> "Instrument":
         """A copy with another effect list (checked against this instrument)."""
         out = replace(self, effects=tuple(effects))
-        _check_effect_targets(out, file=None)
+        check_effect_targets(out, file=None)
         return out
 
     def effect(self, label: str) -> EffectInstance:
@@ -333,7 +333,11 @@ def _kelvin_step(spec: dict, key: str, prefix: str, file: Any, default: float) -
     return value
 
 
-def _aux(val: Any, network: Network, file: Any) -> tuple[AuxChannel, ...]:
+def parse_aux(val: Any, network: Network, file: Any) -> tuple[AuxChannel, ...]:
+    """An ``[[aux]]`` array (an instrument's, or the channels a scenario adds): each table a
+    channel ``aux_*`` reading ``power:NODE`` [W] or ``temperature:NODE`` [degC] of
+    ``network`` through a gain, an offset, white noise and a random walk; a ScenarioError
+    names ``file`` and the dotted key of any fault."""
     if not isinstance(val, list):
         raise ScenarioError("must be an array of tables [[aux]]", file=file, key="aux")
     out = []
@@ -378,9 +382,11 @@ def parse_effects(val: Any, file: Any, key: str = "effects") -> tuple[EffectInst
     return tuple(out)
 
 
-def _check_effect_targets(inst: Instrument, file: Any) -> None:
-    """Every node, axis and thermometer an effect names must exist; a channel must be an
-    ``aux_*`` name.
+def check_effect_targets(inst: Instrument, file: Any) -> None:
+    """Every node, axis and thermometer an effect of ``inst`` names must exist; a channel
+    must be an ``aux_*`` name; the effects' geometry must suit the turntable's tilts [deg]
+    (:func:`nfs.effects.check_geometry`).  A ScenarioError names ``file`` and the effect;
+    with ``file`` None (an instrument built in code) the EffectError itself is raised.
 
     A channel need not be declared under ``[[aux]]``: an effect may read a measured column
     that the model does not simulate (a fitted ``aux_linear`` on a recorded current).  Such
@@ -440,11 +446,12 @@ def _check_winding(inst: Instrument, file: Any) -> None:
               file=file, key=f"{where}.N_opt", error=ScenarioError)
 
 
-def _check_heating(network: Network, file: Any, effects=()) -> None:
-    """The steady-state rise of every node above the chamber under the nodes' constant
-    powers and the effects' constant heat sources (G dT = P, the chamber as ground) against
-    ``limits.steady_rise_k`` of :mod:`nfs.ranges`; a powered part without a thermal path to
-    the chamber would heat without bound."""
+def check_heating(network: Network, file: Any, effects=()) -> None:
+    """The steady-state rise dT [K] of every node above the chamber under the nodes'
+    constant powers P [W] and the ``effects``' constant heat sources (G dT = P, G the
+    conductances [W/K], the chamber as ground) against ``limits.steady_rise_k`` of
+    :mod:`nfs.ranges`; a powered part without a thermal path to the chamber would heat
+    without bound.  A ScenarioError names ``file`` and the node."""
     names = list(network.node_names)
     idx = {n: i for i, n in enumerate(names)}
     n = len(names)
@@ -520,16 +527,16 @@ def _instrument_from_dict(d: dict[str, Any], file: Any) -> Instrument:
     tt = _dataclass_numbers(TurntableModel, table(d, "turntable", "", file, {}), "turntable",
                             file, {}, network)
     thermo = _thermometers(table(d, "thermometers", "", file), network, file)
-    aux = _aux(d.get("aux", []), network, file)
+    aux = parse_aux(d.get("aux", []), network, file)
     effects = parse_effects(d.get("effects", []), file)
     inst = Instrument(name=string(d, "name", "", file, "instrument"), network=network,
                       gyro=gyro, accelerometers=acc, turntable=tt, thermometers=thermo,
                       effects=effects, aux=aux, t_ref_c=number(d, "t_ref_c", "", file, T_REF_C),
                       description=string(d, "description", "", file, ""), coil=coil)
-    _check_effect_targets(inst, file)
+    check_effect_targets(inst, file)
     check_tree(d, file=file, error=ScenarioError)
     _check_winding(inst, file)
-    _check_heating(network, file, inst.effects)
+    check_heating(network, file, inst.effects)
     return inst
 
 

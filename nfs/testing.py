@@ -2,7 +2,7 @@
 
 * :func:`assert_table_within`: a heading table against a baseline that ``nfs table --json``
   wrote earlier, cell by cell, beyond noise and a relative tolerance (the comparison of
-  ``nfs table --baseline``: :mod:`nfs.report.baseline`);
+  ``nfs table --baseline``: :mod:`nfs.scoring.baseline`);
 * :func:`assert_compensator_no_worse`: a trained compensator against no compensation on the
   same runs, start temperature by start temperature, beyond noise;
 * :func:`assert_time_to_spec_below`: every run's time to spec (after power-on, the time from
@@ -39,7 +39,7 @@ import numpy as np
 from .compensate import load_compensator
 from .io.measurement import read_runs
 from .northfind import north_find, run_time_to_spec_s
-from .report.baseline import TOLERANCE, BaselineComparison, compare_tables
+from .scoring.baseline import TOLERANCE, BaselineComparison, compare_tables
 from .scoring.heading_table import pooled_rmse
 from .scoring.tablefile import TableData
 
@@ -127,7 +127,7 @@ def assert_compensator_no_worse(compensator, runs, *, tolerance: float = 0.0,
     The runs are north-found as they are and with the compensator's drift subtracted; the
     start-up RMSE at each start temperature (runs of one T0 pooled, cycles ending within
     ``startup_end_s``) and its mean over the temperatures are compared *paired*, on the same
-    runs and cycles (:func:`nfs.report.baseline.compare_tables`): a cell fails when the
+    runs and cycles (:func:`nfs.scoring.baseline.compare_tables`): a cell fails when the
     95 % interval of (compensated - uncompensated) lies above 0 and the change exceeds
     ``tolerance`` x the uncompensated RMSE.
 

@@ -8,7 +8,8 @@ the :class:`ThermalResult` labels every node and carries the energy bookkeeping.
 :class:`Annulus` makes the nodes and links of a layered body (a thick-walled cylinder in
 radial shells, conduction through cylindrical shells).
 :func:`estimate_states` estimates the node temperatures from :class:`LinearSensor` readings
-through the network (Kalman filter and smoother, thermal/estimate.py).
+through the network (Kalman filter and smoother, thermal/estimate.py; the sensors and
+records it reads in thermal/sensors.py).
 """
 
 from importlib import import_module
@@ -22,9 +23,10 @@ _PUBLIC = {
     "Network": "thermal.network", "simulate": "thermal.solve", "ThermalResult": "thermal.solve",
     "simulate_many": "thermal.batch", "iter_simulate_many": "thermal.batch",
     "final_temperature": "thermal.final", "Annulus": "thermal.annulus",
+    **{name: "thermal.sensors" for name in ("LinearSensor", "ThermalRecord", "StatePower")},
     **{name: "thermal.estimate" for name in (
-        "LinearSensor", "ThermalRecord", "StatePower", "NodeEstimate", "ProcessNoiseFit",
-        "StateEstimate", "kalman_smooth", "fit_process_noise", "estimate_states")},
+        "NodeEstimate", "ProcessNoiseFit", "StateEstimate", "kalman_smooth",
+        "fit_process_noise", "estimate_states")},
 }
 
 __all__ = ["ThermalError", *_PUBLIC]

@@ -14,10 +14,11 @@ from collections.abc import Iterator
 import numpy as np
 
 from thermal.errors import ThermalError
+from thermal.inputs import as_ambient, as_time, step_classes
 from thermal.march import heated_rows, march, step_maps
 from thermal.network import Network
-from thermal.solve import (AMBIENT_HOLDS, PowerLaw, ThermalResult, _as_ambient, _as_time,
-                           _result, _step_classes, fill_inputs, simulate, step_matrices)
+from thermal.solve import (AMBIENT_HOLDS, PowerLaw, ThermalResult, fill_inputs, simulate,
+                           step_matrices, thermal_result)
 
 __all__ = ["simulate_many", "iter_simulate_many", "runs_per_batch"]
 
@@ -80,7 +81,7 @@ def iter_simulate_many(network: Network, time_s: np.ndarray, *, ambient_c, initi
                        heated_nodes=None) -> Iterator[ThermalResult]:
     """:func:`simulate_many`, its results yielded one at a time, in order: at most one
     batch of marched states (``max_bytes``) and the result being read are held at once."""
-    t = _as_time(time_s)
+    t = as_time(time_s)
     n_t = t.size
     names = network.node_names
     n = len(names)
@@ -109,14 +110,14 @@ def iter_simulate_many(network: Network, time_s: np.ndarray, *, ambient_c, initi
                            f"{ambient_hold!r}")
     linear = ambient_hold == "first-order"
     a, b = network.matrices()
-    steps, cls = _step_classes(t)
+    steps, cls = step_classes(t)
     mats = [step_matrices(a, b, h, slope=linear) for h in steps]
     maps = step_maps(mats, network.node_power_w)
     nodes = heated_rows(n, heated_nodes)
     per = runs_per_batch(n, n_t, max_bytes, nodes.size) or r
     for b0 in range(0, r, per):
         batch = range(b0, min(r, b0 + per))
-        ambs = np.array([_as_ambient(amb_all[i], t) for i in batch])      # (R, n_t)
+        ambs = np.array([as_ambient(amb_all[i], t) for i in batch])      # (R, n_t)
         slopes = np.zeros(ambs.shape)
         if linear and n_t > 1:
             slopes[:, :-1] = np.diff(ambs, axis=1) / np.diff(t)
@@ -128,6 +129,6 @@ def iter_simulate_many(network: Network, time_s: np.ndarray, *, ambient_c, initi
             inputs = np.empty((n_t, 1 + n))
             inputs[:, 0] = ambs[q]
             fill_inputs(inputs, network.node_power_w, nodes, powers[q], t, names)
-            yield _result(network, a, b, mats, steps, cls, t, ambs[q], slopes[q], linear,
-                          temps[q], inputs, ambient_hold)
+            yield thermal_result(network, a, b, mats, steps, cls, t, ambs[q], linear,
+                                 temps[q], inputs, ambient_hold)
         del temps, powers

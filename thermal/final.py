@@ -27,9 +27,9 @@ import functools
 
 import numpy as np
 
+from thermal.inputs import as_ambient, as_initial, as_time, step_classes
 from thermal.network import Network
-from thermal.solve import (StepMatrices, _as_ambient, _as_initial, _as_time, _step_classes,
-                           modal_form, step_matrices)
+from thermal.solve import StepMatrices, modal_form, step_matrices
 
 __all__ = ["final_temperature", "KEPT_STEPS"]
 
@@ -56,13 +56,13 @@ def final_temperature(network: Network, time_s: np.ndarray, *, ambient_c,
     held over each interval and the constant node powers only: :func:`thermal.simulate`'s
     (``ambient_hold="zero-order"``, no ``power_w``) ``.temperature_c[-1]`` to rounding, by
     (1) on the step matrices of equations (3) and (5) of thermal/solve.py."""
-    t = _as_time(time_s)
-    amb = _as_ambient(ambient_c, t)
+    t = as_time(time_s)
+    amb = as_ambient(ambient_c, t)
     n = len(network.node_names)
-    t0 = _as_initial(initial_c, network.node_names)
+    t0 = as_initial(initial_c, network.node_names)
     if t.size == 1:
         return t0
-    steps, cls = _step_classes(t)
+    steps, cls = step_classes(t)
     kept = [_step(network, float(h)) for h in steps]
     inputs = np.empty((t.size, 1 + n))  # u_k = [T_amb,k, P_1, ..., P_n], equation (2)
     inputs[:, 0] = amb

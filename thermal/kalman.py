@@ -2,7 +2,8 @@
 records grouped to share one covariance, and the filter-smoother pass.
 
 Equations (1)-(8) are those of thermal/estimate.py's module docstring; this module holds no
-public API of the package (:mod:`thermal.estimate` is it).
+public API of the package (:mod:`thermal.estimate` is it).  It reads the inputs of
+:mod:`thermal.sensors` and knows nothing of :mod:`thermal.estimate`.
 """
 
 from __future__ import annotations
@@ -10,17 +11,14 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
 
 import numpy as np
 from scipy.linalg import expm
 
 from thermal.errors import ThermalError
 from thermal.network import Network, index_of
+from thermal.sensors import LinearSensor, StatePower, ThermalRecord
 from thermal.solve import step_matrices
-
-if TYPE_CHECKING:
-    from thermal.estimate import LinearSensor, StatePower, ThermalRecord
 
 __all__ = ["Model", "Step", "Group", "build_model", "discretise", "group_records",
            "initial_cov", "run_group", "loglik"]

@@ -62,10 +62,12 @@ from scipy.linalg import expm, eigh
 from scipy.signal import lfilter
 
 from thermal.errors import ThermalError
+from thermal.inputs import as_ambient, as_initial, as_time, step_classes
 from thermal.march import heated_rows, march, step_maps
 from thermal.network import Network, index_of
 
-__all__ = ["ThermalResult", "simulate", "step_matrices", "StepMatrices", "AMBIENT_HOLDS"]
+__all__ = ["ThermalResult", "simulate", "step_matrices", "StepMatrices", "AMBIENT_HOLDS",
+           "thermal_result"]
 
 #: How the chamber temperature is taken between samples: held (zero-order) or linear
 #: (first-order, equations (7)-(8)).
@@ -195,24 +197,6 @@ def step_matrices(a: np.ndarray, b: np.ndarray, h_s: float, *,
                          omega=omega)
 
 
-def _step_classes(time_s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(h, cls): the distinct steps h [s] and, per interval k, the index cls[k] into h.
-
-    Steps that differ by less than the resolution of the time stamps themselves (16 ulp of
-    the largest |t|) are one step: a uniform grid from ``np.linspace`` has one class.
-    """
-    dt = np.diff(time_s)
-    if dt.size == 0:
-        return np.empty(0), np.empty(0, dtype=int)
-    tol = 16.0 * np.spacing(np.max(np.abs(time_s[[0, -1]])))
-    unique, inverse = np.unique(dt, return_inverse=True)
-    starts = np.concatenate([[True], np.diff(unique) > tol])
-    # a class starts where the gap to the previous distinct step exceeds tol
-    cluster = np.cumsum(starts) - 1
-    first = unique[starts]
-    return first, cluster[inverse]
-
-
 def _per_interval(mats: list[np.ndarray], cls: np.ndarray, x: np.ndarray,
                   n_out: int) -> np.ndarray:
     """Rows mats[cls[k]] @ x[k] (n_out,) for every interval k, vectorised per step class."""
@@ -300,52 +284,6 @@ def _closed_form(mats: list[StepMatrices], cls: np.ndarray, capacity: np.ndarray
     return temp
 
 
-def _as_time(time_s: object) -> np.ndarray:
-    """The sample times as a 1-D, finite, strictly increasing float array."""
-    t = np.asarray(time_s, dtype=float)
-    if t.ndim != 1 or t.size == 0:
-        raise ThermalError(f"time_s must be a non-empty 1-D array, got shape {t.shape}")
-    if not np.all(np.isfinite(t)):
-        raise ThermalError(f"time_s is not finite at sample {int(np.argmin(np.isfinite(t)))}")
-    bad = np.flatnonzero(np.diff(t) <= 0.0)
-    if bad.size:
-        k = int(bad[0])
-        raise ThermalError(f"time_s must be strictly increasing: time_s[{k + 1}] = "
-                           f"{t[k + 1]} after time_s[{k}] = {t[k]}")
-    return t
-
-
-def _as_ambient(ambient_c: object, time_s: np.ndarray) -> np.ndarray:
-    """T_amb at every sample [degC] from a scalar, an array (n_t,) or a callable(t_s)."""
-    if callable(ambient_c):
-        amb = np.array([float(ambient_c(t)) for t in time_s.tolist()])
-    else:
-        amb = np.asarray(ambient_c, dtype=float)
-        if amb.ndim == 0:
-            amb = np.full(time_s.shape, float(amb))
-        elif amb.shape != time_s.shape:
-            raise ThermalError(f"ambient_c must be a scalar, a callable or an array of "
-                               f"shape {time_s.shape}, got shape {amb.shape}")
-    if not np.all(np.isfinite(amb)):
-        k = int(np.argmin(np.isfinite(amb)))
-        raise ThermalError(f"ambient_c is not finite at t = {time_s[k]} s")
-    return amb
-
-
-def _as_initial(initial_c: object, names) -> np.ndarray:
-    """T(0) of every node [degC] (n,) from a scalar or an array (n,), checked finite."""
-    n = len(names)
-    try:
-        t0 = np.broadcast_to(np.asarray(initial_c, dtype=float), (n,)).copy()
-    except ValueError:
-        raise ThermalError(f"initial_c must be a scalar or have shape ({n},), got shape "
-                           f"{np.shape(initial_c)}") from None
-    if not np.all(np.isfinite(t0)):
-        raise ThermalError(f"initial_c is not finite for node "
-                           f"{names[int(np.argmin(np.isfinite(t0)))]!r}")
-    return t0
-
-
 def _check_power_array(power: np.ndarray, time_s: np.ndarray, names: tuple[str, ...],
                        source: str) -> None:
     """A :class:`ThermalError` locating the first non-finite power (time and node)."""
@@ -403,19 +341,19 @@ def simulate(network: Network, time_s: np.ndarray, *,
         Temperatures, exact rates, the powers and ambient used, and the energy bookkeeping
         heat_in_j = stored_j + heat_lost_j (equation (6)).
     """
-    t = _as_time(time_s)
+    t = as_time(time_s)
     n_t = t.size
     names = network.node_names
     n = len(names)
-    amb = _as_ambient(ambient_c, t)
-    t0 = _as_initial(initial_c, names)
+    amb = as_ambient(ambient_c, t)
+    t0 = as_initial(initial_c, names)
 
     if ambient_hold not in AMBIENT_HOLDS:
         raise ThermalError(f"ambient_hold must be one of {', '.join(AMBIENT_HOLDS)}, got "
                            f"{ambient_hold!r}")
     linear = ambient_hold == "first-order"
     a, b = network.matrices()
-    steps, cls = _step_classes(t)
+    steps, cls = step_classes(t)
     mats = [step_matrices(a, b, h, slope=linear) for h in steps]
     slope = np.zeros(n_t)               # v_k of (7), the chamber's slope over [t_k, t_k+1)
     if linear and n_t > 1:
@@ -446,8 +384,8 @@ def simulate(network: Network, time_s: np.ndarray, *,
         fill_inputs(inputs, network.node_power_w, heated_rows(n, heated_nodes), powers[0],
                     t, names)
 
-    return _result(network, a, b, mats, steps, cls, t, amb, slope, linear, temp, inputs,
-                   ambient_hold)
+    return thermal_result(network, a, b, mats, steps, cls, t, amb, linear, temp, inputs,
+                          ambient_hold)
 
 
 def fill_inputs(inputs: np.ndarray, node_power_w: np.ndarray, nodes: np.ndarray,
@@ -466,15 +404,26 @@ def fill_inputs(inputs: np.ndarray, node_power_w: np.ndarray, nodes: np.ndarray,
         inputs[:, 1 + nodes] += power_w
 
 
-def _result(network, a, b, mats, steps, cls, t, amb, slope, linear, temp, inputs,
-            ambient_hold) -> ThermalResult:
-    """The read-only :class:`ThermalResult` of one run: its rates now, its heat bookkeeping
-    (6) when first read (:func:`_heat_ledger`; ``slope`` is recomputed then from the
-    chamber, as it was made)."""
-    rate = temp @ a.T + inputs @ b.T
-    arrays = dict(time_s=t, capacity_j_per_k=network.capacity_j_per_k,
-                  temperature_c=np.ascontiguousarray(temp), rate_c_per_s=rate,
-                  power_w=inputs[:, 1:].copy(), ambient_c=amb)
+def thermal_result(network: Network, a: np.ndarray, b: np.ndarray,
+                   mats: list[StepMatrices], steps: np.ndarray, cls: np.ndarray, time_s: np.ndarray,
+                   ambient_c: np.ndarray, linear: bool, temperature_c: np.ndarray,
+                   inputs: np.ndarray, ambient_hold: str) -> ThermalResult:
+    """The read-only :class:`ThermalResult` of one solved run, shared by :func:`simulate`
+    and :func:`thermal.simulate_many`: its rates dT/dt = A T + B u [K/s] now, its heat
+    bookkeeping (6) when first read (:func:`_heat_ledger`; the chamber's slope is recomputed
+    then from the chamber, as it was made).
+
+    ``a``, ``b`` are the network's matrices of equation (2) (:meth:`Network.matrices`),
+    ``mats`` the step matrices of the distinct ``steps`` h [s] and ``cls`` the class of each
+    interval (:func:`thermal.inputs.step_classes`), ``linear`` True under a first-order
+    chamber hold; ``time_s`` (n_t,) [s], ``ambient_c`` (n_t,) [degC], ``temperature_c``
+    (n_t, n) [degC] and ``inputs`` (n_t, 1 + n) = [T_amb,k [degC], P_1,k ... P_n,k [W]]
+    become the result's arrays (not copied: the caller hands them over).
+    """
+    rate = temperature_c @ a.T + inputs @ b.T
+    arrays = dict(time_s=time_s, capacity_j_per_k=network.capacity_j_per_k,
+                  temperature_c=np.ascontiguousarray(temperature_c), rate_c_per_s=rate,
+                  power_w=inputs[:, 1:].copy(), ambient_c=ambient_c)
     for value in arrays.values():
         value.flags.writeable = False
     return ThermalResult(node_names=network.node_names, ambient_hold=ambient_hold,

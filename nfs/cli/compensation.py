@@ -34,7 +34,8 @@ def cmd_table(args) -> int:
     paths = result.write(args.output, json_path=args.json)
     comparison = None
     if baseline is not None:
-        from ..report.baseline import compare_tables, write_baseline_comparison
+        from ..report.baseline import baseline_comparison_markdown, write_baseline_comparison
+        from ..scoring.baseline import compare_tables
         comparison = compare_tables(table, baseline, tolerance=args.tolerance)
         paths += write_baseline_comparison(comparison, args.output)
     inputs = {"scenario": provenance["scenario"], "compensation": not args.no_compensation}
@@ -43,8 +44,8 @@ def cmd_table(args) -> int:
     finish(folder, args, inputs)
     print(text, end="")
     if comparison is not None:
-        print(f"\n## Against the baseline {args.baseline}\n\n" + comparison.to_markdown(),
-              end="")
+        print(f"\n## Against the baseline {args.baseline}\n\n"
+              + baseline_comparison_markdown(comparison), end="")
     if not args.quiet:
         print("\nwrote " + ", ".join(str(p) for p in paths), file=sys.stderr)
     return 0 if comparison is None else comparison.exit_code
@@ -75,8 +76,9 @@ def _baseline(args, scenario, settings):
         return None
     from ..compensate import get_method
     from ..io.provenance import sha256_of_file
-    from ..report.baseline import TOLERANCE, check_common, read_table
+    from ..scoring.baseline import TOLERANCE
     from ..scoring.heading_table import REFERENCE_ROWS
+    from ..scoring.tablefile import check_common, read_table
     if args.tolerance is None:
         args.tolerance = TOLERANCE
     if not (math.isfinite(args.tolerance) and args.tolerance >= 0):

@@ -50,16 +50,15 @@ import os
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 from ..chamber import check_temperature, parse_program
 from ..compensate.methods import get_method
-from ..denoise.wavelet import wavelet_denoise
 from ..constants import POSITION_TOL_DEG
+from ..denoise.levels import (DEFAULT_WAVELET, FILTER_LENGTHS, check_edge_fit, check_level,
+                              level_for_cutoff)
 from ..effects import check_geometry, load_effects_file
 from ..errors import EffectError, NfsError, ScenarioError
-from ..instrument import (Instrument, _aux, _check_effect_targets, _check_heating,
-                          load_instrument, parse_effects)
+from ..instrument import (Instrument, check_effect_targets, check_heating, load_instrument,
+                          parse_aux, parse_effects)
 from ..io.tomlio import (boolean, check_keys, integer, load_toml, number, number_list, string,
                          table)
 from ..ranges import check_tree, deferred_warnings, find, warn_unusual
@@ -228,15 +227,18 @@ def _check_work(temps, duration: float | None, chamber: ChamberProfile, fs: floa
 def _check_cutoff(cutoff_period_s: float, temps, duration: float | None,
                   chamber: ChamberProfile, fs: float, file) -> None:
     """The drift target of a compensated run is separated at the wavelet level of
-    ``compensation.cutoff_period_s`` (:func:`nfs.denoise.drift.separate_drift`): the
-    denoiser, with the options that separation uses, on a record as long as the shortest
-    run refuses the level now rather than after the start-ups are simulated."""
+    ``compensation.cutoff_period_s`` (:func:`nfs.denoise.drift.separate_drift`): the checks
+    the denoiser makes of its record (:mod:`nfs.denoise.levels`: the level of the cutoff,
+    the record with its smooth extension long enough for it with the separation's wavelet,
+    the edge fit), made on the length of the shortest run, refuse the level now rather than
+    after the start-ups are simulated, without PyWavelets."""
     n = min(int((duration if duration is not None else chamber.powered_s(t0, 1.0 / fs)) * fs)
             + 1 for t0 in temps)
     try:
-        with np.errstate(all="ignore"):
-            wavelet_denoise(np.zeros(max(n, 2)), sample_rate_hz=fs,
-                            cutoff_period_s=cutoff_period_s)
+        level = level_for_cutoff(cutoff_period_s, fs)
+        check_level(level, max(n, 2), DEFAULT_WAVELET, FILTER_LENGTHS[DEFAULT_WAVELET],
+                    extended=True)
+        check_edge_fit(level, max(n, 2), None, "auto")
     except NfsError as exc:
         raise ScenarioError(f"the drift of the shortest run ({n} samples) cannot be separated "
                             f"at this cutoff: {exc}", file=file,
@@ -320,7 +322,7 @@ def _load(path: Path, overrides, chain: tuple[Path, ...]) -> tuple[Scenario, dic
             raise ScenarioError(exc.message, file=f, key="instrument") from None
         raise
     if "aux" in d:
-        extra = _aux(d["aux"], inst.network, f)
+        extra = parse_aux(d["aux"], inst.network, f)
         have = {a.name for a in inst.aux}
         dup = next((a.name for a in extra if a.name in have), None)
         if dup is not None:
@@ -332,8 +334,8 @@ def _load(path: Path, overrides, chain: tuple[Path, ...]) -> tuple[Scenario, dic
         if "added_effects" in d:
             effects = effects + parse_effects(d["added_effects"], f, "added_effects")
         inst = Instrument(**{**inst.__dict__, "effects": effects})
-        _check_effect_targets(inst, f)
-        _check_heating(inst.network, f, inst.effects)
+        check_effect_targets(inst, f)
+        check_heating(inst.network, f, inst.effects)
 
     sch = table(d, "schedule", "", f)
     check_keys(sch, _SCHEDULE, "schedule", f, required=("positions_deg", "dwell_s"))

@@ -27,6 +27,7 @@ from nfs.errors import InputError, MeasurementError
 from nfs.run import Run
 from nfs.sensors.fog import earth_rate_along_axis_dph
 
+from .levels import DEFAULT_WAVELET
 from .thresholds import ThresholdRule
 from .wavelet import DenoiseResult, wavelet_denoise
 
@@ -157,7 +158,7 @@ def _sample_rate_hz(run: Run) -> float:
 
 
 def separate_drift(run: Run, *, cutoff_period_s: float | None = DEFAULT_CUTOFF_PERIOD_S,
-                   level: int | None = None, wavelet: str = "db4",
+                   level: int | None = None, wavelet: str = DEFAULT_WAVELET,
                    rule: str | ThresholdRule = "visu", mode: str = "soft",
                    boundary: str = "smooth-extend", sigma_per_level: bool = False,
                    scale_factor: float = 1.0,

@@ -46,7 +46,8 @@ import pywt
 
 from ..docfields import document_fields
 from ..errors import InputError
-from .levels import cutoff_for_level, edge_span_samples, level_for_cutoff, positive
+from .levels import (DEFAULT_WAVELET, check_edge_fit, check_level, cutoff_for_level,
+                     edge_span_samples, level_for_cutoff, positive)
 from .thresholds import ThresholdRule, mad_sigma, resolve_rule
 
 __all__ = [
@@ -266,7 +267,7 @@ def _transform_and_shrink(xp: np.ndarray, wav: pywt.Wavelet, ext_mode: str, leve
 
 def wavelet_denoise(x: np.ndarray, *, sample_rate_hz: float = 1.0,
                     cutoff_period_s: float | None = None, level: int | None = None,
-                    wavelet: str = "db4", rule: str | ThresholdRule = "visu",
+                    wavelet: str = DEFAULT_WAVELET, rule: str | ThresholdRule = "visu",
                     mode: str = "soft", keep_approximation: bool = True,
                     boundary: str = "smooth-extend", sigma_per_level: bool = False,
                     edge_fit_samples: int | None = None, edge_fit_degree: int | str = "auto",
@@ -334,8 +335,8 @@ def wavelet_denoise(x: np.ndarray, *, sample_rate_hz: float = 1.0,
     ------
     InputError
         An empty, non-1-D or non-finite record; neither or both of cutoff and level; a level
-        beyond what the record supports (``pywt.dwt_max_level``); an unknown rule, mode,
-        boundary or wavelet.
+        beyond what the record supports (:func:`~nfs.denoise.levels.check_level`); an unknown
+        rule, mode, boundary or wavelet.
     """
     x = np.asarray(x, dtype=float)
     if x.ndim != 1 or x.size < 2:
@@ -369,27 +370,11 @@ def wavelet_denoise(x: np.ndarray, *, sample_rate_hz: float = 1.0,
                          f"{', '.join(BOUNDARIES)}")
     n = x.size
     # The transform sees the record plus its extension under "smooth-extend".
-    n_transformed = n + 2 * min(edge_span_samples(level, wav.dec_len), n - 1) \
-        if boundary == "smooth-extend" else n
-    max_level = pywt.dwt_max_level(n_transformed, wav.dec_len)
-    if level > max_level:
-        need = (wav.dec_len - 1) * 2 ** level
-        raise InputError(f"level {level} needs a transformed record of at least {need} "
-                         f"samples with {wav.name} (filter length {wav.dec_len}); this one "
-                         f"has {n_transformed} (max level {max_level})")
+    check_level(level, n, wav.name, wav.dec_len, extended=boundary == "smooth-extend")
     edge = min(edge_span_samples(level, wav.dec_len), n // 2)
 
     pad = min(edge_span_samples(level, wav.dec_len), n - 1)
-    window = min(n, 2 ** level if edge_fit_samples is None else int(edge_fit_samples))
-    degree = edge_fit_degree
-    if degree != "auto":
-        if isinstance(degree, bool) or not isinstance(degree, (int, np.integer)) or degree < 0:
-            raise InputError(f'edge_fit_degree must be "auto" or an integer >= 0, '
-                             f"got {degree!r}")
-        degree = int(degree)
-    if window < (3 if degree == "auto" else degree + 1):
-        raise InputError(f"edge fit of degree {degree} needs more samples than "
-                         f"edge_fit_samples = {window}")
+    window, degree = check_edge_fit(level, n, edge_fit_samples, edge_fit_degree)
 
     untrusted = np.zeros(n, dtype=bool) if trusted is None else ~np.asarray(trusted, bool)
     if untrusted.shape != (n,):

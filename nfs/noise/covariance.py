@@ -68,12 +68,11 @@ import numpy as np
 from scipy.linalg import LinAlgError, cholesky, solve_triangular
 
 from nfs.errors import InputError
+from nfs.noise.checks import check_non_negative, check_positive
 from nfs.noise.generators import (
     DEFAULT_CORRELATION_TIME_S,
-    _bi_poles,
-    _check_bi_times,
-    _check_non_negative,
-    _check_positive,
+    bias_instability_poles,
+    check_bias_instability_times,
 )
 
 __all__ = [
@@ -251,16 +250,16 @@ def segment_sum_covariance(starts: np.ndarray, lengths: np.ndarray, sample_rate_
         (n_segments, n_segments) symmetric covariance [(deg/h)^2].
     """
     a, m = _check_segments(starts, lengths)
-    fs = _check_positive("sample_rate_hz", sample_rate_hz)
-    arw = _check_non_negative("arw_deg_per_rth_h", arw_deg_per_rth_h)
-    b = _check_non_negative("bias_instability_dph", bias_instability_dph)
-    k = _check_non_negative("rrw_deg_per_h_per_rth_h", rrw_deg_per_h_per_rth_h)
+    fs = check_positive("sample_rate_hz", sample_rate_hz)
+    arw = check_non_negative("arw_deg_per_rth_h", arw_deg_per_rth_h)
+    b = check_non_negative("bias_instability_dph", bias_instability_dph)
+    k = check_non_negative("rrw_deg_per_h_per_rth_h", rrw_deg_per_h_per_rth_h)
     a1, a2 = a[:, None], (a + m)[:, None]
     b1, b2 = a[None, :], (a + m)[None, :]
     cov = (60.0 * arw) ** 2 * fs * _overlap(a1, a2, b1, b2).astype(float)
     if b > 0.0:
-        fs, t_c = _check_bi_times(fs, correlation_time_s)
-        times_s, q2_per_b2 = _bi_poles(fs, t_c)
+        fs, t_c = check_bias_instability_times(fs, correlation_time_s)
+        times_s, q2_per_b2 = bias_instability_poles(fs, t_c)
         gap = np.maximum(b1 - a2, a1 - b2)
         overlapping = np.nonzero(gap < 0)
         lag = np.maximum(gap, 0).astype(float) + 1.0

@@ -29,6 +29,7 @@ import numpy as np
 from scipy.signal import lfilter
 
 from nfs.errors import InputError
+from nfs.noise.checks import check_n_samples, check_non_negative, check_positive, check_rng
 
 __all__ = [
     "BI_FLOOR_FACTOR",
@@ -39,6 +40,8 @@ __all__ = [
     "bias_instability_adev_dph",
     "bias_instability_band_s",
     "bias_instability_noise_dph",
+    "bias_instability_poles",
+    "check_bias_instability_times",
     "gyro_noise_dph",
     "rate_random_walk_noise_dph",
     "white_noise",
@@ -65,38 +68,6 @@ DEFAULT_CORRELATION_TIME_S: float = 3600.0
 _BAND_LO_SAMPLES = 2.0
 _BAND_HI_DIVISOR = 3.0
 _MIN_TC_SAMPLES = 100.0
-
-
-# --------------------------------------------------------------------------------------------
-# argument checks (one place, one message format)
-
-def _check_rng(rng: object) -> np.random.Generator:
-    if not isinstance(rng, np.random.Generator):
-        raise InputError(
-            f"rng must be a numpy.random.Generator (e.g. numpy.random.default_rng(seed)), "
-            f"got {type(rng).__name__}")
-    return rng
-
-
-def _check_n_samples(n_samples: object) -> int:
-    if isinstance(n_samples, bool) or not isinstance(n_samples, (int, np.integer)) \
-            or n_samples < 0:
-        raise InputError(f"n_samples must be an integer >= 0, got {n_samples!r}")
-    return int(n_samples)
-
-
-def _check_positive(name: str, value: float) -> float:
-    value = float(value)
-    if not math.isfinite(value) or value <= 0.0:
-        raise InputError(f"{name} must be finite and > 0, got {value!r}")
-    return value
-
-
-def _check_non_negative(name: str, value: float) -> float:
-    value = float(value)
-    if not math.isfinite(value) or value < 0.0:
-        raise InputError(f"{name} must be finite and >= 0, got {value!r}")
-    return value
 
 
 # --------------------------------------------------------------------------------------------
@@ -143,10 +114,10 @@ def white_noise(n_samples: int, sample_rate_hz: float, density_per_rth_hz: float
     numpy.ndarray
         ``n_samples`` float64 values [unit], zero mean.
     """
-    n = _check_n_samples(n_samples)
-    fs = _check_positive("sample_rate_hz", sample_rate_hz)
-    density = _check_non_negative("density_per_rth_hz", density_per_rth_hz)
-    rng = _check_rng(rng)
+    n = check_n_samples(n_samples)
+    fs = check_positive("sample_rate_hz", sample_rate_hz)
+    density = check_non_negative("density_per_rth_hz", density_per_rth_hz)
+    rng = check_rng(rng)
     if sided == "one":
         std = density * math.sqrt(fs / 2.0)
     elif sided == "two":
@@ -185,16 +156,31 @@ def angle_random_walk_noise_dph(n_samples: int, sample_rate_hz: float,
     numpy.ndarray
         Rate noise [deg/h].
     """
-    arw = _check_non_negative("arw_deg_per_rth_h", arw_deg_per_rth_h)
+    arw = check_non_negative("arw_deg_per_rth_h", arw_deg_per_rth_h)
     return white_noise(n_samples, sample_rate_hz, 60.0 * arw, rng=rng, sided="two")
 
 
 @functools.lru_cache(maxsize=64)
-def _bi_poles(sample_rate_hz: float, correlation_time_s: float) -> tuple[np.ndarray, float]:
-    """Correlation times T_k [s] of the bias-instability construction (read-only) and the
-    variance of each component per B^2 [-] (see :func:`bias_instability_noise_dph`); kept
-    per (fs, T_c), which every run of an instrument shares (np.geomspace costs a tenth of a
-    default start-up's gyro noise)."""
+def bias_instability_poles(sample_rate_hz: float,
+                           correlation_time_s: float) -> tuple[np.ndarray, float]:
+    """The first-order Gauss-Markov components of the bias-instability construction.
+
+    Returns the correlation times T_k [s] (read-only array), log-spaced
+    ``BI_POLES_PER_DECADE`` per decade from one sample interval 1/fs to T_c, and the variance
+    of each component per B^2, q^2 / B^2 = ln(r) / pi [1] with r the ratio of neighbouring
+    T_k (see :func:`bias_instability_noise_dph`).  The generator, the closed-form Allan
+    deviation and the covariance of window means (:mod:`nfs.noise.covariance`) all build on
+    these, so the three describe one process.  Kept per (fs, T_c), which every run of an
+    instrument shares (np.geomspace costs a tenth of a default start-up's gyro noise).
+    Arguments unchecked: pass them through :func:`check_bias_instability_times` first.
+
+    Parameters
+    ----------
+    sample_rate_hz : float
+        Sample rate fs [Hz], > 0.
+    correlation_time_s : float
+        Longest correlation time T_c [s], >= 100 sample intervals.
+    """
     t_min = 1.0 / sample_rate_hz
     decades = math.log10(correlation_time_s / t_min)
     n_poles = max(2, math.ceil(BI_POLES_PER_DECADE * decades - 1e-9) + 1)
@@ -204,9 +190,13 @@ def _bi_poles(sample_rate_hz: float, correlation_time_s: float) -> tuple[np.ndar
     return times_s, math.log(ratio) / math.pi
 
 
-def _check_bi_times(sample_rate_hz: float, correlation_time_s: float) -> tuple[float, float]:
-    fs = _check_positive("sample_rate_hz", sample_rate_hz)
-    t_c = _check_positive("correlation_time_s", correlation_time_s)
+def check_bias_instability_times(sample_rate_hz: float,
+                                 correlation_time_s: float) -> tuple[float, float]:
+    """(fs [Hz], T_c [s]) as floats, both finite and > 0 and T_c at least 100 sample
+    intervals (below that the flat Allan floor of the construction has no band to exist
+    in), else an InputError naming the argument."""
+    fs = check_positive("sample_rate_hz", sample_rate_hz)
+    t_c = check_positive("correlation_time_s", correlation_time_s)
     shortest = _MIN_TC_SAMPLES / fs
     if t_c < shortest:
         raise InputError(
@@ -267,11 +257,11 @@ def bias_instability_noise_dph(n_samples: int, sample_rate_hz: float,
     numpy.ndarray
         Rate noise [deg/h], zero mean, stationary.
     """
-    n = _check_n_samples(n_samples)
-    b = _check_non_negative("bias_instability_dph", bias_instability_dph)
-    fs, t_c = _check_bi_times(sample_rate_hz, correlation_time_s)
-    rng = _check_rng(rng)
-    times_s, q2_per_b2 = _bi_poles(fs, t_c)
+    n = check_n_samples(n_samples)
+    b = check_non_negative("bias_instability_dph", bias_instability_dph)
+    fs, t_c = check_bias_instability_times(sample_rate_hz, correlation_time_s)
+    rng = check_rng(rng)
+    times_s, q2_per_b2 = bias_instability_poles(fs, t_c)
     q = b * math.sqrt(q2_per_b2)
     out = np.zeros(n)
     for t_k in times_s:
@@ -312,13 +302,13 @@ def bias_instability_adev_dph(taus_s: np.ndarray, sample_rate_hz: float,
     sample_rate_hz, bias_instability_dph, correlation_time_s
         As in :func:`bias_instability_noise_dph`.
     """
-    b = _check_non_negative("bias_instability_dph", bias_instability_dph)
-    fs, t_c = _check_bi_times(sample_rate_hz, correlation_time_s)
+    b = check_non_negative("bias_instability_dph", bias_instability_dph)
+    fs, t_c = check_bias_instability_times(sample_rate_hz, correlation_time_s)
     tau = np.asarray(taus_s, dtype=float)
     if np.any(~np.isfinite(tau)) or np.any(tau <= 0.0):
         raise InputError("taus_s must be finite and > 0")
     m = tau * fs
-    times_s, q2_per_b2 = _bi_poles(fs, t_c)
+    times_s, q2_per_b2 = bias_instability_poles(fs, t_c)
     q2 = b * b * q2_per_b2
     avar = np.zeros_like(tau)
     for t_k in times_s:
@@ -335,7 +325,7 @@ def bias_instability_band_s(sample_rate_hz: float,
                             ) -> tuple[float, float]:
     """The band (tau_lo, tau_hi) [s] = (2/fs, T_c/3) in which the Allan deviation of
     :func:`bias_instability_noise_dph` is within 5 % of its flat floor 0.6643 B."""
-    fs, t_c = _check_bi_times(sample_rate_hz, correlation_time_s)
+    fs, t_c = check_bias_instability_times(sample_rate_hz, correlation_time_s)
     return _BAND_LO_SAMPLES / fs, t_c / _BAND_HI_DIVISOR
 
 
@@ -367,10 +357,10 @@ def rate_random_walk_noise_dph(n_samples: int, sample_rate_hz: float,
     numpy.ndarray
         Rate noise [deg/h].
     """
-    n = _check_n_samples(n_samples)
-    fs = _check_positive("sample_rate_hz", sample_rate_hz)
-    k = _check_non_negative("rrw_deg_per_h_per_rth_h", rrw_deg_per_h_per_rth_h)
-    rng = _check_rng(rng)
+    n = check_n_samples(n_samples)
+    fs = check_positive("sample_rate_hz", sample_rate_hz)
+    k = check_non_negative("rrw_deg_per_h_per_rth_h", rrw_deg_per_h_per_rth_h)
+    rng = check_rng(rng)
     step = (k / 60.0) / math.sqrt(fs)
     return np.cumsum(step * rng.standard_normal(n))
 
@@ -419,15 +409,15 @@ def gyro_noise_dph(n_samples: int, sample_rate_hz: float, *, arw_deg_per_rth_h: 
     numpy.ndarray
         ``n_samples`` rate-noise values [deg/h].
     """
-    n = _check_n_samples(n_samples)
-    rng = _check_rng(rng)
+    n = check_n_samples(n_samples)
+    rng = check_rng(rng)
     arw_rng, bi_rng, rrw_rng = (np.random.default_rng(int(s))
                                 for s in rng.integers(0, 2**63 - 1, size=3, dtype=np.int64))
     out = angle_random_walk_noise_dph(n, sample_rate_hz, arw_deg_per_rth_h, rng=arw_rng)
-    if _check_non_negative("bias_instability_dph", bias_instability_dph) > 0.0:
+    if check_non_negative("bias_instability_dph", bias_instability_dph) > 0.0:
         out += bias_instability_noise_dph(n, sample_rate_hz, bias_instability_dph,
                                     correlation_time_s=correlation_time_s, rng=bi_rng)
-    if _check_non_negative("rrw_deg_per_h_per_rth_h", rrw_deg_per_h_per_rth_h) > 0.0:
+    if check_non_negative("rrw_deg_per_h_per_rth_h", rrw_deg_per_h_per_rth_h) > 0.0:
         out += rate_random_walk_noise_dph(n, sample_rate_hz, rrw_deg_per_h_per_rth_h,
                                           rng=rrw_rng)
     return out
@@ -449,10 +439,10 @@ class GyroNoise:
     (within 5 %) for 2/fs <= tau <= T_c / 3; >= 100 sample intervals."""
 
     def __post_init__(self) -> None:
-        _check_non_negative("arw_deg_per_rth_h", self.arw_deg_per_rth_h)
-        _check_non_negative("bias_instability_dph", self.bias_instability_dph)
-        _check_non_negative("rrw_deg_per_h_per_rth_h", self.rrw_deg_per_h_per_rth_h)
-        _check_positive("correlation_time_s", self.correlation_time_s)
+        check_non_negative("arw_deg_per_rth_h", self.arw_deg_per_rth_h)
+        check_non_negative("bias_instability_dph", self.bias_instability_dph)
+        check_non_negative("rrw_deg_per_h_per_rth_h", self.rrw_deg_per_h_per_rth_h)
+        check_positive("correlation_time_s", self.correlation_time_s)
 
     def generate(self, n_samples: int, sample_rate_hz: float,
                  rng: np.random.Generator) -> np.ndarray:

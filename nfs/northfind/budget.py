@@ -11,7 +11,7 @@ import math
 import numpy as np
 
 from nfs.errors import NfsError
-from nfs.northfind.solve import _omega_h
+from nfs.northfind.solve import horizontal_earth_rate_dph
 
 __all__ = [
     "white_noise_floor_deg",
@@ -77,7 +77,7 @@ def white_noise_floor_deg(arw_deg_per_rth_h: float, dwell_s: float, n_positions:
                        f"visits >= 1, got {dwell_s:g}, {n_positions}, {visits}")
     tau_h = dwell_s / 3600.0
     sigma_w = arw_deg_per_rth_h / math.sqrt(tau_h)
-    omega_h = _omega_h(latitude_deg)
+    omega_h = horizontal_earth_rate_dph(latitude_deg)
     if n_positions >= 3:
         return math.degrees(math.sqrt(2.0 / (n_positions * visits)) * sigma_w / omega_h)
     if heading_deg is None:
@@ -152,7 +152,7 @@ def tilt_model_error_deg(pitch_deg: float, roll_deg: float, heading_deg,
 
 def rate_error_heading_deg(rate_error_dph: float, latitude_deg: float) -> float:
     """Heading error of an uncancelled rate error: delta_psi = delta_b / (Omega_ie cos L) [deg]."""
-    return math.degrees(rate_error_dph / _omega_h(latitude_deg))
+    return math.degrees(rate_error_dph / horizontal_earth_rate_dph(latitude_deg))
 
 
 def linear_drift_error_deg(drift_dph_per_s: float, step_s: float, n_positions: int,
@@ -191,7 +191,7 @@ def linear_drift_error_deg(drift_dph_per_s: float, step_s: float, n_positions: i
         raise NfsError("linear_drift_error_deg needs n_positions >= 3")
     psi = np.radians(heading_deg)
     k_delta = drift_dph_per_s * step_s
-    out = np.degrees(k_delta / _omega_h(latitude_deg)
+    out = np.degrees(k_delta / horizontal_earth_rate_dph(latitude_deg)
                      * (np.cos(psi) / math.tan(math.pi / n_positions) + np.sin(psi)))
     return out if np.ndim(out) else float(out)
 

@@ -18,8 +18,8 @@ from nfs.errors import MeasurementError, NfsError
 from nfs.run import Run
 from nfs.northfind.segment import Cycle, dwell_samples, find_dwells, segment_cycles
 from nfs.northfind.level import LEVEL_UP, gravity_and_biases, level_heading, level_two_position
-from nfs.northfind.solve import (distinct_angles, _solve_stack, _vertical_rate_removed,
-                                 solve_heading, wrap_deg_180, wrap_deg_360)
+from nfs.northfind.solve import (distinct_angles, remove_vertical_rate, solve_heading,
+                                 solve_xyb_stack, wrap_deg_180, wrap_deg_360)
 
 __all__ = ["NorthFindResult", "north_find", "StageRMSE", "heading_rmse"]
 
@@ -227,7 +227,7 @@ def north_find(run: Run, *, tilt_correction: bool = True, settle_s: float = 0.0,
     bias = np.full((n_cyc, 2), np.nan)
     if tilt_correction:
         up, bias[:, 0], bias[:, 1] = gravity_and_biases(theta_rad, acc_x, acc_y)
-        y, _ = _vertical_rate_removed(rate, acc_x, meta.latitude_deg)
+        y, _ = remove_vertical_rate(rate, acc_x, meta.latitude_deg)
     else:
         up, y = np.tile(LEVEL_UP, (n_cyc, 1)), rate
 
@@ -237,7 +237,7 @@ def north_find(run: Run, *, tilt_correction: bool = True, settle_s: float = 0.0,
     distinct = distinct_angles(theta_rad[0], math.radians(position_tol_deg))
     if len(distinct) >= 3:
         if np.any(ok):
-            x_dph[ok], y_dph[ok], b_dph[ok], rms[ok] = _solve_stack(theta_rad[ok], y[ok])
+            x_dph[ok], y_dph[ok], b_dph[ok], rms[ok] = solve_xyb_stack(theta_rad[ok], y[ok])
             psi[ok], omh[ok] = level_heading(x_dph[ok], y_dph[ok], up[ok])
         psi = np.degrees(psi)
     elif len(distinct) == 2 and abs(abs(math.remainder(distinct[1] - distinct[0], 2 * math.pi))

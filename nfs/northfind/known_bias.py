@@ -34,7 +34,8 @@ from nfs.constants import earth_rate_components_dph
 from nfs.errors import NfsError
 from nfs.northfind.heading import NorthFindResult
 from nfs.northfind.level import branch_heading, gravity_and_biases, level_heading
-from nfs.northfind.solve import distinct_angles, _omega_h, wrap_deg_180, wrap_deg_360
+from nfs.northfind.solve import (distinct_angles, horizontal_earth_rate_dph, wrap_deg_180,
+                                 wrap_deg_360)
 
 __all__ = ["KnownBiasHeading", "level_known_bias", "north_find_known_bias"]
 
@@ -94,7 +95,8 @@ def level_known_bias(theta_rad, rate_dph, acc_x_g, acc_y_g, latitude_deg: float,
     theta_a = th[:, :1]
     sgn = np.where(np.abs(np.angle(np.exp(1j * (th - theta_a)))) < np.pi / 2, 1.0, -1.0)
     a = np.mean(sgn * y, axis=1)
-    return branch_heading(a, theta_a[:, 0], up, _omega_h(latitude_deg), heading_hint_deg)
+    return branch_heading(a, theta_a[:, 0], up, horizontal_earth_rate_dph(latitude_deg),
+                          heading_hint_deg)
 
 
 def north_find_known_bias(result: NorthFindResult, *, positions_deg=None,

@@ -34,7 +34,7 @@ import math
 import numpy as np
 
 from nfs.errors import NfsError
-from nfs.northfind.solve import _omega_h
+from nfs.northfind.solve import horizontal_earth_rate_dph
 
 __all__ = ["LEVEL_UP", "gravity_and_biases", "level_heading",
            "level_two_position", "branch_heading"]
@@ -125,7 +125,7 @@ def level_two_position(theta_rad, rate_dph, up, latitude_deg: float,
     th = np.asarray(theta_rad, dtype=float)
     w = np.asarray(rate_dph, dtype=float)
     up = np.broadcast_to(np.asarray(up, dtype=float), th.shape[:-1] + (3,))
-    omega_h = _omega_h(latitude_deg)
+    omega_h = horizontal_earth_rate_dph(latitude_deg)
     theta_a = th[:, :1]
     sgn = np.where(np.abs(np.angle(np.exp(1j * (th - theta_a)))) < np.pi / 2, 1.0, -1.0)
     design = np.stack([sgn, np.ones_like(th)], axis=-1)

@@ -16,7 +16,8 @@ The mean rate over the dwell at position k is modelled as
         = cos e_k (X cos theta_k - Y sin theta_k) + Omega_v sin e_k + b,
 
 which is linear in (X, Y, b). Inside this module angles are in rad; the public functions
-take and return deg.
+take and return deg, except :func:`solve_xyb_stack` and :func:`distinct_angles`, shared with
+the run's north finding (:mod:`nfs.northfind.heading`), which take rad as their names say.
 """
 
 from __future__ import annotations
@@ -36,6 +37,9 @@ __all__ = [
     "wrap_deg_360",
     "wrap_deg_180",
     "distinct_angles",
+    "horizontal_earth_rate_dph",
+    "remove_vertical_rate",
+    "solve_xyb_stack",
 ]
 
 #: Two turntable angles closer than this [deg] (modulo 360) count as the same position.
@@ -59,8 +63,9 @@ def wrap_deg_180(angle_deg):
     return out if np.ndim(out) else float(out)
 
 
-def _omega_h(latitude_deg: float) -> float:
-    """Omega_h = Omega_ie cos L [deg/h]; NfsError at a pole, where psi is undefined."""
+def horizontal_earth_rate_dph(latitude_deg: float) -> float:
+    """Omega_h = Omega_ie cos L [deg/h], the horizontal Earth rate at latitude L [deg] that
+    every heading solver divides by; NfsError at a pole, where psi is undefined."""
     omega_h, _ = earth_rate_components_dph(latitude_deg)
     if not omega_h > 1e-9:
         raise NfsError(f"no horizontal Earth rate at latitude {latitude_deg} deg: "
@@ -68,8 +73,14 @@ def _omega_h(latitude_deg: float) -> float:
     return omega_h
 
 
-def _vertical_rate_removed(rate_dph, acc_x_g, latitude_deg: float):
-    """(w_k - Omega_ie sin L sin e_k, cos e_k) with sin e_k = f_x,k (NaN passes through)."""
+def remove_vertical_rate(rate_dph, acc_x_g, latitude_deg: float):
+    """The mean rates w_k [deg/h] without the vertical Earth rate that an axis lifted by e_k
+    sees, and cos e_k [1]: (w_k - Omega_ie sin L sin e_k, cos e_k), sin e_k = f_x,k, from the
+    x accelerometer's mean f_x,k [g] and the latitude L [deg] (NaN passes through).
+
+    The first step of :func:`tilt_correct`; the run's north finding stops here and levels
+    with both accelerometers (:mod:`nfs.northfind.level`).  NfsError when |f_x,k| > 1 g.
+    """
     sin_e = np.asarray(acc_x_g, dtype=float)
     if np.any(np.abs(sin_e) > 1.0):
         raise NfsError(f"|acc_x_g| must not exceed 1 g to give an elevation; got "
@@ -102,7 +113,7 @@ def tilt_correct(rate_dph, acc_x_g, latitude_deg: float):
         of :func:`solve_heading`); :func:`north_find` levels exactly with both
         accelerometers instead (:mod:`nfs.northfind.level`).
     """
-    rate_v, cos_e = _vertical_rate_removed(rate_dph, acc_x_g, latitude_deg)
+    rate_v, cos_e = remove_vertical_rate(rate_dph, acc_x_g, latitude_deg)
     return rate_v / cos_e
 
 
@@ -141,14 +152,31 @@ def distinct_angles(theta_rad: np.ndarray, tol_rad: float) -> np.ndarray:
     return out
 
 
-def _solve_stack(theta_rad, rate, cos_e=None, weights=None):
-    """Least squares of rate = cos_e (X cos theta - Y sin theta) + b for a stack of cycles.
+def solve_xyb_stack(theta_rad, rate_dph, cos_e=None, weights=None):
+    """Least squares of w_k = cos e_k (X cos theta_k - Y sin theta_k) + b for a stack of
+    cycles, all solved in one batched SVD (the linear model of this module's docstring).
 
-    All arrays are (n_cycles, n_positions) (weights may be (n_positions,)). Returns X, Y, b,
-    residual RMS, each (n_cycles,). Raises NfsError when a cycle's design is rank deficient.
+    Parameters
+    ----------
+    theta_rad : array_like
+        Turntable angles theta_k [rad] (rad, unlike the public functions in deg: the caller
+        has them in rad already), (n_cycles, n_positions).
+    rate_dph : array_like
+        Mean rates w_k [deg/h] with the vertical Earth rate removed
+        (:func:`remove_vertical_rate`), same shape.
+    cos_e : array_like, optional
+        cos e_k [1], same shape (None: level, 1 everywhere).
+    weights : array_like, optional
+        Non-negative weights of the positions [1], same shape or (n_positions,).
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        X, Y, b and the residual RMS [deg/h], each (n_cycles,).  NfsError when a cycle's
+        design [cos theta, -sin theta, 1] is rank deficient.
     """
     theta_rad = np.asarray(theta_rad, dtype=float)
-    rate = np.asarray(rate, dtype=float)
+    rate = np.asarray(rate_dph, dtype=float)
     c = np.ones_like(theta_rad) if cos_e is None else np.asarray(cos_e, dtype=float)
     design = np.stack([c * np.cos(theta_rad), -c * np.sin(theta_rad),
                        np.ones_like(theta_rad)], axis=-1)
@@ -184,7 +212,7 @@ def _solve_two_position(theta_a, theta_rad, rate, cos_e, weights, latitude_deg,
         raise NfsError("two positions 180 deg apart observe only Omega_h cos(psi + theta_a): "
                        "pass latitude_deg (for the known Omega_h) or use at least 3 distinct "
                        "positions")
-    omega_h = _omega_h(latitude_deg)
+    omega_h = horizontal_earth_rate_dph(latitude_deg)
     sgn = np.where(np.abs(np.angle(np.exp(1j * (theta_rad - theta_a)))) < np.pi / 2, 1.0, -1.0)
     c = np.ones_like(theta_rad) if cos_e is None else cos_e
     sw = np.ones_like(theta_rad) if weights is None else np.sqrt(np.asarray(weights, float))
@@ -270,7 +298,7 @@ def solve_heading(theta_deg, rate_dph, *, weights=None, cos_elevation=None,
     distinct = distinct_angles(used, math.radians(angle_tol_deg))
     n = theta.size
     if len(distinct) >= 3:
-        x, y, b, rms = (float(v[0]) for v in _solve_stack(theta[None], rate[None],
+        x, y, b, rms = (float(v[0]) for v in solve_xyb_stack(theta[None], rate[None],
                                                            None if c is None else c[None],
                                                            None if w is None else w[None]))
         psi = math.atan2(y, x)

@@ -109,7 +109,7 @@ class HeadingTable:
     errors_deg: dict | None = field(default=None, compare=False)
     """Row name -> ``errors[column][start-up]``: the heading errors [deg] of the cycles
     behind each cell (set by :meth:`with_intervals`; kept in the JSON so that a later table
-    can be compared with this one start-up by start-up, :mod:`nfs.report.baseline`)."""
+    can be compared with this one start-up by start-up, :mod:`nfs.scoring.baseline`)."""
     provenance: dict | None = field(default=None, compare=False)
     """What produced the table: versions, platform, scenario and instrument hashes, seeds
     (:func:`nfs.io.provenance.output_provenance`); None when not recorded."""

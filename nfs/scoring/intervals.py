@@ -189,12 +189,12 @@ class ClusterBootstrap:
     @property
     def row_means(self) -> np.ndarray:
         """Mean of each row's finite cells, shape (n_rows,)."""
-        return _nanmean(self.cells, axis=1)
+        return finite_mean(self.cells, axis=1)
 
     @property
     def row_replicates(self) -> np.ndarray:
         """Replicates of each row mean, shape (n_rows, n_boot)."""
-        return _nanmean(self.cell_replicates, axis=1)
+        return finite_mean(self.cell_replicates, axis=1)
 
     def cell_intervals(self) -> np.ndarray:
         """Bias-corrected intervals of the cells, shape (n_rows, n_columns, 2)."""
@@ -223,7 +223,10 @@ class ClusterBootstrap:
         return d, lo, hi, bc_pvalue(reps, d)
 
 
-def _nanmean(a: np.ndarray, axis: int) -> np.ndarray:
+def finite_mean(a: np.ndarray, axis: int) -> np.ndarray:
+    """Mean of the finite entries of ``a`` along ``axis``, in the unit of ``a`` (an RMSE
+    [deg]); NaN where a slice has none (a cell or replicate that did not run), without
+    NumPy's warning for an all-NaN slice."""
     a = np.asarray(a, dtype=float)
     ok = np.isfinite(a)
     n = ok.sum(axis=axis)
@@ -277,9 +280,9 @@ def cluster_bootstrap(errors, *, variants=None, n_boot: int = DEFAULT_N_BOOT,
     cells, reps = _bootstrap_tables(tables, n_boot, np.random.default_rng(random_state))
     compare = None
     if owner:
-        compare = _nanmean(reps[:n_rows], axis=1)
+        compare = finite_mean(reps[:n_rows], axis=1)
         pick = np.random.default_rng([random_state, 1])
-        means = _nanmean(reps, axis=1)
+        means = finite_mean(reps, axis=1)
         for i in range(n_rows):
             idx = np.array([n_rows + k for k, o in enumerate(owner) if o == i])
             if idx.size:

@@ -1,6 +1,6 @@
 """A heading table read back from its JSON (``nfs table --json``, ``heading_rmse.json``).
 
-What a later comparison needs (:mod:`nfs.report.baseline`): the start temperatures, each
+What a later comparison needs (:mod:`nfs.scoring.baseline`): the start temperatures, each
 row's RMSE, the cycle errors behind each cell and the provenance, checked on reading: a file
 that is not such a table is one located error (file and key), never a traceback.
 """

@@ -322,7 +322,7 @@ def table_provenance(scenario, settings: CompensationSettings | None = None, *,
     behind its numbers (:func:`~nfs.io.provenance.output_provenance`).
 
     ``test_start_ups`` is the seed of the test start-ups (two tables with the same one, and
-    as many start-ups, are compared start-up by start-up: :mod:`nfs.report.baseline`).
+    as many start-ups, are compared start-up by start-up: :mod:`nfs.scoring.baseline`).
     """
     s = settings or scenario.compensation or CompensationSettings()
     seeds = {"test_start_ups": scenario.seed}

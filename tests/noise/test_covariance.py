@@ -22,7 +22,7 @@ from nfs.noise import (
     whiten,
     window_mean_covariance,
 )
-from nfs.noise.generators import _bi_poles
+from nfs.noise.generators import bias_instability_poles
 
 
 def _sample_covariance(n: int, fs: float, arw: float, b: float, k: float,
@@ -32,7 +32,7 @@ def _sample_covariance(n: int, fs: float, arw: float, b: float, k: float,
     (K/60)^2 / fs (min(i, j) + 1)."""
     i = np.arange(n)
     cov = (60.0 * arw) ** 2 * fs * np.eye(n)
-    times_s, q2_per_b2 = _bi_poles(fs, t_c)
+    times_s, q2_per_b2 = bias_instability_poles(fs, t_c)
     for t_k in times_s:
         phi = math.exp(-1.0 / (fs * t_k))
         cov += b * b * q2_per_b2 * phi ** np.abs(i[:, None] - i[None, :])

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from nfs.errors import NfsError
-from nfs.report.baseline import compare_tables
+from nfs.scoring.baseline import compare_tables
 from nfs.scoring.heading_table import HeadingTable, TableRow
 from nfs.scoring.tablefile import TableData, read_table
 
