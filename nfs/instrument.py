@@ -9,6 +9,7 @@ checks every key, naming the file and the dotted key of any fault.
 from __future__ import annotations
 
 import functools
+import tomllib
 from dataclasses import dataclass, replace
 from importlib import resources
 from pathlib import Path
@@ -220,6 +221,12 @@ class Instrument:
     def to_toml(self) -> str:
         """TOML text that :func:`load_instrument` reads back to an equal instrument."""
         return dumps_toml(self.to_dict()) + "\n"
+
+    @classmethod
+    def from_toml_text(cls, text: str, file: Any = None) -> "Instrument":
+        """The instrument of TOML ``text`` (what :meth:`to_toml` wrote), checked as a file
+        is (:func:`instrument_from_dict`); ``file`` names it in messages."""
+        return instrument_from_dict(tomllib.loads(text), file)
 
 
 _TOP_KEYS = ("name", "description", "t_ref_c", "thermal", "coil", "gyro", "accelerometers",

@@ -21,7 +21,7 @@ __all__ = ["cmd_fit", "cmd_compare", "cmd_diagnose", "read_finding"]
 
 def read_finding(path: str, option: str = "--diagnosis"):
     """The finding an earlier ``nfs diagnose --json`` wrote (:class:`nfs.rivals.Finding`)."""
-    from ..records import RecordError
+    from ..io.records import RecordError
     from ..rivals import Finding
     try:
         data = json.loads(Path(path).read_text(encoding="utf-8"))

@@ -29,7 +29,7 @@ __all__ = ["ChannelSpec", "CHANNELS", "CHANNEL_BY_KEY", "COMPARISON_STAGES", "St
            "position_test", "channel_run"]
 
 
-#: A trace kept for the figures and left out of the JSON record (:mod:`nfs.records`).
+#: A trace kept for the figures and left out of the JSON record (:mod:`nfs.io.records`).
 TRACE = {"record": False}
 
 

@@ -58,7 +58,7 @@ from ..experiment import simulate_run
 from ..instrument import Instrument
 from ..run import Run
 from ..northfind import heading_rmse, north_find
-from ..records import RecordError, encode, from_record
+from ..io.records import RecordError, encode, from_record
 from .channel_residual import CHANNELS, ChannelRun, ChannelSpec, StageBounds, channel_run
 from .channel_summary import POSITION_RATIO, ChannelSummary, format_sig, summarise
 from .heading import (HEADING_ALPHA, HeadingComparison, RunHeading, heading_comparison,
@@ -137,7 +137,7 @@ class Comparison:
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready form: the statistics and sentences for a reader (NaN as null), and
-        under ``record`` every field for :meth:`from_dict` (:mod:`nfs.records`; no traces:
+        under ``record`` every field for :meth:`from_dict` (:mod:`nfs.io.records`; no traces:
         the runs and the model reproduce them).  Schema :data:`COMPARISON_SCHEMA`."""
         return {"schema": COMPARISON_SCHEMA,
             "model": self.model_name,

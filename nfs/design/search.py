@@ -28,7 +28,7 @@ import numpy as np
 from ..errors import NfsError
 from ..conditions import RunConditions
 from ..ranges import TEMPERATURE_RANGE_C
-from ..records import RecordError, encode, from_record
+from ..io.records import RecordError, encode, from_record
 from ..run import Run
 from ..rivals.noise_level import scaled
 from ..rivals.predict import PREDICT_STEP_S, noise_sigma
@@ -129,7 +129,7 @@ class Design:
     def to_dict(self) -> dict:
         """JSON-ready form (``design.json``): the run, the separations by pair and the
         verdict for a reader, and under ``record`` every field for :meth:`from_dict`
-        (:mod:`nfs.records`; the rivals' predictions for the figure are left out).  Schema
+        (:mod:`nfs.io.records`; the rivals' predictions for the figure are left out).  Schema
         :data:`DESIGN_SCHEMA`."""
         return {
             "schema": DESIGN_SCHEMA,

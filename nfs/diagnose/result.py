@@ -6,7 +6,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from ..docfields import document_fields
-from ..records import encode, from_record, to_record
+from ..io.records import encode, from_record, to_record
 from ..fit.adequacy import ThermalAdequacy
 from .candidates import Candidate
 from .drift_structure import DriftStructure
@@ -81,7 +81,7 @@ def label_of(effect: str, target: str | None) -> str:
 class CandidateScore:
     """What one candidate explains."""
 
-    #: Properties written beside the fields (:mod:`nfs.records`).
+    #: Properties written beside the fields (:mod:`nfs.io.records`).
     DERIVED = ("cv_drop",)
 
     effect: str
@@ -142,7 +142,7 @@ class CandidateScore:
         return 1.0 - self.cv_rms_after / self.cv_rms_before
 
     def to_dict(self) -> dict[str, Any]:
-        """Every field, and the CV drop, as JSON-ready data (:mod:`nfs.records`)."""
+        """Every field, and the CV drop, as JSON-ready data (:mod:`nfs.io.records`)."""
         return encode(self)
 
 
@@ -151,7 +151,7 @@ class CandidateScore:
 class Diagnosis:
     """The ranked candidates and what is left unexplained."""
 
-    #: Properties written beside the fields (:mod:`nfs.records`): the one answer in words.
+    #: Properties written beside the fields (:mod:`nfs.io.records`): the one answer in words.
     DERIVED = ("answer", "verdict")
 
     ranking: tuple[CandidateScore, ...]
@@ -273,7 +273,7 @@ class Diagnosis:
 
     def to_dict(self) -> dict[str, Any]:
         """Every field as JSON-ready data, with the answer and verdict beside them
-        (:mod:`nfs.records`; schema :data:`DIAGNOSIS_SCHEMA`)."""
+        (:mod:`nfs.io.records`; schema :data:`DIAGNOSIS_SCHEMA`)."""
         return to_record(self, DIAGNOSIS_SCHEMA)
 
     @classmethod

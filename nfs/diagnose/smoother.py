@@ -9,7 +9,7 @@ the model's network by :mod:`thermal.estimate` (Kalman filter and Rauch-Tung-Str
 smoother; the network's error is an unmodelled random-walk heat per node whose scale q is
 the maximum-likelihood estimate over all runs).
 
-Each thermometer of the instrument is a :class:`thermal.estimate.LinearSensor`: its node
+Each thermometer of the instrument is a :class:`thermal.sensors.LinearSensor`: its node
 weights normalised (:meth:`nfs.sensors.ThermometerModel.sensed`), its lag followed by the
 ``thermometer_lag`` effects on it (lags in series, as :func:`nfs.sensors.thermometer_reading`
 applies them), its offset, and a white error of variance noise_c^2 + quantum_c^2 / 12 (the

@@ -77,7 +77,7 @@ class AlternativeScore:
                                           metadata={"record": False})
     """The fitted alternative instrument (the model's parameters moved with it); an
     alternative not refined holds its start values, which need not be a valid instrument, so
-    it is not written to JSON (None when read back: :mod:`nfs.records`)."""
+    it is not written to JSON (None when read back: :mod:`nfs.io.records`)."""
     cv_sse_by_run: tuple[float, ...] = ()
     """Held-out squared residual summed over each run's knots, with the alternative [K^2]
     (the pairs :func:`better_run_by_run` tests)."""

@@ -13,7 +13,7 @@ import numpy as np
 from ..docfields import document_fields
 from ..instrument import Instrument
 from ..io.atomic import atomic_write_text
-from ..records import from_record, record, to_record
+from ..io.records import from_record, record, to_record
 from .noise_fit import GyroNoiseEstimate
 from .soak import SoakAnchor
 from .stage import StageReport
@@ -95,7 +95,7 @@ class FitResult:
         return {k: s.n_residuals for k, s in self.stages.items()}
 
     def to_dict(self) -> dict[str, Any]:
-        """Every field as JSON-ready data (:mod:`nfs.records`; the instruments as TOML)."""
+        """Every field as JSON-ready data (:mod:`nfs.io.records`; the instruments as TOML)."""
         return to_record(self, FIT_SCHEMA)
 
     @classmethod

@@ -36,7 +36,7 @@ from typing import Any, Sequence
 
 from ..docfields import document_fields
 from ..instrument import Instrument
-from ..records import record
+from ..io.records import record
 from ..run import Run
 from .adequacy import ThermalAdequacy, thermal_adequacy
 from .alternative_score import BEATS_ALPHA, CV_DROP, better_run_by_run

@@ -48,7 +48,7 @@ from ..run import Run
 from .evidence import Evidence, evidence
 from .predict import CHANNELS
 from .replay import replay_runs_taken
-from ..records import from_record, to_record
+from ..io.records import from_record, to_record
 from .models import MODEL, RATE_ALTERNATIVE, Rival, rival_models
 
 __all__ = ["Decision", "Settlement", "decide", "decision_rates", "settle_tie", "settlement",
@@ -77,7 +77,7 @@ def decision_rates(s: float, threshold: float = LAMBDA_NAME,
 class Decision:
     """What the runs say between two rivals."""
 
-    #: Properties written beside the fields (:mod:`nfs.records`).
+    #: Properties written beside the fields (:mod:`nfs.io.records`).
     DERIVED = ("winner", "separation_sigma", "text")
 
     a: str
@@ -225,7 +225,7 @@ def _interval_text(r: Rival, interval: dict[str, tuple[float, float]]) -> str:
 class Settlement:
     """A diagnosis's tie put to the runs: one answer."""
 
-    #: Properties written beside the fields (:mod:`nfs.records`).
+    #: Properties written beside the fields (:mod:`nfs.io.records`).
     DERIVED = ("standing_labels",)
 
     answer: Answer
@@ -254,7 +254,7 @@ class Settlement:
 
     def to_dict(self) -> dict:
         """Every field as JSON-ready data, the rivals' fitted instruments as TOML
-        (:mod:`nfs.records`; schema :data:`SETTLEMENT_SCHEMA`)."""
+        (:mod:`nfs.io.records`; schema :data:`SETTLEMENT_SCHEMA`)."""
         return to_record(self, SETTLEMENT_SCHEMA)
 
     @classmethod

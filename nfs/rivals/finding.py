@@ -15,7 +15,7 @@ from typing import Any
 
 from ..diagnose.result import Answer, Diagnosis
 from ..errors import NfsError
-from ..records import from_record, to_record
+from ..io.records import from_record, to_record
 from .decide import Settlement
 from .models import MODEL
 
@@ -29,7 +29,7 @@ FINDING_SCHEMA = "nfs-finding/1"
 class Finding:
     """A diagnosis with the settlement of its tie (None: not put to the runs)."""
 
-    #: Properties written beside the fields (:mod:`nfs.records`): the one answer in words.
+    #: Properties written beside the fields (:mod:`nfs.io.records`): the one answer in words.
     DERIVED = ("answer", "verdict", "tie")
 
     diagnosis: Diagnosis
@@ -64,7 +64,7 @@ class Finding:
         return self.diagnosis.finding(effect, target)
 
     def to_dict(self) -> dict[str, Any]:
-        """Every field as JSON-ready data, the one answer beside them (:mod:`nfs.records`;
+        """Every field as JSON-ready data, the one answer beside them (:mod:`nfs.io.records`;
         schema :data:`FINDING_SCHEMA`)."""
         return to_record(self, FINDING_SCHEMA)
 

@@ -9,7 +9,7 @@ from typing import Any
 from ..docfields import document_fields
 from ..fit.fit_result import FitResult
 from ..instrument import Instrument
-from ..records import from_record, to_record
+from ..io.records import from_record, to_record
 
 __all__ = ["Applied", "APPLIED_SCHEMA"]
 
@@ -58,7 +58,7 @@ class Applied:
         return "\n".join(lines)
 
     def to_dict(self) -> dict[str, Any]:
-        """Every field as JSON-ready data (:mod:`nfs.records`; schema
+        """Every field as JSON-ready data (:mod:`nfs.io.records`; schema
         :data:`APPLIED_SCHEMA`)."""
         return to_record(self, APPLIED_SCHEMA)
 

@@ -3,7 +3,7 @@
 The measurement side's counterpart of :class:`nfs.ModelChain`.  A :class:`UnitChain` holds
 one unit's runs and the model being worked on; each step returns a frozen result that the
 next step takes as it is, and that writes and reads itself as JSON (``to_dict`` /
-``from_dict``, :mod:`nfs.records`)::
+``from_dict``, :mod:`nfs.io.records`)::
 
     import nfs
     chain = nfs.UnitChain("default", "runs/")        # a model (name, file) and the runs

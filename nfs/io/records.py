@@ -10,7 +10,8 @@ type annotations, so the JSON schema is the class itself and nothing parses pros
 - NumPy arrays as nested lists (read back as float arrays);
 - tuples and lists as lists; a dict with non-string keys (a start temperature, a pair of
   rival indices) with the key written as text (``"20.0"``, ``"0,1"``);
-- an :class:`~nfs.instrument.Instrument` as its TOML text (the file ``nfs fit`` writes);
+- an object with ``to_toml()`` (an :class:`~nfs.instrument.Instrument`) as its TOML text (the
+  file ``nfs fit`` writes), read back by its class's ``from_toml_text``;
 - a field marked ``field(metadata={"record": False})`` (a trace kept for a figure, which
   the inputs reproduce) is left out and read back as its default (an empty array);
 - a nested result as an object, with the properties its class lists in ``DERIVED`` (an
@@ -26,7 +27,6 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import tomllib
 import types
 import typing
 import warnings
@@ -34,9 +34,8 @@ from typing import Any, Union
 
 import numpy as np
 
-from .errors import NfsError
-from .instrument import Instrument, instrument_from_dict
-from .ranges import RangeWarning
+from ..errors import NfsError
+from ..ranges import RangeWarning
 
 __all__ = ["RECORDS", "record", "encode", "decode", "to_record", "from_record", "RecordError"]
 
@@ -87,7 +86,7 @@ def encode(value: Any, tag: bool = False) -> Any:
         return bool(value)
     if isinstance(value, (float, np.floating)):
         return _float(value)
-    if isinstance(value, Instrument):
+    if hasattr(value, "to_toml") and hasattr(type(value), "from_toml_text"):
         return {"toml": value.to_toml()}
     if isinstance(value, np.ndarray):
         if value.dtype.kind in "fc":
@@ -151,13 +150,13 @@ def _decode(data: Any, hint: Any, where: str) -> Any:
         return data
     if hint is np.ndarray:
         return np.asarray(_floats(data), dtype=float)
-    if hint is Instrument:
+    if isinstance(hint, type) and hasattr(hint, "from_toml_text"):
         with warnings.catch_warnings():
             # the result that wrote this instrument reported its unusual values when it was
             # made (a fit's departures from the typical ranges are in its own record); read
             # back, it is not a user's input: the hard limits still apply, the notes do not
             warnings.simplefilter("ignore", RangeWarning)
-            return instrument_from_dict(tomllib.loads(data["toml"]), where)
+            return hint.from_toml_text(data["toml"], where)
     if origin is tuple:
         if len(args) == 2 and args[1] is Ellipsis:
             return tuple(_decode(x, args[0], f"{where}[{i}]") for i, x in enumerate(data))
