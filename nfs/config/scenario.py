@@ -53,7 +53,7 @@ from typing import Any
 import numpy as np
 
 from ..chamber import check_temperature, parse_program
-from ..compensate.methods import get_method
+from ..compensate.registry import get_method
 from ..denoise.wavelet import wavelet_denoise
 from ..constants import POSITION_TOL_DEG
 from ..effects import check_geometry, load_effects_file

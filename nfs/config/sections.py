@@ -7,7 +7,7 @@ import dataclasses
 from typing import Any
 
 from ..compensate.features import FeatureError, resolve_features
-from ..compensate.methods import get_method
+from ..compensate.registry import get_method
 from ..compensate.modes import FeatureModeError, check_features_mode
 from ..compensate.settings import PROTOCOLS, CompensationSettings
 from ..errors import NfsError, ScenarioError
