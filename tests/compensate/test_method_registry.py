@@ -157,9 +157,11 @@ def test_a_users_ridge_regression_is_a_row_of_the_table(tmp_path, own, scenario_
     # on two worker processes: the methods, registered here only, are sent to them
     settings = dataclasses.replace(CompensationSettings(), methods=("ls", "ridge", "ols"),
                                    train_seed=9, test_repeats=1, n_jobs=2)
-    result = nfs.ModelChain(scenario, settings).run_model()
+    chain = nfs.ModelChain(scenario, settings)
+    result = chain.run_model()
     names = [r.method for r in result.table.rows]
     assert names == ["before", "LS", "Ridge", "OLS", "stable", "floor"]
+    assert chain.table_rows() == tuple(names)
     assert "\n| Ridge | " in result.markdown and "\n| OLS | " in result.markdown
     ridge = result.table.row("Ridge")
     assert ridge.group == "other methods" and result.table.row("OLS").group == "least squares"
