@@ -1,4 +1,5 @@
-"""The registry of compensation methods: the built-in rows, a user's own method, the errors.
+"""The registry of compensation methods: the built-in rows, a user's own method, the errors,
+and the user guide's snippet (docs/compensation.md, "Your own method"), run as written.
 
 Oracles: the rows of the seed papers in the order of the stored tables (README.md's default
 table); a user's ridge regression is a row of the table made through the public API
@@ -178,6 +179,22 @@ def test_a_users_ridge_regression_is_a_row_of_the_table(tmp_path, own, scenario_
     np.testing.assert_allclose(ridge.rmse_deg, result.table.row("OLS").rmse_deg, rtol=1e-6)
     assert ridge.rmse_deg != result.table.row("LS").rmse_deg     # another model than cubic LS
     assert isinstance(study.results["Ridge"].compensator.estimator, Pipeline)
+
+
+def test_the_user_guides_own_method_snippet_runs(tmp_path, monkeypatch, capsys):
+    text = (ROOT / "docs" / "compensation.md").read_text(encoding="utf-8")
+    section = re.search(r"^## Your own method$(.*?)^## ", text, flags=re.M | re.S).group(1)
+    code = re.search(r"^```python\n(.*?)^```$", section, flags=re.M | re.S).group(1)
+    monkeypatch.chdir(tmp_path)
+    try:
+        exec(compile(code, "docs/compensation.md", "exec"), {"__name__": "__main__"})
+    finally:
+        if "ridge" in available_methods():
+            unregister_method("ridge")
+    out = capsys.readouterr().out
+    rows = [line.split("|")[1].strip() for line in out.splitlines() if line.startswith("| ")]
+    assert rows == ["method", "before", "LS", "Ridge", "stable", "floor"]
+    assert (tmp_path / "ridge.npz").is_file()
 
 
 def test_a_plug_in_registers_its_methods_on_the_first_look_up_that_misses(monkeypatch):
