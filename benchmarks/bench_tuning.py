@@ -45,7 +45,7 @@ import numpy as np
 from sklearn.base import clone
 
 from nfs.compensate.dataset import drift_dataset
-from nfs.compensate.methods import get_method
+from nfs.compensate import get_method
 from nfs.learners.tuners import TUNERS, TuneResult, minimize
 from nfs.experiment import simulate_run
 from nfs.config.scenario import load_scenario

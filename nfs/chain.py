@@ -27,6 +27,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable
 
+from .compensate import get_method
 from .compensate.settings import CompensationSettings
 from .config.scenario import load_scenario
 from .docfields import document_fields
@@ -39,7 +40,7 @@ from .scoring.heading_table import HeadingTable
 from .studies.cycle_study import run_cycle_study, run_runs_study
 from .studies.parameter_study import run_parameter_study
 from .studies.scenario_runs import (ScenarioResult, run_scenario, stage_errors_by_temperature,
-                                    uncompensated_table)
+                                    stage_names, uncompensated_table)
 from .studies.startup_study import run_study, table_provenance, test_scenario
 
 __all__ = ["ModelChain", "ModelChainResult"]
@@ -131,6 +132,21 @@ class ModelChain:
         if self.settings is not None:
             return self.settings
         return self.scenario.compensation or CompensationSettings()
+
+    def table_rows(self) -> tuple[str, ...] | None:
+        """The rows of the heading table :meth:`run_model` makes, in its order, known before
+        any work (what ``nfs table --baseline`` checks a baseline against): the
+        uncompensated start-up stage, a row per compensation method (its row label in the
+        method registry), the later stages (``stable``, or ``held`` and ``ramping`` under a
+        chamber program that moves) and the white-noise ``floor``; None when the chain
+        makes a drift or parameter table instead (protocol ``cycles``, ``runs`` or
+        ``parameters``)."""
+        s = self._settings()
+        if self.compensate and s.protocol != "start-ups":
+            return None
+        first, *later = stage_names(test_scenario(self.scenario, s))
+        methods = [get_method(m).name for m in s.methods] if self.compensate else []
+        return (first, *methods, *later, "floor")
 
     def run_model(self) -> ModelChainResult:
         """Run every stage; the result is also kept in :attr:`results`."""

@@ -4,7 +4,8 @@ and keeps every intermediate.
 Oracles: the table's ``before`` cell is the RMSE of the start-up headings the result keeps
 (pooled over the runs at that temperature, recomputed here from the kept north-finding
 results); a written table reads back as the table; the chain's table is the table the
-``nfs table`` command prints for the same scenario (the CLI calls the chain).
+``nfs table`` command prints for the same scenario (the CLI calls the chain), and its rows
+the ones the chain names before it runs.
 """
 
 import numpy as np
@@ -53,6 +54,11 @@ def test_before_row_is_the_rmse_of_the_kept_headings(result):
             for k in runs.runs_at(i)])
         assert errors.size and before.rmse_deg[i] == pytest.approx(float(np.sqrt(np.mean(np.square(errors)))),
                                                    rel=1e-12)
+
+
+def test_the_chain_names_its_rows_before_it_runs(result, scenario_path):
+    chain = nfs.ModelChain.from_scenario(scenario_path, compensate=False)
+    assert chain.table_rows() == tuple(r.method for r in result.table.rows)
 
 
 def test_intermediates_are_kept(result):

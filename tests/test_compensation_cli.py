@@ -5,6 +5,9 @@ import json
 import numpy as np
 import pytest
 
+import nfs
+from nfs.compensate import get_method
+
 
 COMPENSATION = """[compensation]
 methods = ["ls", "ssa-svr"]
@@ -219,3 +222,33 @@ def test_before_row_is_the_same_start_ups_with_and_without_compensation(tmp_path
         doc = json.loads((tmp_path / f"t{len(extra)}.json").read_text())
         rows.append(next(r for r in doc["rows"] if r["method"] == "before"))
     assert rows[0]["rmse_deg"] == rows[1]["rmse_deg"]
+
+
+PROGRAM = """[chamber]
+program = [{ hold_s = 600.0 }, { ramp_to_c = 30.0, rate_c_per_min = 0.5 }, { hold_s = 6000.0 }]
+"""
+
+
+def test_the_baseline_is_checked_against_the_chains_rows(tmp_path, cli, scenario_text):
+    # The rows the command checks a baseline against are those of the table the chain
+    # makes: under a chamber program that moves the chamber, before, held, ramping and
+    # floor (no stable stage), so a baseline of the held stage alone is compared, and the
+    # printed table holds the chain's rows in the chain's order.
+    scen = tmp_path / "s.toml"
+    scen.write_text(scenario_text("prog", 5, (20.0,), 6600.0, extra=PROGRAM))
+    rows = nfs.ModelChain.from_scenario(scen, compensate=False).table_rows()
+    assert rows == ("before", "held", "ramping", "floor")
+    base = tmp_path / "held.json"
+    base.write_text(json.dumps({"temperatures_c": [20.0],
+                                "rows": [{"method": "held", "rmse_deg": [0.0066]}]}))
+    code, out, err = cli("table", scen, "-o", tmp_path / "o", "-q", "--no-compensation",
+                         "--baseline", base, "--tolerance", "10")
+    assert code == 0, err
+    printed = [line.split("|")[1].strip() for line in out.split("\n\n")[0].splitlines()[2:]]
+    assert tuple(printed) == rows
+    comp = json.loads((tmp_path / "o" / "baseline_comparison.json").read_text())
+    assert comp["methods"] == ["held"]
+    # a table with compensation names each method's row where the table will have it
+    methods = [get_method(m).name for m in nfs.CompensationSettings().methods]
+    assert nfs.ModelChain.from_scenario(scen).table_rows() == (
+        "before", *methods, "held", "ramping", "floor")

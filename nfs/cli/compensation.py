@@ -25,24 +25,24 @@ def cmd_table(args) -> int:
     scenario = with_overrides(load_scenario(args.scenario), args)
     output_file(args.json, "--json", args.overwrite)
     settings = _table_settings(args, scenario.compensation or CompensationSettings())
-    baseline = _baseline(args, scenario, settings)
+    chain = ModelChain(scenario, settings, compensate=not args.no_compensation)
+    baseline = _baseline(args, chain)
     folder = output_folder(args, "table")
-    progress = Progress("simulating" if args.no_compensation else "", args.quiet)
-    result = ModelChain(scenario, settings, compensate=not args.no_compensation,
-                        progress=progress).run_model()
-    provenance, table, text = result.provenance, result.table, result.markdown
+    chain.progress = Progress("simulating" if args.no_compensation else "", args.quiet)
+    # what is printed and written is what the chain's result holds
+    result = chain.run_model()
     paths = result.write(args.output, json_path=args.json)
     comparison = None
     if baseline is not None:
         from ..report.baseline import baseline_comparison_markdown, write_baseline_comparison
         from ..scoring.baseline import compare_tables
-        comparison = compare_tables(table, baseline, tolerance=args.tolerance)
+        comparison = compare_tables(result.table, baseline, tolerance=args.tolerance)
         paths += write_baseline_comparison(comparison, args.output)
-    inputs = {"scenario": provenance["scenario"], "compensation": not args.no_compensation}
+    inputs = {"scenario": result.provenance["scenario"], "compensation": result.compensated}
     if baseline is not None:
         inputs["baseline"] = {"file": str(args.baseline), "sha256": args.baseline_sha256}
     finish(folder, args, inputs)
-    print(text, end="")
+    print(result.markdown, end="")
     if comparison is not None:
         print(f"\n## Against the baseline {args.baseline}\n\n"
               + baseline_comparison_markdown(comparison), end="")
@@ -67,17 +67,15 @@ def _table_settings(args, settings):
     return settings
 
 
-def _baseline(args, scenario, settings):
-    """The --baseline table, read and checked against the table to come before any work
-    (None without --baseline)."""
+def _baseline(args, chain):
+    """The --baseline table, read and checked before any work against the rows and start
+    temperatures of the table the chain will make (None without --baseline)."""
     if args.baseline is None:
         if args.tolerance is not None:
             raise NfsError("--tolerance needs --baseline OLD.json")
         return None
-    from ..compensate import get_method
     from ..io.provenance import sha256_of_file
     from ..scoring.baseline import TOLERANCE
-    from ..scoring.heading_table import REFERENCE_ROWS
     from ..scoring.tablefile import check_common, read_table
     if args.tolerance is None:
         args.tolerance = TOLERANCE
@@ -87,14 +85,12 @@ def _baseline(args, scenario, settings):
     baseline = read_table(args.baseline, "--baseline")
     # hashed now: the file may be the --json this run replaces
     args.baseline_sha256 = sha256_of_file(args.baseline)
-    methods = list(REFERENCE_ROWS)
-    if not args.no_compensation:
-        if settings.protocol != "start-ups":
-            raise NfsError(f"--baseline compares heading tables; scenario '{scenario.name}' "
-                           f"has compensation.protocol = \"{settings.protocol}\", which writes "
-                           "another table (or add --no-compensation)")
-        methods += [get_method(m).name for m in settings.methods]
-    check_common(baseline, scenario.start_temperatures_c, methods)
+    rows = chain.table_rows()
+    if rows is None:
+        raise NfsError(f"--baseline compares heading tables; scenario '{chain.scenario.name}' "
+                       f"has compensation.protocol = \"{chain.settings.protocol}\", which "
+                       "writes another table (or add --no-compensation)")
+    check_common(baseline, chain.scenario.start_temperatures_c, rows)
     return baseline
 
 

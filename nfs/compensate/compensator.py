@@ -24,15 +24,16 @@ from ..run import Run
 from ..io.provenance import library_versions, runs_provenance
 from .dataset import DriftDataset, drift_dataset
 from .features import compute_features
-from .methods import get_method
-from .model_file import (FORMAT, former_modules, model_file_kind, read_model_file,
-                         write_model_file)
+from .model_file import (FORMAT, ModelFileError, former_modules, model_file_kind,
+                         read_model_file, write_model_file)
 from .modes import (
     DEFAULT_FEATURE_MODE,
     FeatureModeError,
     check_features_mode,
     horizon_index,
 )
+from .catalog import MethodSpec
+from . import get_method  # the package registers the seed papers' methods first
 
 __all__ = ["DriftCompensator", "PredictionPlan", "prediction_plan", "train_compensator",
            "load_compensator", "FORMAT", "PICKLE_FORMAT"]
@@ -224,11 +225,18 @@ class DriftCompensator:
 
     def save(self, path: str | Path) -> Path:
         """Write the compensator as a model file (:data:`FORMAT`, e.g. ``model.npz``),
-        atomically; loading it runs no code (:mod:`~nfs.compensate.model_file`)."""
+        atomically; loading it runs no code (:mod:`~nfs.compensate.model_file`).
+        ModelFileError, in one line naming the method and the class, when the estimator
+        holds a class a model file may not hold (a registered method's own classes it may,
+        when the method lists them in ``model_classes``)."""
         header = {name: getattr(self, name) for name in _HEADER_FIELDS}
         header["feature_names"] = list(self.feature_names)
         header["trained_on"] = list(self.trained_on)
-        return write_model_file(path, header, self.estimator)
+        try:
+            return write_model_file(path, header, self.estimator)
+        except ModelFileError as exc:    # one line that names the method it cannot save
+            raise ModelFileError(f"method '{self.method}': {exc.message}",
+                                 file=exc.file) from None
 
 
 def load_compensator(path: str | Path, *, trust_pickle: bool = False) -> DriftCompensator:
@@ -289,12 +297,13 @@ def _load_pickle(path: Path) -> DriftCompensator:
                                for f in fields(DriftCompensator)})
 
 
-def train_compensator(method: str, runs: Sequence[Run] | DriftDataset, *,
+def train_compensator(method: str | MethodSpec, runs: Sequence[Run] | DriftDataset, *,
                       features="seed004", budget: int = 40, random_state: int = 0,
                       n_jobs: int | None = None, decimate_s: float = 30.0,
                       cutoff_period_s: float = 512.0, rate_window_s: float | None = None,
                       features_mode: str | None = None) -> DriftCompensator:
-    """Train a compensator of ``method`` (a key or name of :data:`~nfs.compensate.methods.METHODS`).
+    """Train a compensator of ``method`` (a key or name of a registered method,
+    :data:`~nfs.compensate.registry.METHODS`).
 
     Tuned methods search their hyperparameters with ``budget`` evaluations of a validation
     error that leaves one start temperature out (one run out when all share one T0;
@@ -302,8 +311,9 @@ def train_compensator(method: str, runs: Sequence[Run] | DriftDataset, *,
 
     Parameters
     ----------
-    method : str
-        Method key or name.
+    method : str or MethodSpec
+        Method key or name, or the method itself (as the studies hand it to their workers,
+        which may not have it registered).
     runs : sequence of Run or DriftDataset
         Measurement runs with a known heading, or a prepared training set (whose features,
         mode and rate window are then used).
@@ -327,7 +337,7 @@ def train_compensator(method: str, runs: Sequence[Run] | DriftDataset, *,
     -------
     DriftCompensator
     """
-    spec = get_method(method)
+    spec = method if isinstance(method, MethodSpec) else get_method(method)
     if isinstance(runs, DriftDataset):
         data = runs
         provenance = {"runs": [{"name": name} for name in data.run_names]}

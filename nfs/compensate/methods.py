@@ -1,7 +1,9 @@
-"""The compensation methods compared in the heading-RMSE table, by name.
+"""The compensation methods of the seed papers, registered by name.
 
 Each method is a recipe that builds a scikit-learn estimator mapping thermometer features to
-drift [deg/h].  Tuned methods wrap their model in
+drift [deg/h], registered with :func:`~nfs.compensate.registry.register_method` exactly as a
+user's own method is (:mod:`~nfs.compensate.registry`); the order of registration is the
+order of the table's rows.  Tuned methods wrap their model in
 :class:`~nfs.learners.search.MetaheuristicSearchCV`: every tuned row gets the same budget of
 evaluations of the same leave-one-run-out validation error, so the tuners are compared on
 equal terms.
@@ -46,54 +48,25 @@ moves with the samples).  What the caps cost is measured in the user guide
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-from typing import Any, Callable
-
 import numpy as np
 
-from ..errors import NfsError
 from ..learners import (BPNetwork, CubicLeastSquares, IRLSSVMRegressor, LSSVMRegressor,
                         MetaheuristicSearchCV, RBFNetwork, Real, RVRRegressor,
                         StepwiseRegression, SVRRegressor)
+from .registry import register_method
 
-__all__ = ["MethodSpec", "METHODS", "TABLE_METHODS", "STARTUP_GROUP", "get_method",
-           "svr_space", "rvr_space", "neg_residual_std"]
+__all__ = ["STARTUP_GROUP", "PAPERS_GROUP", "LSSVM_SIGMA", "LSSVM_GAMMA", "svr_space",
+           "rvr_space", "neg_residual_std", "svr_search",
+           # each method's factory, in the table's order
+           "ls", "stepwise", "bp", "rbf", "lssvm", "ir_lssvm", "svr_grid", "pso_svr",
+           "gwo_svr", "ssa_svr", "hho_rvr", "tpe_svr",
+           # the registry's look-up, for the modules that look methods up here
+           "METHODS", "MethodSpec", "get_method"]
 
-
-@dataclass(frozen=True)
-class MethodSpec:
-    """A compensation method: a table row and how to build its estimator."""
-
-    name: str
-    """Row label in the tables (e.g. ``SSA-SVR``)."""
-    key: str
-    """Command-line key (e.g. ``ssa-svr``)."""
-    tuned: bool
-    """True when hyperparameters are searched with a budget of evaluations."""
-    build: Callable[..., Any]
-    """build(budget=, random_state=, n_jobs=) -> unfitted estimator."""
-    reference: str
-    """Where the method comes from."""
-    max_samples: int | None = None
-    """Training samples at most (every k-th sample is kept above it, k = ceil(n /
-    max_samples)): for the models whose searches cost O(n^2) (SVR) or O(n^3) (RVR) per fit;
-    stated in the table notes."""
-    tuner: str | None = None
-    """The tuner of a tuned method (``grid``, ``pso``, ...)."""
-    cost: float = 1.0
-    """Cost of one training [s of CPU, default scenario, measured one training at a time on
-    one thread of a loaded 2-core machine: only their order matters] (the study dispatches
-    the costliest first, so that its workers finish together)."""
-    group: str = "other papers' methods"
-    """Panel of the table's figure the row is drawn in: :data:`STARTUP_GROUP` (the start-up
-    paper's BP and SVR rows, and the SVR tuned by other searches) or the methods of the other
-    papers."""
-
-    @property
-    def seeded(self) -> bool:
-        """True when training depends on the random_state through a tuner's draws (a grid
-        search draws nothing)."""
-        return self.tuner is not None and self.tuner != "grid"
+#: Figure panel of the start-up paper's rows (BP, SVR by grid, PSO, GWO, SSA) and TPE-SVR.
+STARTUP_GROUP = "start-up paper: BP and tuned SVRs"
+#: Figure panel of the other seed papers' rows.
+PAPERS_GROUP = "other papers' methods"
 
 
 def svr_space():
@@ -121,28 +94,6 @@ def rvr_space():
     return {"sigma": Real(0.5, 30.0, log=True)}
 
 
-def _tuned_svr(method: str):
-    def build(*, budget: int, random_state: int, n_jobs: int | None):
-        return MetaheuristicSearchCV(SVRRegressor(), svr_space(), method=method,
-                                     budget=budget, random_state=random_state, n_jobs=n_jobs,
-                                     scoring=neg_residual_std)
-    return build
-
-
-def _hho_rvr(*, budget: int, random_state: int, n_jobs: int | None):
-    # max_iter 40 / tol 0.01: the evidence updates have settled the prediction long before
-    # the last bases are pruned; the full 300 sweeps cost 5x for little change in the score.
-    # alpha_threshold 1e6 (the class default 1e9): a basis is pruned once its prior allows
-    # it a weight of 1e-3 of the target's STD; its weight is then ~0 already (the validation
-    # error at sigma 4-11 on the default scenario is the same to 4 digits), and the sweeps,
-    # which cost n^3 while the bases are many, shrink sooner: a search 15 % faster.
-    return MetaheuristicSearchCV(RVRRegressor(max_iter=40, tol=1e-2, alpha_threshold=1e6),
-                                 rvr_space(),
-                                 method="hho", budget=budget,
-                                 random_state=random_state, n_jobs=n_jobs,
-                                 scoring=neg_residual_std)
-
-
 def neg_residual_std(estimator, X, y) -> float:
     """Validation score of the tuners: minus the standard deviation of the residual
     y - f(X) on a held-out run [deg/h].
@@ -155,28 +106,39 @@ def neg_residual_std(estimator, X, y) -> float:
     return -float(np.std(np.asarray(y) - estimator.predict(X)))
 
 
-def _plain(factory: Callable[[int], Any]):
-    def build(*, budget: int, random_state: int, n_jobs: int | None):
-        return factory(random_state)
-    return build
+def svr_search(tuner: str, *, budget: int, random_state: int, n_jobs: int | None):
+    """The epsilon-SVR of the tuned SVR rows, its (C, sigma, epsilon) searched in
+    :func:`svr_space` by ``tuner`` with ``budget`` evaluations of
+    :func:`neg_residual_std`."""
+    return MetaheuristicSearchCV(SVRRegressor(), svr_space(), method=tuner, budget=budget,
+                                 random_state=random_state, n_jobs=n_jobs,
+                                 scoring=neg_residual_std)
 
 
-def _ls(rs):
+@register_method("ls", name="LS", reference="Tao et al. (2019): cubic least squares",
+                 cost=0.2, group=PAPERS_GROUP)
+def ls():
     return CubicLeastSquares()
 
 
-def _stepwise(rs):
+@register_method("stepwise", name="stepwise", reference="Tao et al. (2019): stepwise regression",
+                 cost=0.2, group=PAPERS_GROUP)
+def stepwise():
     return StepwiseRegression()
 
 
-def _bp(rs):
-    return BPNetwork(random_state=rs)
+@register_method("bp", name="BP", reference="the FOG start-up paper: BP network", cost=0.6,
+                 group=STARTUP_GROUP)
+def bp(*, random_state: int):
+    return BPNetwork(random_state=random_state)
 
 
-def _rbf(rs):
+@register_method("rbf", name="RBF", reference="Cheng et al. (2015): RBF network", cost=0.1,
+                 group=PAPERS_GROUP)
+def rbf(*, random_state: int):
     # 150 centres: the target spans the bias levels of every start temperature (about
     # 0.5 deg/h) while the heading needs it to ~0.003 deg/h; 20 centres leave ~0.02 deg/h.
-    return RBFNetwork(n_centers=150, width=1.0, alpha=1e-8, random_state=rs)
+    return RBFNetwork(n_centers=150, width=1.0, alpha=1e-8, random_state=random_state)
 
 
 #: Fixed LSSVM kernel width: the median distance between standardised training samples
@@ -187,61 +149,62 @@ LSSVM_SIGMA = 3.5
 LSSVM_GAMMA = 1000.0
 
 
-def _lssvm(rs):
+@register_method("lssvm", name="LSSVM", reference="Tao et al. (2019): LSSVM",
+                 max_samples=4000, cost=0.13, group=PAPERS_GROUP)
+def lssvm():
     return LSSVMRegressor(gamma=LSSVM_GAMMA, sigma=LSSVM_SIGMA)
 
 
-def _irlssvm(rs):
+@register_method("ir-lssvm", name="IR-LSSVM",
+                 reference="Tao et al. (2019): IR-LSSVM, myriad weights", max_samples=4000,
+                 cost=1.0, group=PAPERS_GROUP)
+def ir_lssvm():
     return IRLSSVMRegressor(gamma=LSSVM_GAMMA, sigma=LSSVM_SIGMA, weight="myriad")
 
 
-#: Figure panel of the start-up paper's rows (BP, SVR by grid, PSO, GWO, SSA) and TPE-SVR.
-STARTUP_GROUP = "start-up paper: BP and tuned SVRs"
-
-_ALL = (
-    MethodSpec("LS", "ls", False, _plain(_ls), "Tao et al. (2019): cubic least squares", cost=0.2),
-    MethodSpec("stepwise", "stepwise", False, _plain(_stepwise),
-               "Tao et al. (2019): stepwise regression",
-               cost=0.2),
-    MethodSpec("BP", "bp", False, _plain(_bp), "the FOG start-up paper: BP network", cost=0.6,
-               group=STARTUP_GROUP),
-    MethodSpec("RBF", "rbf", False, _plain(_rbf), "Cheng et al. (2015): RBF network", cost=0.1),
-    MethodSpec("LSSVM", "lssvm", False, _plain(_lssvm),
-               "Tao et al. (2019): LSSVM", max_samples=4000,
-               cost=0.13),
-    MethodSpec("IR-LSSVM", "ir-lssvm", False, _plain(_irlssvm),
-               "Tao et al. (2019): IR-LSSVM, myriad weights", max_samples=4000, cost=1.0),
-    MethodSpec("SVR (grid)", "svr-grid", True, _tuned_svr("grid"),
-               "the FOG start-up paper: SVR, grid search",
-               max_samples=700, tuner="grid", cost=1.8, group=STARTUP_GROUP),
-    MethodSpec("PSO-SVR", "pso-svr", True, _tuned_svr("pso"),
-               "the FOG start-up paper: PSO-tuned SVR",
-               max_samples=700, tuner="pso", cost=4.4, group=STARTUP_GROUP),
-    MethodSpec("GWO-SVR", "gwo-svr", True, _tuned_svr("gwo"),
-               "the FOG start-up paper: GWO-tuned SVR",
-               max_samples=700, tuner="gwo", cost=2.4, group=STARTUP_GROUP),
-    MethodSpec("SSA-SVR", "ssa-svr", True, _tuned_svr("ssa"),
-               "the FOG start-up paper: SSA-tuned SVR",
-               max_samples=700, tuner="ssa", cost=1.9, group=STARTUP_GROUP),
-    MethodSpec("HHO-RVR", "hho-rvr", True, _hho_rvr, "Liang et al. (2021): HHO-tuned RVR",
-               max_samples=400, tuner="hho", cost=5.0),
-    MethodSpec("TPE-SVR", "tpe-svr", True, _tuned_svr("tpe"),
-               "Optuna TPE-tuned SVR (optional 'tune' extra)", max_samples=700, tuner="tpe",
-               cost=4.5, group=STARTUP_GROUP),
-)
-
-#: Every method by key.
-METHODS: dict[str, MethodSpec] = {m.key: m for m in _ALL}
-
-#: The compensated rows of ``nfs table``, in order.
-TABLE_METHODS: tuple[str, ...] = ("ls", "stepwise", "bp", "rbf", "lssvm", "ir-lssvm",
-                                  "svr-grid", "pso-svr", "gwo-svr", "ssa-svr", "hho-rvr")
+@register_method("svr-grid", name="SVR (grid)",
+                 reference="the FOG start-up paper: SVR, grid search", tuner="grid",
+                 max_samples=700, cost=1.8, group=STARTUP_GROUP)
+def svr_grid(*, budget: int, random_state: int, n_jobs: int | None):
+    return svr_search("grid", budget=budget, random_state=random_state, n_jobs=n_jobs)
 
 
-def get_method(name: str) -> MethodSpec:
-    """A method by key (``ssa-svr``) or row label (``SSA-SVR``); error listing the valid ones."""
-    for m in _ALL:
-        if name in (m.key, m.name) or name.lower() == m.key:
-            return m
-    raise NfsError(f"unknown compensation method '{name}'; methods: "
-                   + ", ".join(m.key for m in _ALL))
+@register_method("pso-svr", name="PSO-SVR", reference="the FOG start-up paper: PSO-tuned SVR",
+                 tuner="pso", max_samples=700, cost=4.4, group=STARTUP_GROUP)
+def pso_svr(*, budget: int, random_state: int, n_jobs: int | None):
+    return svr_search("pso", budget=budget, random_state=random_state, n_jobs=n_jobs)
+
+
+@register_method("gwo-svr", name="GWO-SVR", reference="the FOG start-up paper: GWO-tuned SVR",
+                 tuner="gwo", max_samples=700, cost=2.4, group=STARTUP_GROUP)
+def gwo_svr(*, budget: int, random_state: int, n_jobs: int | None):
+    return svr_search("gwo", budget=budget, random_state=random_state, n_jobs=n_jobs)
+
+
+@register_method("ssa-svr", name="SSA-SVR", reference="the FOG start-up paper: SSA-tuned SVR",
+                 tuner="ssa", max_samples=700, cost=1.9, group=STARTUP_GROUP)
+def ssa_svr(*, budget: int, random_state: int, n_jobs: int | None):
+    return svr_search("ssa", budget=budget, random_state=random_state, n_jobs=n_jobs)
+
+
+@register_method("hho-rvr", name="HHO-RVR", reference="Liang et al. (2021): HHO-tuned RVR",
+                 tuner="hho", max_samples=400, cost=5.0, group=PAPERS_GROUP)
+def hho_rvr(*, budget: int, random_state: int, n_jobs: int | None):
+    # max_iter 40 / tol 0.01: the evidence updates have settled the prediction long before
+    # the last bases are pruned; the full 300 sweeps cost 5x for little change in the score.
+    # alpha_threshold 1e6 (the class default 1e9): a basis is pruned once its prior allows
+    # it a weight of 1e-3 of the target's STD; its weight is then ~0 already (the validation
+    # error at sigma 4-11 on the default scenario is the same to 4 digits), and the sweeps,
+    # which cost n^3 while the bases are many, shrink sooner: a search 15 % faster.
+    return MetaheuristicSearchCV(RVRRegressor(max_iter=40, tol=1e-2, alpha_threshold=1e6),
+                                 rvr_space(), method="hho", budget=budget,
+                                 random_state=random_state, n_jobs=n_jobs,
+                                 scoring=neg_residual_std)
+
+
+@register_method("tpe-svr", name="TPE-SVR",
+                 reference="Optuna TPE-tuned SVR (optional 'tune' extra)", tuner="tpe",
+                 max_samples=700, cost=4.5, group=STARTUP_GROUP, table=False)
+def tpe_svr(*, budget: int, random_state: int, n_jobs: int | None):
+    """Not a row of the default table: Optuna is an optional extra."""
+    return svr_search("tpe", budget=budget, random_state=random_state, n_jobs=n_jobs)

@@ -14,16 +14,19 @@ documentation warns so for its own models).  A model file instead holds only dat
 The estimator tree names every object's class by a key of :data:`ESTIMATORS` or
 :data:`RECORDS`, an explicit list of the package's own estimators and the few
 scikit-learn estimators inside them (``sklearn.svm.SVR`` in the SVR rows, ``MLPRegressor``
-in the BP network).  An estimator is written as its class, its hyper-parameters
-(``get_params(deep=False)``) and its fitted state (every other attribute), and read back by
-setting that state on a bare instance of the listed class, without calling ``fit``: the
-loaded model predicts with the same arrays through the same code, bit for bit.  Reading a
-name that is not on the lists is an error; nothing in a file selects code to run.  A name
-is the class's module and qualified name (``nfs.learners.svr.SVRRegressor``); the names of
-the files written before the estimators moved to :mod:`nfs.learners`
-(``nfs.compensate.kernels.SVRRegressor``, ...) are read as the same classes
-(:data:`FORMER_NAMES`), and so are the classes of a trusted pickle of that time
-(:func:`former_modules`).
+in the BP network), or of a class a registered method lists in its ``model_classes`` (a
+user's own, registered where the file is written and where it is read).  An estimator
+is written as its class, its hyper-parameters (``get_params(deep=False)``) and its fitted
+state (every other attribute), and read back by setting that state on a bare instance of
+the listed class, without calling ``fit``: the loaded model predicts with the same arrays
+through the same code, bit for bit.  Reading a name that is not on the lists is an error,
+and so is writing an object of another class (one line that names it); nothing in a file
+selects code to run.  A name is the class's module and qualified name
+(``nfs.learners.svr.SVRRegressor``; a registered method's class by its public path,
+``sklearn.linear_model.Ridge``); the names of the files written before the estimators
+moved to :mod:`nfs.learners` (``nfs.compensate.kernels.SVRRegressor``, ...) are read as the
+same classes (:data:`FORMER_NAMES`), and so are the classes of a trusted pickle of that
+time (:func:`former_modules`).
 
 Value encoding in the tree (a JSON object with a key starting with ``$`` is one of these):
 
@@ -87,6 +90,7 @@ from ..learners.stepwise import StepwiseRegression, StepwiseStep
 from ..learners.svr import SVRRegressor
 from ..learners.tuners.evaluation import TuneResult
 from .methods import neg_residual_std
+from .registry import class_path, model_classes
 
 __all__ = ["FORMAT", "HEADER_NAME", "ESTIMATORS", "RECORDS", "FUNCTIONS", "FORMER_NAMES",
            "ModelFileError", "ModelVersionWarning", "write_model_file", "read_model_file",
@@ -180,7 +184,6 @@ _NOT_WRITTEN: dict[type, dict[str, str]] = {
     MLPRegressor: {"_optimizer": "the stochastic solver's state, used only to go on training"},
 }
 
-_NAME_OF = {cls: name for name, cls in {**ESTIMATORS, **RECORDS}.items()}
 _FUNCTION_NAME = {id(f): name for name, f in FUNCTIONS.items()}
 
 #: Array dtypes written (booleans, integers, floats, complex, text): none needs a pickle.
@@ -210,10 +213,12 @@ class ModelVersionWarning(UserWarning):
 # --------------------------------------------------------------------------------------
 
 class _Encoder:
-    """Turns an estimator into JSON values, collecting its arrays."""
+    """Turns an estimator into JSON values, collecting its arrays (a class is written by
+    the package's own name where a registered method lists it too)."""
 
     def __init__(self) -> None:
         self.arrays: list[np.ndarray] = []
+        self.names = {c: n for n, c in {**model_classes(), **ESTIMATORS, **RECORDS}.items()}
 
     def __call__(self, value: Any, where: str) -> Any:
         if value is None or isinstance(value, (bool, str)):
@@ -239,12 +244,13 @@ class _Encoder:
             return {"$random_state": self(value.get_state(legacy=False), where)}
         if callable(value) and id(value) in _FUNCTION_NAME:
             return {"$function": _FUNCTION_NAME[id(value)]}
-        name = _NAME_OF.get(type(value))
+        name = self.names.get(type(value))
         if name is None:
             raise ModelFileError(
-                f"{where}: a {type(value).__module__}.{type(value).__qualname__} cannot be "
-                "written to a model file, which holds the package's own estimators ("
-                + ", ".join(n.rsplit(".", 1)[1] for n in ESTIMATORS) + ")")
+                f"{where}: a {class_path(type(value))} cannot be written to a model file, "
+                "which holds the package's own estimators ("
+                + ", ".join(n.rsplit(".", 1)[1] for n in ESTIMATORS) + ") and the classes "
+                "a registered method lists in register_method(..., model_classes=)")
         if name in RECORDS:
             return {"$record": name,
                     "fields": {f.name: self(getattr(value, f.name), f"{where}.{f.name}")
@@ -291,7 +297,7 @@ def write_model_file(path: str | Path, header: dict, estimator: Any) -> Path:
     header : dict
         JSON values stored beside the model (features, settings, provenance, ...); the keys
         ``format``, ``nfs_version`` and ``estimator`` are set here.
-    estimator : estimator of :data:`ESTIMATORS`
+    estimator : estimator of :data:`ESTIMATORS` or of a registered method's model_classes
         The fitted model.
 
     Returns
@@ -369,8 +375,9 @@ def read_model_file(path: str | Path) -> tuple[dict, Any]:
     """Read a file written by :func:`write_model_file`: its header and its estimator.
 
     Only JSON and ``.npy`` arrays are parsed (``numpy.load(..., allow_pickle=False)``), and
-    only the classes of :data:`ESTIMATORS` and :data:`RECORDS` are instantiated; nothing in
-    the file is run.  A pickle is refused by its leading bytes, before it is opened as one.
+    only the classes of :data:`ESTIMATORS` and :data:`RECORDS` and those the registered
+    methods list are instantiated; nothing in the file is run.  A pickle is refused by its
+    leading bytes, before it is opened as one.
 
     Returns
     -------
@@ -480,7 +487,7 @@ class _Decoder:
             cls = _listed(RECORDS, body, "record")
             return cls(**{k: self(v) for k, v in value["fields"].items()})
         if kind == "$estimator":
-            cls = _listed(ESTIMATORS, body, "estimator")
+            cls = _listed({**model_classes(), **ESTIMATORS}, body, "estimator")
             est = cls.__new__(cls)
             est.__setstate__({**{k: self(v) for k, v in value["params"].items()},
                               **{k: self(v) for k, v in value["fitted"].items()}})

@@ -3,10 +3,10 @@ as data (read by :mod:`nfs.config.scenario`, used by the studies of :mod:`nfs.st
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 from ..docfields import document_fields
-from .methods import TABLE_METHODS
+from .catalog import table_methods
 from .modes import DEFAULT_FEATURE_MODE
 
 __all__ = ["PROTOCOLS", "CompensationSettings"]
@@ -21,8 +21,10 @@ PROTOCOLS = ("start-ups", "cycles", "runs", "parameters")
 class CompensationSettings:
     """How the compensators are trained and compared (``[compensation]`` of a scenario)."""
 
-    methods: tuple[str, ...] = TABLE_METHODS
-    """Method keys, in table order."""
+    methods: tuple[str, ...] = field(default_factory=table_methods)
+    """Method keys, in table order (default: every registered method that is a row of the
+    default table, :func:`~nfs.compensate.registry.table_methods`, read when the settings
+    are made)."""
     features: tuple[str, ...] = ("seed004",)
     """Input features (names, sets or patterns) of every method."""
     features_mode: str = DEFAULT_FEATURE_MODE

@@ -51,7 +51,7 @@ from pathlib import Path
 from typing import Any
 
 from ..chamber import check_temperature, parse_program
-from ..compensate.methods import get_method
+from ..compensate.catalog import lookup_method
 from ..constants import POSITION_TOL_DEG
 from ..denoise.levels import (DEFAULT_WAVELET, FILTER_LENGTHS, check_edge_fit, check_level,
                               level_for_cutoff)
@@ -403,7 +403,7 @@ def _load(path: Path, overrides, chain: tuple[Path, ...]) -> tuple[Scenario, dic
                                 "{ repeat = N, steps = [...] } step, N >= 2", file=f,
                                 key="compensation.protocol")
     if comp.protocol in ("cycles", "runs"):
-        tuned = [m for m in comp.methods if get_method(m).tuned]
+        tuned = [m for m in comp.methods if lookup_method(m).tuned]
         if tuned:
             raise ScenarioError(f"{tuned[0]} tunes by leaving a start temperature or a run "
                                 "out, and a drift-table study trains once: use untuned "

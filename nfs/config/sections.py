@@ -7,7 +7,7 @@ import dataclasses
 from typing import Any
 
 from ..compensate.features import FeatureError, resolve_features
-from ..compensate.methods import get_method
+from ..compensate.catalog import lookup_method
 from ..compensate.modes import FeatureModeError, check_features_mode
 from ..compensate.settings import PROTOCOLS, CompensationSettings
 from ..errors import NfsError, ScenarioError
@@ -124,7 +124,7 @@ def compensation_table(tbl: dict, file, units: int = 1) -> Any:
                             "gives the uncompensated rows alone)", file=file,
                             key=f"{p}.methods")
     try:
-        methods = tuple(get_method(m).key for m in methods)
+        methods = tuple(lookup_method(m).key for m in methods)
     except NfsError as exc:
         raise ScenarioError(str(exc), file=file, key=f"{p}.methods") from None
     feats = tbl.get("features", list(d.features))

@@ -23,7 +23,8 @@ By concept:
   al. (2019)) with the robust weights of :mod:`~nfs.learners.weights`, and
   :mod:`~nfs.learners.rvr` (:class:`RVRRegressor`, Liang et al. (2021));
 - tuning: :mod:`~nfs.learners.tuners` (grid, random, PSO, GWO, HHO, SSA, TPE: plain
-  minimisers on the box [-1, 1]^d, :func:`minimize` by name) and
+  minimisers on the box [-1, 1]^d, :func:`minimize` by name, :func:`register_tuner` for
+  a user's own) and
   :mod:`~nfs.learners.search` (:class:`MetaheuristicSearchCV`, a search-CV wrapper over any
   estimator, by whole runs when given groups).
 
@@ -38,8 +39,8 @@ from .rvr import RVRRegressor
 from .search import Integer, MetaheuristicSearchCV, Real
 from .stepwise import StepwiseRegression, StepwiseStep
 from .svr import SVRRegressor
-from .tuners import (TUNERS, TuneResult, TuningError, default_population, grid, gwo, hho,
-                     minimize, pso, random_search, ssa, tpe)
+from .tuners import (TUNERS, TuneResult, TuningError, default_population, get_tuner, grid,
+                     gwo, hho, minimize, pso, random_search, register_tuner, ssa, tpe)
 from .validation import HyperparameterError
 from .weights import WEIGHT_FUNCTIONS
 
@@ -49,7 +50,8 @@ __all__ = [
     "SVRRegressor", "LSSVMRegressor", "IRLSSVMRegressor", "RVRRegressor", "WEIGHT_FUNCTIONS",
     "HyperparameterError",
     # tuners and the search
-    "TUNERS", "TuneResult", "TuningError", "minimize", "default_population", "grid",
+    "TUNERS", "register_tuner", "get_tuner", "TuneResult", "TuningError", "minimize",
+    "default_population", "grid",
     "random_search", "pso", "gwo", "hho", "ssa", "tpe", "MetaheuristicSearchCV", "Real",
     "Integer",
 ]

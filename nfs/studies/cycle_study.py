@@ -53,7 +53,8 @@ from ..scoring.intervals import MIN_REPLICATES, bc_interval, block_counts
 from ..scoring.heading_table import pooled_rmse
 from ..compensate.compensator import DriftCompensator, prediction_plan
 from ..compensate.dataset import drift_dataset
-from ..compensate.methods import get_method
+from ..compensate.catalog import METHODS
+from ..compensate import get_method
 from ..compensate.modes import check_features_mode
 from .startup_study import (test_scenario, ticker, train_and_predict, train_scenario,
                             training_pool)
@@ -306,9 +307,10 @@ def _untuned(s, why: str):
     specs = [get_method(m) for m in s.methods]
     for spec in specs:
         if spec.tuned:
+            untuned = ", ".join(k for k, m in METHODS.items() if not m.tuned)
             raise NfsError(f"method '{spec.key}' tunes its hyperparameters by leaving one "
                            f"start temperature or run out, and {why}: use an untuned method "
-                           "(ls, stepwise, bp, rbf, lssvm, ir-lssvm) here")
+                           f"({untuned}) here")
     return specs
 
 
@@ -336,7 +338,7 @@ def _drift_study(scenario, s, specs, train, test, n_boot, tick, spans,
     order = sorted(specs, key=lambda sp: -sp.cost)
     with training_pool(s.n_jobs, len(order)) as parallel:
         for j, comp, pred in parallel(delayed(train_and_predict)(
-                j, spec.key, data, s, s.random_state, plans) for j, spec in enumerate(order)):
+                j, spec, data, s, s.random_state, plans) for j, spec in enumerate(order)):
             comps[order[j].name], preds[order[j].name] = comp, pred
             tick(f"trained {order[j].name}")
     tick("scoring")

@@ -61,7 +61,8 @@ from ..northfind.solve import distinct_angles
 from ..scoring.intervals import MIN_REPLICATES, bc_interval, block_counts
 from ..compensate.compensator import prediction_plan
 from ..compensate.dataset import drift_dataset
-from ..compensate.methods import get_method
+from ..compensate.catalog import MethodSpec
+from ..compensate import get_method
 from ..compensate.modes import check_features_mode
 from .startup_study import (test_scenario, ticker, train_and_predict, train_scenario,
                             training_pool)
@@ -214,14 +215,15 @@ def _stack(cals, parameter: str) -> tuple[np.ndarray, np.ndarray]:
     return x, y
 
 
-def _fit(key: str, parameter: str, x, y, budget: int, seed: int):
-    spec = get_method(key)
+def _fit(spec: MethodSpec, parameter: str, x, y, budget: int, seed: int):
+    """Fit ``spec``'s estimator of ``parameter`` against its thermometer (the method itself
+    is sent to the worker, which may not have it registered)."""
     est = spec.build(budget=budget, random_state=seed, n_jobs=1)
     if spec.tuned:   # Liang et al. 2021, section 4.1: 5-fold cross-validation over the cycles
         est.set_params(cv=KFold(5, shuffle=True, random_state=seed))
     ok = np.isfinite(x[:, 0]) & np.isfinite(y)
     est.fit(x[ok], y[ok])        # in training_pool: the capped iterations' warning ignored
-    return key, parameter, est
+    return spec.name, parameter, est
 
 
 def _blocks(cals) -> np.ndarray:
@@ -288,11 +290,11 @@ def run_parameter_study(scenario, settings=None, *, n_boot: int = 2000,
     test = tuple(calibrate_cycles(r, nf) for r, nf in zip(test_runs, test_nf))
 
     models: dict = {}
-    jobs = [(spec.key, p) for spec in sorted(specs, key=lambda sp: -sp.cost) for p in PARAMETERS]
+    jobs = [(spec, p) for spec in sorted(specs, key=lambda sp: -sp.cost) for p in PARAMETERS]
     with training_pool(s.n_jobs, len(jobs)) as parallel:
-        for key, p, est in parallel(delayed(_fit)(key, p, *_stack(train, p), s.budget,
-                                                  s.random_state) for key, p in jobs):
-            models[(get_method(key).name, p)] = est
+        for name, p, est in parallel(delayed(_fit)(spec, p, *_stack(train, p), s.budget,
+                                                   s.random_state) for spec, p in jobs):
+            models[(name, p)] = est
     tick("modelled every parameter")
 
     block = _blocks(test)

@@ -40,7 +40,8 @@ from sklearn.exceptions import ConvergenceWarning
 from ..compensate.compensator import (DriftCompensator, PredictionPlan, prediction_plan,
                                       train_compensator)
 from ..compensate.dataset import DriftDataset, drift_dataset
-from ..compensate.methods import MethodSpec, get_method
+from ..compensate.catalog import MethodSpec
+from ..compensate import get_method
 from ..compensate.modes import FEATURE_MODE_NOTES, check_features_mode
 from ..compensate.settings import CompensationSettings
 from ..denoise import separate_drift
@@ -366,7 +367,7 @@ def run_study(scenario, settings: CompensationSettings | None = None, *,
             pass
         # on several workers the trainings start now, and the test start-ups are simulated,
         # separated and featured meanwhile (with one, each training when its turn comes)
-        trained = parallel(delayed(train_method)(j, jobs[j][0].key, data, s, jobs[j][1])
+        trained = parallel(delayed(train_method)(j, jobs[j][0], data, s, jobs[j][1])
                            for j in order)
         if test is None:
             tick("simulating the test start-ups")
@@ -510,18 +511,20 @@ def _seeds(spec: MethodSpec, s: CompensationSettings) -> list[int]:
     return [s.random_state + k for k in range(n)]
 
 
-def train_method(j: int, key: str, data: DriftDataset, s: CompensationSettings, seed: int):
-    """Train method ``key`` with ``seed`` on one worker (the tuner's own evaluations are
-    serial): (j, compensator), ``j`` passed through to tell the jobs apart.  Run in
-    :func:`training_pool`, which ignores the ConvergenceWarning of the capped iterations."""
-    return j, train_compensator(key, data, budget=s.budget, random_state=seed, n_jobs=1)
+def train_method(j: int, spec: MethodSpec, data: DriftDataset, s: CompensationSettings,
+                 seed: int):
+    """Train ``spec`` (the method itself: a worker may not have it registered) with ``seed``
+    on one worker, its tuner's evaluations serial: (j, compensator), ``j`` passed through to
+    tell the jobs apart.  Run in :func:`training_pool` (the capped iterations' warning
+    ignored)."""
+    return j, train_compensator(spec, data, budget=s.budget, random_state=seed, n_jobs=1)
 
 
-def train_and_predict(j: int, key: str, data: DriftDataset, s: CompensationSettings,
+def train_and_predict(j: int, spec: MethodSpec, data: DriftDataset, s: CompensationSettings,
                       seed: int, plans: list[PredictionPlan]):
     """:func:`train_method`, then the drift of every test run predicted from its plan:
     (j, compensator, predictions)."""
-    _, comp = train_method(j, key, data, s, seed)
+    _, comp = train_method(j, spec, data, s, seed)
     return j, comp, [comp.predict_drift(plan=p) for p in plans]
 
 

@@ -48,7 +48,7 @@ from typing import Any, Iterator
 import numpy as np
 from scipy.stats import qmc
 
-from ..compensate.methods import get_method
+from ..compensate import get_method
 from ..errors import USER_ERRORS, InputError, NfsError
 from ..config.scenario import OVERRIDE_KEYS, load_scenario
 from ..config.presets import scenario_file

@@ -13,7 +13,6 @@ import subprocess
 import sys
 from pathlib import Path
 
-import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -23,10 +22,6 @@ HEAVY = ("sklearn", "pywt", "nfs.learners", "nfs.denoise.wavelet", "nfs.denoise.
          "nfs.denoise.thresholds")
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "nfs/compensate/__init__.py imports the compensator, its training data (nfs.denoise, "
-    "PyWavelets) and the methods (nfs.learners, scikit-learn) eagerly, and the scenario's "
-    "[compensation] reader needs CompensationSettings and the method catalogue from there"))
 def test_reading_a_scenario_loads_no_learner_and_no_pywavelets():
     code = ("import json, sys, nfs; nfs.load_scenario(); "
             f"heavy = {HEAVY!r}; "

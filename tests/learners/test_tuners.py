@@ -18,7 +18,9 @@ from sklearn.utils.estimator_checks import check_estimator
 
 from nfs.learners.search import Integer, MetaheuristicSearchCV, Real
 from nfs.learners.svr import SVRRegressor as SVRModel
-from nfs.learners.tuners import TUNERS, TuningError, minimize
+from nfs.learners.tuners import (TUNERS, TuningError, minimize, random_search,
+                                 register_tuner)
+from nfs.learners.tuners import registry as tuner_registry
 from nfs.errors import NfsError
 
 try:
@@ -173,6 +175,30 @@ def test_bad_names_and_options():
     with pytest.raises(TuningError, match="one value per row"):
         minimize(lambda X: np.zeros(1), 2, method="pso", budget=10, population=5)
     assert issubclass(TuningError, NfsError)
+
+
+def test_a_users_tuner_plugs_in_as_the_built_in_ones(monkeypatch):
+    # Oracle: a tuner registered under a new name is the function it wraps (random search
+    # with the same seed gives the same history); a second registration of a name is an
+    # error unless replace=True, and a function without minimize's arguments is refused.
+    monkeypatch.setattr(tuner_registry, "TUNERS", dict(TUNERS))
+    registered = tuner_registry.TUNERS
+
+    @register_tuner("mine")
+    def mine(objective_batch, n_dims, *, budget, random_state=None, population=None):
+        return random_search(objective_batch, n_dims, budget=budget,
+                             random_state=random_state, population=population)
+    assert registered["mine"] is mine
+    a = minimize(sphere(C2), 2, method="mine", budget=30, random_state=4)
+    b = minimize(sphere(C2), 2, method="random", budget=30, random_state=4)
+    assert np.array_equal(a.all_x, b.all_x)
+    with pytest.raises(TuningError, match="^a tuner 'ssa' is registered already; replace=True"):
+        register_tuner("ssa", mine)
+    with pytest.raises(TuningError, match="^tuner 'bad': its function lacks budget, "
+                                          "random_state, population"):
+        register_tuner("bad", lambda objective_batch, n_dims: None)
+    register_tuner("ssa", mine, replace=True)
+    assert registered["ssa"] is mine
 
 
 def test_nan_objective_counts_as_worst():

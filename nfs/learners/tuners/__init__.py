@@ -58,13 +58,14 @@ Modules
   :func:`~.swarm.ssa`;
 * :mod:`~.model_based`: :func:`~.model_based.tpe` (Optuna's tree-structured Parzen
   estimator, optional);
-* :mod:`~.registry`: :data:`~.registry.TUNERS` (name -> function) and
+* :mod:`~.registry`: :data:`~.registry.TUNERS` (name -> function),
+  :func:`~.registry.register_tuner`, :func:`~.registry.get_tuner` and
   :func:`~.registry.minimize`.
 """
 
 from .evaluation import TuneResult, TuningError, default_population
 from .model_based import tpe
-from .registry import TUNERS, minimize
+from .registry import TUNERS, get_tuner, minimize, register_tuner
 from .sampling import grid, random_search
 from .swarm import gwo, hho, pso, ssa
 
@@ -72,6 +73,8 @@ __all__ = [
     "TuneResult",
     "TuningError",
     "TUNERS",
+    "register_tuner",
+    "get_tuner",
     "minimize",
     "grid",
     "random_search",

@@ -25,7 +25,7 @@ import numpy as np
 import joblib
 
 from nfs.compensate.compensator import PICKLE_FORMAT, DriftCompensator
-from nfs.compensate.methods import METHODS
+from nfs.compensate import METHODS  # with the seed papers' methods registered
 from nfs.compensate.model_file import write_model_file
 
 #: Methods stored: every one whose state holds no scikit-learn estimator.
