@@ -58,11 +58,12 @@ The result is a :class:`~nfs.fit.fit_result.FitResult`.
 
 from __future__ import annotations
 
+import inspect
 import functools
 import math
 import os
 from dataclasses import dataclass, field, replace
-from typing import Iterable, Mapping, Sequence
+from typing import Any, Iterable, Mapping, Sequence
 
 import numpy as np
 from threadpoolctl import threadpool_limits
@@ -87,7 +88,7 @@ from .thermal_residual import (DEFAULT_START, ThermalRun, prepare_thermal, simul
                                start_states, thermal_residual, thermal_residual_parts,
                                thermometer_floors)
 
-__all__ = ["fit_model", "fitted_name", "DEFAULT_DECIMATE_S"]
+__all__ = ["fit_model", "fitted_name", "DEFAULT_DECIMATE_S", "check_fit_keywords"]
 
 #: Default decimation of the residual grid [s].
 DEFAULT_DECIMATE_S = 10.0
@@ -311,6 +312,17 @@ def _drift_stage(inst: Instrument, runs: Sequence[Run], sp: list[str],
 
 # ---------------------------------------------------------------------------------------------
 # The fit
+
+def check_fit_keywords(keywords: Mapping[str, Any], caller: str) -> None:
+    """TypeError, before any work, when ``keywords`` that ``caller`` hands on to
+    :func:`fit_model` hold one it does not take (as an unknown keyword of any function)."""
+    takes = inspect.signature(fit_model).parameters
+    unknown = [k for k in keywords if k not in takes or k in ("inst", "runs")]
+    if unknown:
+        raise TypeError(f"{caller}() got an unexpected keyword argument {unknown[0]!r} "
+                        f"(it passes keywords on to fit_model: "
+                        f"{', '.join(k for k in takes if k not in ('inst', 'runs'))})")
+
 
 def fitted_name(model_name: str, runs: Sequence[Run]) -> str:
     """Name of a model fitted to ``runs``: ``'<model> fitted to <source>'``, the source being

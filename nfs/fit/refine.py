@@ -40,7 +40,7 @@ from ..io.records import record
 from ..run import Run
 from .adequacy import ThermalAdequacy, thermal_adequacy
 from .alternative_score import BEATS_ALPHA, CV_DROP, better_run_by_run
-from .calibration import fit_model, one_blas_thread
+from .calibration import check_fit_keywords, fit_model, one_blas_thread
 from .fit_result import FitResult
 from .free_set import default_free
 from .params import expand_paths
@@ -168,6 +168,7 @@ def fit_unit(inst: Instrument, runs: Sequence[Run], *, refine: bool = True,
     holds the :class:`Refinement` (None without a thermal stage or with ``refine=False``);
     its ``initial`` stays ``inst``.
     """
+    check_fit_keywords(fit_kwargs, "fit_unit")
     runs = list(runs)
     result = fit_model(inst, runs, **fit_kwargs)
     stages = tuple(fit_kwargs.get("stages", ("thermal", "drift")))

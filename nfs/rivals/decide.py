@@ -42,6 +42,7 @@ import numpy as np
 from scipy.stats import norm
 
 from ..diagnose.result import Answer, Diagnosis
+from ..fit.calibration import check_fit_keywords
 from ..effects.thermometer import THERMOMETERS
 from ..instrument import Instrument
 from ..run import Run
@@ -289,6 +290,7 @@ def settle_tie(diagnosis: Diagnosis | None, inst: Instrument, runs: Sequence[Run
     may tie other candidates, but the question the run was made to answer is theirs); the
     diagnosis then need not be a tie.
     """
+    check_fit_keywords(fit_kw, "settle_tie")
     if labels is None:
         labels = [] if diagnosis is None else tie_labels(diagnosis)
         if len(labels) < 2:

@@ -45,6 +45,7 @@ from ..diagnose.columns import model_drift_paths
 from ..diagnose.result import RATE_ALTERNATIVE
 from ..fit import (default_free, fit_model, get_param, set_params, structural_alternatives,
                    thermal_adequacy)
+from ..fit.calibration import check_fit_keywords
 from ..fit.fit_result import FitResult
 from ..fit.thermal_residual import DEFAULT_START
 
@@ -275,6 +276,7 @@ def rival_model(inst: Instrument, runs: Sequence[Run], label: str, **fit_kw) -> 
         ``label`` names no effect, target or structural alternative of ``inst``; the
         message lists what it can be.
     """
+    check_fit_keywords(fit_kw, "rival_model")
     runs = list(runs)
     if label == MODEL:
         fr = fit_model(inst, runs, free=model_drift_paths(inst), stages=("drift",),
@@ -309,6 +311,7 @@ def _apply_kw(fit_kw: dict) -> dict:
 def rival_models(inst: Instrument, runs: Sequence[Run], labels: Sequence[str],
                  **fit_kw) -> list[Rival]:
     """:func:`rival_model` of each label (at least two, all different)."""
+    check_fit_keywords(fit_kw, "rival_models")
     labels = list(labels)
     if len(labels) < 2:
         raise NfsError(f"a design needs at least two rivals, got {len(labels)}: "

@@ -31,3 +31,14 @@ def test_moved_names_resolve_for_one_release(package, name, home):
     assert value is getattr(__import__(home, fromlist=[name]), name)
     with pytest.raises(AttributeError):
         getattr(getattr(nfs, package), "not_a_name")
+
+
+@pytest.mark.parametrize("call", [
+    lambda inst: nfs.fit_unit(inst, [], refin=False),
+    lambda inst: nfs.rivals.rival_model(inst, [], "magnetic", decimate=10.0),
+    lambda inst: nfs.rivals.rival_models(inst, [], ["model", "magnetic"], start=None),
+    lambda inst: nfs.rivals.settle_tie(None, inst, [], starts=None)])
+def test_keywords_handed_on_to_the_fit_are_checked_before_any_work(call):
+    # as python-control's kwargs tests: a misspelt option is an error, not ignored
+    with pytest.raises(TypeError, match="unexpected keyword argument"):
+        call(nfs.load_instrument("default"))
