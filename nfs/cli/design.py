@@ -34,15 +34,14 @@ def cmd_design(args) -> int:
     inst = load_instrument(args.model)
     chain = UnitChain(inst, read_runs(args.data), start_state=start_model(args))
     chain.check_rivals(labels)         # what each rival is, before any work
+    space = chain.design_space(soak_h=args.soak_h, start_temperatures_c=args.start_temperatures,
+                               max_hours=args.max_hours, option="--max-hours")
     folder = output_folder(args, "design")
     say = (lambda m: None) if args.quiet else (lambda m: print(m, file=sys.stderr))
     say(f"fitting {len(labels)} rivals ({', '.join(labels)}) to {len(chain.runs)} run(s), "
         "then searching the experiments...")
-    design = chain.design(labels, soak_h=args.soak_h,
-                          start_temperatures_c=args.start_temperatures,
-                          max_hours=args.max_hours, margin_sigma=args.margin,
-                          n_draws=args.draws, seed=args.seed,
-                          progress=None if args.quiet else say)
+    design = chain.design(labels, space=space, margin_sigma=args.margin, n_draws=args.draws,
+                          seed=args.seed, progress=None if args.quiet else say)
     prov = output_provenance(instrument=inst, runs=chain.runs, seeds={"draws": args.seed})
     paths = write_design(design, args.output, chain.runs,
                          args.model if Path(args.model).exists() else inst.name,

@@ -10,12 +10,13 @@ kept beside it (``tie``), since the run that would break it is designed for thos
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 from typing import Any
 
 from ..diagnose.result import Answer, Diagnosis
 from ..errors import NfsError
-from ..io.records import from_record, to_record
+from ..io.records import RecordError, decode, encode
 from .decide import Settlement
 from .models import MODEL
 
@@ -64,14 +65,27 @@ class Finding:
         return self.diagnosis.finding(effect, target)
 
     def to_dict(self) -> dict[str, Any]:
-        """Every field as JSON-ready data, the one answer beside them (:mod:`nfs.io.records`;
-        schema :data:`FINDING_SCHEMA`)."""
-        return to_record(self, FINDING_SCHEMA)
+        """JSON-ready data (:mod:`nfs.io.records`; schema :data:`FINDING_SCHEMA`): the
+        diagnosis's fields at the top (``ranking``, ``not_tried``, ``unexplained``, ...), then
+        ``settlement`` and ``provenance``, and the one answer: ``answer``, ``verdict`` and,
+        when a settlement answered a tie, the diagnosis's own ``tie``."""
+        return {"schema": FINDING_SCHEMA, **encode(self.diagnosis),
+                "settlement": encode(self.settlement), "provenance": encode(self.provenance),
+                "answer": encode(self.answer), "verdict": self.verdict,
+                "tie": encode(self.tie)}
 
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> "Finding":
         """The finding :meth:`to_dict` wrote (``nfs diagnose --json``)."""
-        return from_record(cls, data, FINDING_SCHEMA)
+        if not isinstance(data, dict):
+            raise RecordError("expected a JSON object written by nfs diagnose --json")
+        if data.get("schema", FINDING_SCHEMA) != FINDING_SCHEMA:
+            raise RecordError(f"schema {data.get('schema')!r}, expected {FINDING_SCHEMA!r}")
+        fields = {f.name for f in dataclasses.fields(Diagnosis)}
+        diagnosis = decode({k: v for k, v in data.items() if k in fields}, Diagnosis,
+                           "diagnosis")
+        return cls(diagnosis, decode(data.get("settlement"), Settlement | None, "settlement"),
+                   data.get("provenance"))
 
 
 def rivals_from_diagnosis(found: Finding | Diagnosis) -> list[str]:

@@ -207,7 +207,8 @@ class UnitChain:
             rivals = self.finding.rivals()
         self.check_rivals(rivals)
         if space is None:
-            space = self._space(soak_h, start_temperatures_c, max_hours)
+            space = self.design_space(soak_h=soak_h, start_temperatures_c=start_temperatures_c,
+                                      max_hours=max_hours)
         fitted = rival_models(self.model, self.runs, list(rivals), start_state=self.start_state)
         res = design_experiment(fitted, self.runs, base_conditions(self.runs), space,
                                 margin_sigma=margin_sigma, n_draws=n_draws, seed=seed,
@@ -236,8 +237,14 @@ class UnitChain:
         for label in labels:
             check_label(self.model, self.runs, label)
 
-    def _space(self, soak_h: float, temps: Sequence[float] | None,
-               max_hours: float | None) -> Space:
+    def design_space(self, *, soak_h: float = SOAK_H,
+                     start_temperatures_c: Sequence[float] | None = None,
+                     max_hours: float | None = None, option: str = "max_hours") -> Space:
+        """The experiments :meth:`design` searches: :func:`nfs.design.default_space` of the
+        runs with a soak of ``soak_h`` [h], the start temperatures given, and a longest run
+        that fits ``max_hours`` chamber hours with its soak (``option`` names it in the
+        error when none fits)."""
+        temps = start_temperatures_c
         space = default_space(self.runs, soak_h=soak_h)
         if temps is not None:
             space = replace(space, start_temperatures_c=tuple(float(t) for t in temps))
@@ -245,7 +252,7 @@ class UnitChain:
             step = space.duration_step_s
             longest = step * np.floor((max_hours - soak_h) * 3600.0 / step + 1e-9)
             if longest < step:
-                raise NfsError(f"max_hours {max_hours:g}: no run of {step / 60.0:g} min fits "
+                raise NfsError(f"{option} {max_hours:g}: no run of {step / 60.0:g} min fits "
                                f"after the {soak_h:g} h soak")
             space = replace(space, max_duration_s=float(longest))
         return space

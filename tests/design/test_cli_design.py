@@ -14,6 +14,8 @@ import pytest
 
 import nfs
 from nfs.cli import main
+from nfs.diagnose import Diagnosis
+from nfs.rivals import Finding
 
 
 @pytest.fixture(scope="module")
@@ -60,8 +62,10 @@ def test_errors_are_one_line_before_any_work(data, capsys, tmp_path):
                              "--rivals", "model", "turn_on_transient", "--max-hours", "3.1"],
                     "--max-hours", "soak")
     bad = tmp_path / "not_a_tie.json"
-    bad.write_text(json.dumps({"answer": {"kind": "nothing", "labels": [],
-                                         "text": "nothing beyond noise"}}))
+    quiet = Diagnosis(ranking=(), not_tried=(), baseline=None, time_s=0.0,
+                      unexplained={"ljung_box": {"consistent": True}})
+    assert quiet.answer.kind == "nothing"
+    bad.write_text(json.dumps(Finding(quiet).to_dict()))
     _one_line_error(capsys, ["design", runs, "--model", model, "-o", tmp_path / "a",
                              "--diagnosis", bad], "no tie")
     _one_line_error(capsys, ["diagnose", runs, "--model", model, "--rivals", "model",
