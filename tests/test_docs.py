@@ -93,6 +93,20 @@ def test_effects_announced_as_coming_are_not_registered():
                         "other effects and drop their '(coming)' rows")
 
 
+_GRID_ROW = re.compile(r"^\| `([a-z_]+)` \| (\w+) \[[^\]]*\] \| ([^|(]+)", flags=re.M)
+
+
+def test_grid_table_matches_the_registry():
+    """Oracle: the registry.  docs/effects.md's table of the grids the diagnosis tries (in
+    "Your own effects") lists every built-in parameter with a grid, with its values."""
+    own = _read("effects.md").split("## Your own effects")[1].split("\n## ")[0]
+    documented = {(e, p): v.strip() for e, p, v in _GRID_ROW.findall(own)}
+    registered = {(n, p.name): ", ".join(f"{v:g}" for v in p.grid)
+                  for n in _builtin_effects() for p in get_effect(n).parameters
+                  if p.grid is not None}
+    assert registered and documented == registered
+
+
 # --------------------------------------------------------------------------------------------
 # links
 

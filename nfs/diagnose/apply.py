@@ -10,8 +10,7 @@ from ..effects import get_effect
 from ..errors import NfsError
 from ..instrument import Instrument
 from ..run import Run
-from .candidates import (FAST_KINDS, SHAPE_GRID, Candidate, effect_of, split_parameters,
-                         targets)
+from .candidates import FAST_KINDS, Candidate, effect_of, split_parameters, targets
 from .columns import (PreparedRun, bare_instrument, fit_shapes, model_drift_paths,
                      prepare_runs, startup_heading_rmse)
 from ..fit.start_state import StartModel
@@ -54,7 +53,7 @@ def fit_candidate(inst: Instrument, runs: Sequence[Run], name: str,
         starts.update(best)
     else:
         for s in shapes:
-            starts[s] = _THERMAL_STARTS.get(s, SHAPE_GRID.get(s, (1.0,))[0])
+            starts[s] = _THERMAL_STARTS.get(s, (spec.parameter(s).grid or (1.0,))[0])
     e = effect_of(c, starts)
     new = inst.with_effects(list(inst.effects) + [e])
     new_paths = [f"effects.{e.label}.{p}" for p in coefs + shapes]
@@ -76,11 +75,12 @@ def apply_candidate(inst: Instrument, runs: Sequence[Run], name: str,
 
     Gyro and accelerometer effects: the drift stage refits the model's drift coefficients and
     the new effect's coefficients and shape parameters (shapes started at the best point of
-    :data:`SHAPE_GRID`).  Thermal and thermometer effects: both stages, default free set plus
-    the new effect's parameters.  Returns (new instrument, FitResult, report) where the report
-    holds ``rms_before``/``rms_after`` per channel (before = the model as given) and the
-    pooled start-up ``heading_rmse_before_deg``/``heading_rmse_after_deg``.  Each run's
-    start is estimated as :func:`fit_model` does (``start_state``).
+    their registered grids, :func:`~nfs.diagnose.candidates.shape_grid`).  Thermal and
+    thermometer effects: both stages, default free set plus the new effect's
+    parameters.  Returns (new instrument, FitResult, report) where the report holds
+    ``rms_before``/``rms_after`` per channel (before = the model as given) and the pooled
+    start-up ``heading_rmse_before_deg``/``heading_rmse_after_deg``.  Each run's start is
+    estimated as :func:`fit_model` does (``start_state``).
 
     Raises NfsError for an unknown effect or target (listing the valid ones) or an effect
     the model already has on that target.

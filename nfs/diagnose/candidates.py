@@ -3,15 +3,16 @@
 A candidate is one effect on one target (a node, an accelerometer axis, a thermometer, a
 measured ``aux_*`` column).  Its float parameters split into *coefficients* (entering the
 model linearly, started at 0) and *shape* parameters (time constants, angles, periods, and
-parameters registered with ``shape=True`` such as shupe_stress's c_m: chosen on
-:data:`SHAPE_GRID`).  Thermal and thermometer candidates are linearised at zero,
-so their time constants become coefficients (:mod:`nfs.diagnose.columns`).
+parameters registered with ``shape=True`` such as shupe_stress's c_m:
+:attr:`~nfs.effects.Parameter.nonlinear`), chosen on the grid each effect registers for
+them (:attr:`~nfs.effects.Parameter.grid`, :func:`shape_grid`) or held at their default.
+Thermal and thermometer candidates are linearised at zero, so their time constants become
+coefficients (:mod:`nfs.diagnose.columns`).
 """
 
 from __future__ import annotations
 
 import itertools
-import math
 from dataclasses import dataclass
 from typing import Sequence
 
@@ -21,26 +22,13 @@ from ..effects.thermometer import THERMOMETERS
 from ..instrument import Instrument
 from ..run import Run
 
-__all__ = ["Candidate", "candidates", "SHAPE_GRID", "FAST_KINDS", "shape_grid",
+__all__ = ["Candidate", "candidates", "FAST_KINDS", "shape_grid",
            "target_parameter", "split_parameters", "aux_columns", "targets", "effect_of"]
 
-#: Grid of the shape (nonlinear) parameters of the built-in effects; a shape parameter not
-#: named here is held at its default.  A candidate's test pays for the choice over the grid
-#: (Bonferroni over its grid points, :mod:`nfs.diagnose.candidate_score`).
-SHAPE_GRID: dict[str, tuple[float, ...]] = {
-    "tau": (60.0, 150.0, 300.0, 600.0, 1200.0),
-    "D_mag": (0.0, 45.0, 90.0, 135.0),
-    "T_p": (2.0, 5.0, 10.0, 20.0),
-    "phi": (0.0, math.pi / 2),
-    # shupe_stress's potting-modulus coefficient [1/K], inside its sign-keeping bounds
-    # (-1/35, 1/65 at T_ref = 25 C); 0 would repeat the model's own shupe_gradient
-    "c_m": (-0.02, -0.01, 0.01),
-}
 #: Kinds scored on window means at rest (gyro: the drift; accelerometer: its own axis's
 #: readings); the others on the thermometers.
 FAST_KINDS = ("gyro", "accelerometer")
 
-_SHAPE_UNITS = ("s", "K", "deg", "rad")
 _FIXED_UNITS = ("degC", "channel unit")
 
 
@@ -57,7 +45,7 @@ class Candidate:
     coefficients: tuple[str, ...]
     """Parameters that enter linearly (start 0)."""
     shapes: tuple[str, ...]
-    """Nonlinear parameters, chosen on :data:`SHAPE_GRID`."""
+    """Nonlinear parameters, chosen on their registered grids (:func:`shape_grid`)."""
     tried: bool
     """False when :func:`~nfs.diagnose.diagnose` does not score it (see ``reason``)."""
     reason: str = ""
@@ -88,7 +76,8 @@ def target_parameter(spec: EffectSpec) -> str | None:
 
 
 def split_parameters(spec: EffectSpec) -> tuple[list[str], list[str], list[str]]:
-    """(coefficients, shapes, required parameters without a start value) of ``spec``."""
+    """(coefficients, shapes, parameters without a start value) of ``spec``: a required
+    parameter of a fixed unit, or a shape parameter with neither a grid nor a default."""
     coefs, shapes, missing = [], [], []
     for p in spec.parameters:
         if p.type is not float or p.name == spec.target:
@@ -96,8 +85,8 @@ def split_parameters(spec: EffectSpec) -> tuple[list[str], list[str], list[str]]
         if p.unit in _FIXED_UNITS:
             if p.required:
                 missing.append(p.name)
-        elif p.unit in _SHAPE_UNITS or p.shape:
-            if p.name not in SHAPE_GRID and p.default is None:
+        elif p.nonlinear:
+            if p.grid is None and p.default is None:
                 missing.append(p.name)
             else:
                 shapes.append(p.name)
@@ -167,7 +156,7 @@ def candidates(inst: Instrument, runs: Sequence[Run]) -> list[Candidate]:
                 reason = ("a geometry effect: it moves the sensor axes, which the drift and "
                           "thermal fits do not model")
             elif missing:
-                reason = "no start value for " + ", ".join(missing)
+                reason = _missing_reason(spec, missing)
             elif not coefs:
                 reason = "no linear coefficient to fit"
             out.append(Candidate(name, target, spec.kind, tuple(coefs), tuple(shapes),
@@ -181,10 +170,24 @@ def candidates(inst: Instrument, runs: Sequence[Run]) -> list[Candidate]:
     return out
 
 
+def _missing_reason(spec: EffectSpec, missing: Sequence[str]) -> str:
+    """Why ``spec`` is not tried when ``missing`` (of :func:`split_parameters`) have no start
+    value, saying how to fix it: a shape parameter wants a grid."""
+    grids = [m for m in missing if spec.parameter(m).unit not in _FIXED_UNITS]
+    starts = [m for m in missing if m not in grids]
+    parts = ([f"no start value for {', '.join(starts)}"] if starts else []) + [
+        f"register a grid for parameter {m} of effect {spec.name}: "
+        f"Parameter('{m}', '{spec.parameter(m).unit}', ..., grid=(...))" for m in grids]
+    return "; ".join(parts)
+
+
 def shape_grid(c: Candidate) -> list[dict[str, float]]:
-    """The grid points of the shape parameters of ``c`` ([{}] when it has none)."""
+    """The grid points of the shape parameters of ``c`` ([{}] when it has none): the
+    product of each one's registered grid (:attr:`~nfs.effects.Parameter.grid`), or its
+    default when it has none."""
     spec = get_effect(c.effect)
-    values = [SHAPE_GRID.get(s) or (spec.parameter(s).default,) for s in c.shapes]
+    pars = [spec.parameter(s) for s in c.shapes]
+    values = [p.grid if p.grid is not None else (p.default,) for p in pars]
     return [dict(zip(c.shapes, v)) for v in itertools.product(*values)]
 
 

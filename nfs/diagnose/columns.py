@@ -32,7 +32,7 @@ from ..effects import get_effect
 from ..instrument import Instrument
 from ..run import Run
 from ..northfind import heading_rmse, north_find
-from .candidates import Candidate, SHAPE_GRID, effect_of, shape_grid, split_parameters
+from .candidates import Candidate, effect_of, shape_grid, split_parameters
 from ..fit.drift_residual import (DriftRun, drift_context, drift_context_on, model_drift_dph,
                              prepare_drift, window_means)
 from ..fit.free_set import default_free
@@ -155,7 +155,8 @@ def _shape_bounds(c: Candidate, x0: dict[str, float]) -> tuple[np.ndarray, np.nd
         if par.bounds is not None:
             lo, hi = par.bounds
         elif unit in ("s", "K"):
-            lo, hi = min(SHAPE_GRID.get(s, (v,))) / 5.0, max(SHAPE_GRID.get(s, (v,))) * 5.0
+            grid = par.grid if par.grid is not None else (v,)
+            lo, hi = min(grid) / 5.0, max(grid) * 5.0
         elif unit == "deg":
             lo, hi = v - 360.0, v + 360.0
         else:

@@ -16,7 +16,7 @@ from .registry import Parameter, register_effect
 
 __all__ = [
     "bias_temperature", "shupe_gradient", "shupe_rate", "shupe_product", "shupe_stress",
-    "stress_factor_bounds", "STRESS_RANGE_C", "turn_on_transient", "aux_linear", "scale_factor_temperature", "magnetic",
+    "stress_factor_bounds", "STRESS_RANGE_C", "STRESS_GRID", "turn_on_transient", "aux_linear", "scale_factor_temperature", "magnetic",
     "polarization_ripple",
 ]
 
@@ -89,6 +89,12 @@ def shupe_product(ctx: EffectContext, *, k_p: float, node: str | None = None) ->
 STRESS_RANGE_C = (-40.0, 60.0)
 
 
+#: The c_m [1/K] the diagnosis tries for the stress term's temperature coefficient, inside
+#: the sign-keeping bounds (-1/35, 1/65 at T_ref = 25 C); 0 would repeat the plain gradient
+#: term (shupe_gradient, shupe_winding's k_m alone).
+STRESS_GRID = (-0.02, -0.01, 0.01)
+
+
 def stress_factor_bounds(t_ref_c: float = T_REF_C) -> tuple[float, float]:
     """The c_m [1/K] for which 1 + c_m (T - T_ref) >= 0 over :data:`STRESS_RANGE_C`.
 
@@ -109,7 +115,7 @@ def stress_factor_bounds(t_ref_c: float = T_REF_C) -> tuple[float, float]:
     Parameter("c_m", "1/K",
               "temperature coefficient of the stress term (potting modulus); "
               "1 + c_m (T_coil - T_ref) must keep its sign over -40..60 C",
-              shape=True, bounds=stress_factor_bounds())])
+              shape=True, bounds=stress_factor_bounds(), grid=STRESS_GRID)])
 def shupe_stress(ctx: EffectContext, *, k_m: float, c_m: float) -> np.ndarray:
     """Shupe-Mohr thermal stress: k_m d(T_out - T_in)/dt (1 + c_m (T_coil - T_ref)) [deg/h].
 
@@ -143,7 +149,7 @@ def shupe_stress(ctx: EffectContext, *, k_m: float, c_m: float) -> np.ndarray:
 
 @register_effect("turn_on_transient", kind="gyro", parameters=[
     Parameter("a", "deg/h", "amplitude at power-on"),
-    Parameter("tau", "s", "time constant")])
+    Parameter("tau", "s", "time constant", grid=(60.0, 150.0, 300.0, 600.0, 1200.0))])
 def turn_on_transient(ctx: EffectContext, *, a: float, tau: float) -> np.ndarray:
     """Electronics turn-on transient: a exp(-t_on / tau) [deg/h] from power-on.
 
@@ -195,7 +201,8 @@ def scale_factor_temperature(ctx: EffectContext, *, s1: float,
 
 @register_effect("magnetic", kind="gyro", parameters=[
     Parameter("m", "deg/h", "amplitude of the magnetic (Faraday) bias"),
-    Parameter("D_mag", "deg", "azimuth of the axis that gives the largest positive bias")])
+    Parameter("D_mag", "deg", "azimuth of the axis that gives the largest positive bias",
+              grid=(0.0, 45.0, 90.0, 135.0))])
 def magnetic(ctx: EffectContext, *, m: float, D_mag: float) -> np.ndarray:
     """Position-dependent bias from the Earth's magnetic field: m cos(A - D_mag) [deg/h].
 
@@ -208,8 +215,8 @@ def magnetic(ctx: EffectContext, *, m: float, D_mag: float) -> np.ndarray:
 
 @register_effect("polarization_ripple", kind="gyro", target="node", parameters=[
     Parameter("A_p", "deg/h", "ripple amplitude"),
-    Parameter("T_p", "K", "temperature period of the ripple"),
-    Parameter("phi", "rad", "phase", default=0.0),
+    Parameter("T_p", "K", "temperature period of the ripple", grid=(2.0, 5.0, 10.0, 20.0)),
+    Parameter("phi", "rad", "phase", default=0.0, grid=(0.0, np.pi / 2)),
     _NODE])
 def polarization_ripple(ctx: EffectContext, *, A_p: float, T_p: float, phi: float = 0.0,
                         node: str | None = None) -> np.ndarray:

@@ -13,6 +13,9 @@ registered exactly like a built-in one::
         '''Rate error k (T_coil - T_coil(0)) [deg/h]. ...'''
         return k * (ctx.coil_c - ctx.coil_c[0])
 
+A parameter the effect is not linear in (a time constant, an angle) carries the values the
+diagnosis tries for it: ``Parameter("tau", "s", "time constant", grid=(30.0, 120.0, 480.0))``.
+
 Such a file is named in a scenario (``effects_files = ["my_effects.py"]``, run only when the
 user trusts it: ``--trust-effects``) or exposed as an
 entry point in the group ``nfs.effects``.
@@ -41,7 +44,7 @@ from __future__ import annotations
 
 import importlib.util
 import sys
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace as replace_fields
 from importlib import metadata
 from pathlib import Path
 from typing import Any, Callable
@@ -50,6 +53,7 @@ from ..errors import EffectError, NfsError
 
 __all__ = [
     "KINDS",
+    "SHAPE_UNITS",
     "Parameter",
     "EffectSpec",
     "EffectInstance",
@@ -64,6 +68,10 @@ __all__ = [
 KINDS = ("gyro", "accelerometer", "thermal", "thermometer", "geometry", "null")
 
 ENTRY_POINT_GROUP = "nfs.effects"
+
+#: Units that make a float parameter a shape (the effect is not linear in it): a time
+#: constant [s], a temperature period [K], an angle [deg] or [rad].
+SHAPE_UNITS = ("s", "K", "deg", "rad")
 
 
 @dataclass(frozen=True)
@@ -87,8 +95,8 @@ class Parameter:
     shape: bool = False
     """True when the effect is not linear in this parameter although its unit does not say so
     (a time constant [s], a period [K] or an angle are shapes by their unit): a fit or a
-    diagnosis holds it at its value, or chooses it on a grid, instead of solving for it as
-    a linear coefficient."""
+    diagnosis holds it at its value, or chooses it on its ``grid``, instead of solving for
+    it as a linear coefficient."""
     bounds: tuple[float, float] | None = None
     """Closed interval (low, high) of the values where the effect is physical; a value
     outside raises :class:`~nfs.errors.EffectError` on construction.  None: unbounded."""
@@ -97,11 +105,25 @@ class Parameter:
     fibre's index and dn/dT, a coil's length and diameter): units of one design share it,
     so a unit's scatter (:mod:`nfs.variability`) leaves it alone and a fit holds it unless
     named."""
+    grid: tuple[float, ...] | None = None
+    """Shape parameters only (:attr:`nonlinear`): the values [in ``unit``] at which the
+    diagnosis (:mod:`nfs.diagnose`) tries the effect, the best one then refined by least
+    squares (inside ``bounds``; a time constant [s] or period [K] without bounds from a
+    fifth of the smallest value to five times the largest); its test pays for the choice
+    (Bonferroni over the grid's points).  Each value lies inside ``bounds``.  None: the
+    diagnosis holds the parameter at its ``default``, and a shape parameter with neither is
+    not tried.  E.g. ``Parameter("tau", "s", "time constant", grid=(60.0, 300.0, 1200.0))``."""
 
     @property
     def required(self) -> bool:
         """True when a scenario must give this parameter."""
         return self.default is None and not self.optional
+
+    @property
+    def nonlinear(self) -> bool:
+        """True for a shape parameter: a float the effect is not linear in, by its unit
+        (:data:`SHAPE_UNITS`) or by ``shape=True``."""
+        return self.type is float and (self.shape or self.unit in SHAPE_UNITS)
 
 
 @dataclass(frozen=True)
@@ -267,7 +289,8 @@ def register_effect(name: str, *, kind: str, parameters: list[Parameter] | tuple
     kind : str
         One of :data:`KINDS`.
     parameters : list of Parameter
-        What the effect needs, with units.
+        What the effect needs, with units; a shape parameter's ``grid`` (the values the
+        diagnosis tries) is checked here against its bounds.
     target : str, optional
         Name of the parameter that says where the effect acts.
     state_dependent : bool
@@ -282,7 +305,7 @@ def register_effect(name: str, *, kind: str, parameters: list[Parameter] | tuple
     """
     if kind not in KINDS:
         raise EffectError(f"effect '{name}': kind '{kind}' is not one of {', '.join(KINDS)}")
-    params = tuple(parameters)
+    params = tuple(_with_checked_grid(name, p) for p in parameters)
     if target is not None and target not in [p.name for p in params]:
         raise EffectError(f"effect '{name}': target '{target}' is not one of its parameters")
 
@@ -299,6 +322,30 @@ def register_effect(name: str, *, kind: str, parameters: list[Parameter] | tuple
         return function
 
     return decorator
+
+
+def _with_checked_grid(effect: str, p: Parameter) -> Parameter:
+    """``p`` with its grid as a tuple of floats; EffectError when the grid is empty, not
+    numbers, outside ``p.bounds`` or on a parameter the effect is linear in."""
+    if p.grid is None:
+        return p
+    where = f"effect '{effect}' parameter '{p.name}'"
+    if not p.nonlinear:
+        raise EffectError(f"{where}: a grid is for a shape parameter (unit "
+                          f"{', '.join(SHAPE_UNITS)} or shape=True); unit '{p.unit}' makes "
+                          "it a linear coefficient, which the diagnosis solves for")
+    if not isinstance(p.grid, (list, tuple)) or not p.grid or any(
+            isinstance(v, bool) or not isinstance(v, (int, float)) for v in p.grid):
+        raise EffectError(f"{where}: grid must be a non-empty tuple of numbers [{p.unit}], "
+                          f"got {p.grid!r}")
+    grid = tuple(float(v) for v in p.grid)
+    if p.bounds is not None:
+        lo, hi = p.bounds
+        outside = [v for v in grid if not lo <= v <= hi]
+        if outside:
+            raise EffectError(f"{where}: grid value(s) {', '.join(f'{v:g}' for v in outside)} "
+                              f"[{p.unit}] outside its bounds [{lo:.6g}, {hi:.6g}]")
+    return replace_fields(p, grid=grid)
 
 
 def _load_entry_points() -> None:

@@ -15,7 +15,10 @@ THERMOMETERS = {"fog": "temp_fog_c", "acc_x": "temp_acc_x_c", "acc_y": "temp_acc
 
 @register_effect("thermometer_lag", kind="thermometer", target="thermometer", parameters=[
     Parameter("thermometer", "", "which thermometer: fog, acc_x or acc_y", type=str),
-    Parameter("tau", "s", "time constant of the extra lag")])
+    # the diagnosis linearises a thermometer effect at tau = 0 (tau a coefficient there):
+    # this grid marks tau as one it can start, and fixes no value of its scores
+    Parameter("tau", "s", "time constant of the extra lag",
+              grid=(60.0, 150.0, 300.0, 600.0, 1200.0))])
 def thermometer_lag(reading_c: np.ndarray, time_s: np.ndarray, *, thermometer: str,
                     tau: float) -> np.ndarray:
     """An extra first-order lag on one thermometer: tau dy/dt = T_read - y [degC].

@@ -69,7 +69,7 @@ from scipy.interpolate import CubicSpline
 
 from ..errors import EffectError
 from .context import CoilLayout, EffectContext
-from .gyro import stress_factor_bounds
+from .gyro import STRESS_GRID, stress_factor_bounds
 from .registry import Parameter, register_effect
 
 __all__ = ["PATTERNS", "CoilLayout", "layer_sequence", "layer_weights", "optical_layer_map",
@@ -219,7 +219,7 @@ def _check_shupe_winding(params: dict) -> None:
     Parameter("k_m", "1/K", "effective stress-optic coefficient of the potted winding at "
               "T_ref (Shupe-Mohr), added to dn/dT", default=0.0),
     Parameter("c_m", "1/K", "temperature coefficient of the stress term (potting modulus)",
-              default=0.0, shape=True, bounds=stress_factor_bounds()),
+              default=0.0, shape=True, bounds=stress_factor_bounds(), grid=STRESS_GRID),
     Parameter("L_asym", "m", "effective asymmetric length: half B's fibre minus half A's",
               default=0.0)])
 def shupe_winding(ctx: EffectContext, *, L: float = 1000.0, D: float = 0.09,

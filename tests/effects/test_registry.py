@@ -5,7 +5,8 @@ from pathlib import Path
 
 import pytest
 
-from nfs.effects import (available_effects, get_effect, load_effects_file,
+import nfs.effects.registry as reg
+from nfs.effects import (Parameter, available_effects, get_effect, load_effects_file,
                          make_effect, register_effect)
 from nfs.errors import EffectError
 
@@ -115,8 +116,6 @@ def test_duplicate_name_refused():
 
 def test_entry_point_plugins(monkeypatch):
     """A plug-in package's entry point in group nfs.effects is loaded on first lookup."""
-    import nfs.effects.registry as reg
-
     loaded = []
 
     class EP:
@@ -130,3 +129,30 @@ def test_entry_point_plugins(monkeypatch):
     monkeypatch.setattr(reg.metadata, "entry_points", lambda group: [EP()])
     assert get_effect("test_ep_effect").kind == "gyro"
     assert loaded == [True]
+
+
+@pytest.mark.parametrize("parameter, match", [
+    (Parameter("k", "deg/h", "gain", grid=(1.0, 2.0)), "linear coefficient"),
+    (Parameter("tau", "s", "time constant", grid=()), "non-empty tuple of numbers"),
+    (Parameter("tau", "s", "time constant", grid=60.0), "non-empty tuple of numbers"),
+    (Parameter("tau", "s", "time constant", grid=(60.0, "long")), "non-empty tuple of numbers"),
+    (Parameter("tau", "s", "time constant", bounds=(1.0, 100.0), grid=(10.0, 300.0)),
+     r"grid value\(s\) 300 \[s\] outside its bounds"),
+])
+def test_grid_checked_at_registration(parameter, match):
+    # Oracle: a grid the diagnosis could not use (on a linear coefficient, empty, not
+    # numbers, outside the bounds) is refused when the effect is registered, naming both.
+    with pytest.raises(EffectError, match=match) as err:
+        register_effect("test_bad_grid", kind="gyro", parameters=[parameter])
+    assert f"effect 'test_bad_grid' parameter '{parameter.name}'" in str(err.value)
+    assert "test_bad_grid" not in available_effects()
+
+
+def test_grid_on_a_shape_by_flag(monkeypatch):
+    # Oracle: shape=True makes a parameter of any unit a shape, so it may carry a grid,
+    # stored as a tuple of floats (the registry is a copy, restored after the test).
+    monkeypatch.setattr(reg, "_REGISTRY", dict(reg._REGISTRY))
+    p = Parameter("c", "1/K", "temperature coefficient", shape=True, grid=[-0.01, 0])
+    assert p.nonlinear and not Parameter("c", "1/K", "temperature coefficient").nonlinear
+    register_effect("test_flag_grid", kind="gyro", parameters=[p])(lambda ctx, *, c: 0.0)
+    assert get_effect("test_flag_grid").parameter("c").grid == (-0.01, 0.0)
