@@ -27,7 +27,7 @@ strongly autocorrelated, runs are independent, so every statistic is run-level
   ``heat_source`` and ``motor_heat`` powers and an extra ``thermometer_lag`` cannot be
   negative: their test is one-sided (:data:`~nfs.diagnose.candidate_score.ONE_SIDED`).
 - **Shape search paid for.**  A candidate with shape parameters (tau, D_mag, T_p, phi) is
-  tested at every point of its grid (:data:`~nfs.diagnose.candidates.SHAPE_GRID`) and its
+  tested at every point of its grid (the grid its registration gives, :attr:`nfs.effects.Parameter.grid`) and its
   p-value is Bonferroni's over the grid, min(1, n_grid min_j p_j): valid whatever the
   correlation between grid points, since under "every coefficient is 0" the shape is
   irrelevant, and cheap, since each grid point's columns are computed once.  (Choosing the
