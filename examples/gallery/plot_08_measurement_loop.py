@@ -1,6 +1,6 @@
 """
 The measurement loop: fit, compare, diagnose, add the effect, diagnose again
-===========================================================================
+============================================================================
 
 A unit's chamber runs and the default model, worked as an engineer works a unit with
 :class:`nfs.UnitChain`: fit the model, set it beside the runs, ask which registered effect
