@@ -15,7 +15,7 @@ def load(name):
     return mod
 
 
-@pytest.mark.slow  # the whole loop on 7 runs; tests/diagnose checks each step by default
+@pytest.mark.integration  # the whole loop on 7 runs; tests/diagnose checks each step by default
 def test_missing_effect_example(tmp_path):
     """Runs of the independent generator (not our simulator) with a hidden magnetic bias
     (m = 0.012 deg/h, D_mag = 40 deg; 1.2x the drift noise floor).  Oracle: the hidden
@@ -38,7 +38,7 @@ def test_missing_effect_example(tmp_path):
     assert r["heading_after_deg"] <= r["heading_before_deg"] * 1.001
 
 
-@pytest.mark.slow  # seven runs fitted and diagnosed twice, a design: about 3 min on two cores
+@pytest.mark.integration  # seven runs fitted and diagnosed twice, a design: about 3 min on two cores
 def test_design_tie_example(tmp_path):
     """A hidden turn-on transient (a = 0.1 deg/h, tau = 120 s).  Oracle: the first diagnosis
     ties it with a rate term on every node; the design is a power cycle; after its run the

@@ -22,6 +22,7 @@ def _check(name):
         assert readme_numbers.differences(name, text, table) == [], page
 
 
+@pytest.mark.integration       # the default table's whole study (nfs table): about 30 s
 def test_default_table_in_readme_is_what_the_package_prints():
     _check("default-table")
 

@@ -33,6 +33,9 @@ from nfs.report.compensation import SVR_FAMILY, shape_checks
 FLEET = Path(__file__).resolve().parents[2] / "scenarios" / "startup_7temps_fleet.toml"
 
 
+# The study of 6 methods with their tuners (about 20 s on two cores) is a benchmark-like
+# check: its tests are the middle tier's (-m integration); tests/compensate has quick ones
+# of each step in the default run.
 @pytest.fixture(scope="module")
 def study():
     settings = CompensationSettings(methods=("ls", "bp", "svr-grid", "pso-svr", "gwo-svr",
@@ -46,6 +49,7 @@ def table(study):
     return study.heading_table()
 
 
+@pytest.mark.integration
 def test_expected_shape(table):
     checks = {c.name: c for c in shape_checks(table)}
     for name in ("SSA-SVR mean <= 0.6 x before", "SVR family ahead of BP",
@@ -53,6 +57,7 @@ def test_expected_shape(table):
         assert checks[name].passed, checks[name].detail
 
 
+@pytest.mark.integration
 def test_expected_shape_beyond_the_uncertainty(table):
     ssa = table.comparison("SSA-SVR", "before")
     assert ssa.distinguishable and ssa.ci_high_deg < 0, ssa.sentence()
@@ -69,6 +74,7 @@ def test_expected_shape_beyond_the_uncertainty(table):
             assert np.all(np.asarray(r.rmse_deg) <= lo_hi[:, 1] + 1e-12), r.method
 
 
+@pytest.mark.integration
 def test_tuned_rows_show_their_median_seed(study, table):
     for name in ("PSO-SVR", "GWO-SVR", "SSA-SVR"):
         means = [r.mean_deg for r in study.results[name].seeds]
@@ -77,6 +83,7 @@ def test_tuned_rows_show_their_median_seed(study, table):
     assert table.row("SVR (grid)").seed_means_deg == ()
 
 
+@pytest.mark.integration
 def test_drift_table_regime(study):
     rows = {r.method: r for r in study.drift_rows()}
     # the FOG start-up paper Table 2: denoised drift STD 0.0134 deg/h; SSA-SVR residual STD 0.0031.
@@ -84,11 +91,13 @@ def test_drift_table_regime(study):
     assert rows["SSA-SVR"].std_dph < 0.5 * rows["denoised (no compensation)"].std_dph
 
 
+@pytest.mark.integration
 def test_tuned_parameters_inside_the_box(study):
     p = study.tuned_parameters()["SSA-SVR"]
     assert 0.1 <= p["C"] <= 100 and 0.5 <= p["sigma"] <= 30 and 0.02 <= p["epsilon"] <= 0.5
 
 
+@pytest.mark.integration
 def test_same_seed_same_model(study):
     """Determinism: retraining SSA-SVR with the same random_state gives the same drift."""
     from nfs.compensate import train_compensator
@@ -127,6 +136,7 @@ def test_cycle_mode_ssa_svr_on_another_unit():
     assert c.distinguishable and c.difference_deg < 0, c.sentence()
 
 
+@pytest.mark.integration
 def test_the_study_keeps_what_it_scored(study):
     """The separation of every test run and each row's predicted drift are kept (the report
     draws them instead of computing them again): the drift row's MAE recomputed from them

@@ -67,12 +67,16 @@ def _designed_and_after(model, truth, runs, seed):
     return d, before, design, d2, after
 
 
+# The whole loop (fit, diagnose, settle, design, run, fit, diagnose, settle) on 7 runs of
+# 2.5 h: about 2 min on two cores, the middle tier's (-m integration).  Each step has its
+# own quick tests in the default run (tests/diagnose, tests/design, tests/unit).
 @pytest.fixture(scope="module")
 def transient():
     model, truth, runs = _world("turn_on_transient", {"a": 0.1, "tau": 120.0}, 11)
     return _designed_and_after(model, truth, runs, 11)
 
 
+@pytest.mark.integration
 def test_transient_tie_before_the_designed_run(transient):
     d, before, design, _, _ = transient
     assert d.answer.kind == "tie"
@@ -84,6 +88,7 @@ def test_transient_tie_before_the_designed_run(transient):
     assert pair.winner is None and before.answer.kind == "tie", before.answer.text
 
 
+@pytest.mark.integration
 def test_the_design_proposes_a_power_cycle_that_separates_them(transient):
     _, _, design, _, _ = transient
     assert design.met and design.experiment.event == "power_off", design.verdict
@@ -96,6 +101,7 @@ def test_the_design_proposes_a_power_cycle_that_separates_them(transient):
                for t in design.trials if t.met)
 
 
+@pytest.mark.integration
 def test_after_the_designed_run_the_transient_is_named_with_its_truth(transient):
     _, _, _, _, after = transient
     assert after.answer.kind == "add" and after.answer.labels == ("turn_on_transient",), \

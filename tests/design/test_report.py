@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import re
 
 import numpy as np
 import pytest
@@ -21,6 +22,7 @@ from nfs.fit import set_params
 from nfs.experiment import simulate_run
 from nfs.instrument import load_instrument
 from nfs.io.measurement import read_runs
+from nfs.ranges import RangeWarning
 from nfs.report.design_report import scenario_toml, to_markdown, write_design
 from nfs.rivals.models import Rival
 from nfs.design.search import design_experiment
@@ -92,12 +94,16 @@ def test_design_json(made):
     assert len(data["trials"]) == len(d.trials)
 
 
-# a one-hour design's start-up stage (640 s) is shorter than usual: a warning, not an error
-@pytest.mark.filterwarnings("ignore::nfs.ranges.RangeWarning")
 def test_scenario_reads_back_with_the_designs_power_cycles(made):
     d, runs = made["design"], made["runs"]
     e = d.experiment
-    sc = load_scenario(made["out"] / "scenario.toml")
+    # a one-hour design's stages (start-up to 800 s, stable from there) are shorter than
+    # usual: a warning for each, not an error
+    with pytest.warns(RangeWarning) as seen:
+        sc = load_scenario(made["out"] / "scenario.toml")
+    assert sorted(re.search(r"scenario\.toml, key '([^']+)': \d+ s is unusual",
+                            str(w.message))[1] for w in seen) == \
+        ["northfind.stable_start_s", "northfind.startup_end_s"]
     [c] = sc.conditions()
     want = e.conditions(base_conditions(runs)).power_off_s
     assert len(want) == e.cycles == 1

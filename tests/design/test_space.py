@@ -144,11 +144,20 @@ def test_start_temperature_outside_the_range(t0):
 
 
 def test_valid_edges():
+    # Oracle: the range's ends are inside it (the check is lo <= T0 <= hi), and the
+    # experiment built there is the one asked for: its program holds T0 for the whole run.
     lo, hi = TEMPERATURE_RANGE_C
-    Experiment(lo, 7200.0)
-    Experiment(hi, 7200.0)
-    # one cycle may be longer than every_s (every_s only spaces repeated cycles)
-    Experiment(20.0, 7200.0, "power_off", power_off_s=1800.0, cycles=1, every_s=1200.0)
+    for t0 in (lo, hi):
+        e = Experiment(t0, 7200.0)
+        assert e.start_temperature_c == t0 and e.event_end_s == 0.0
+        t, temp = _prog(e).corners(t0, 1.0)
+        np.testing.assert_allclose(t, [0.0, 7200.0])
+        np.testing.assert_allclose(temp, [t0, t0])
+    # one cycle may be longer than every_s (every_s only spaces repeated cycles): one span,
+    # from event_s for power_off_s
+    e = Experiment(20.0, 7200.0, "power_off", power_off_s=1800.0, cycles=1, every_s=1200.0)
+    assert _prog(e).power_off_spans_s(20.0, 1.0) == ((3600.0, 5400.0),)
+    assert e.event_end_s == 3600.0 + 1800.0
 
 
 # ---- the grid ---------------------------------------------------------------------------
@@ -232,14 +241,28 @@ def test_grid_drops_ramps_ending_after_the_longest_run():
     assert all(sp.durations_s(e).size for e in ex)
 
 
-@pytest.mark.filterwarnings("ignore::Warning")
 def test_every_neighbour_the_search_tries_is_runnable():
+    # Oracle: the neighbours of a ramp that ends at the range's hot end stay inside the range
+    # (T0 within the space's temperatures, the chamber within TEMPERATURE_RANGE_C), last the
+    # space's longest run, and each gives run conditions.  A chamber above 85 C is unusual (nfs.ranges) but allowed: each program
+    # ramping there says so, once, with a RangeWarning.
     from nfs.design.search import _neighbours
+    from nfs.ranges import RangeWarning
     lo, hi = TEMPERATURE_RANGE_C
-    sp = Space(start_temperatures_c=(hi - 40.0, hi - 10.0))
+    t_range = (hi - 40.0, hi - 10.0)
+    sp = Space(start_temperatures_c=t_range)
     best = Experiment(hi - 10.0, sp.max_duration_s, "ramp", 3600.0, ramp_to_c=hi)
-    for e in _neighbours(best, sp, (hi - 40.0, hi - 10.0), 150.0):
-        e.conditions(_base())
+    near = _neighbours(best, sp, t_range, 150.0)
+    assert len(near) >= 8          # T0, event_s, dwell, rate and ramp end, each way
+    for e in near:
+        with pytest.warns(RangeWarning, match=r"key 'design\.program\[1\]\.ramp_to_c'.* is "
+                                              r"unusual \(a chamber program runs within"):
+            c = e.conditions(_base())
+        assert t_range[0] <= c.start_temperature_c <= t_range[1]
+        assert c.duration_s == sp.max_duration_s
+        chamber = c.chamber_c(np.linspace(0.0, c.duration_s, 401))
+        assert lo <= chamber.min() and chamber.max() <= hi
+        assert chamber.max() == pytest.approx(e.ramp_to_c)       # the ramp reaches its end
 
 
 # ---- default space ----------------------------------------------------------------------

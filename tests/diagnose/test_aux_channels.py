@@ -87,6 +87,7 @@ def test_diagnose_scores_an_undeclared_column_without_a_hidden_effect(clean_runs
     assert 0.0 <= s.wald_p <= 1.0
 
 
+@pytest.mark.integration       # a second set of runs and its diagnosis
 def test_diagnose_names_a_hidden_effect_on_an_undeclared_column():
     """Oracle: the hidden truth, aux_linear k = 0.005 deg/h/mA on the undeclared column,
     is the top candidate, significant, and its interval holds the true k."""

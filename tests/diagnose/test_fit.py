@@ -92,6 +92,11 @@ def test_report(fitted, scenario):
         assert get_param(scenario.instrument, p) == fitted.initial_params[p]
 
 
+# The default instrument's bias instability, 0.002 deg/h, is the lower end of its typical
+# range in nfs.ranges; fitted to these runs it comes out at 0.00186, and loading the written
+# model says so (a RangeWarning that is not what this test is about).
+@pytest.mark.filterwarnings(r"ignore:.*key 'gyro\.bias_instability_dph'.* is unusual"
+                            ":nfs.ranges.RangeWarning")
 def test_write_fitted_model(fitted, tmp_path):
     path = write_fitted_model(fitted, tmp_path / "fitted.toml")
     text = path.read_text()

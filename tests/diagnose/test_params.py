@@ -48,7 +48,7 @@ def test_round_trip_every_path(preset):
 
 def test_set_many_and_toml_round_trip(lumped):
     inst = lumped
-    values = {"thermal.nodes.coil_inner.capacity_j_per_k": 222.0,
+    values = {"thermal.nodes.coil_inner.capacity_j_per_k": 170.0,
               "thermal.links.chamber-housing.conductance_w_per_k": 1.9,   # reversed order
               "thermometers.fog.lag_s": 36.0, "gyro.bias_dph": 0.03,
               "effects.shupe_gradient.k_r": 0.12,

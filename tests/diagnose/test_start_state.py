@@ -202,6 +202,7 @@ def _clean_set(seed):
     return d, d.thermal_structure.adequate
 
 
+@pytest.mark.integration       # simulate, fit and diagnose the default world's 7 runs
 def test_the_default_world_names_nothing():
     """Oracle: the model's structure is the truth's (nothing is missing), with every run's
     soak unfinished, the chamber wandering and the unit's parameters scattered: no effect is

@@ -70,12 +70,14 @@ def test_its_own_runs_are_adequate(default, clean):
     assert not any(a.beats_model for a in ad.alternatives)
 
 
+@pytest.mark.integration       # a diagnosis of 7 runs of 2.5 h (as the two below)
 def test_clean_runs_name_nothing(default, clean):
     d = diagnose(default, clean, start_state=None)
     assert d.answer.kind == "nothing", d.verdict
     assert not any(s.significant for s in d.ranking)
 
 
+@pytest.mark.integration
 @pytest.mark.parametrize("name", sorted(HIDDEN))
 def test_a_hidden_effect_is_named(default, name):
     truth = default.with_effects(list(default.effects) + [make_effect(name, HIDDEN[name])])

@@ -227,8 +227,8 @@ def test_indexing_scatter_is_drawn_per_visit_from_the_seeded_stream(quiet):
 GEOMETRY_TOML = """
 [[effects]]
 name = "tilt_exact"
-pitch_deg = 2.0
-roll_deg = 1.0
+pitch_deg = 0.05
+roll_deg = 0.03
 
 [[effects]]
 name = "indexing_error"
@@ -248,7 +248,9 @@ def test_instrument_and_scenario_files_with_geometry_effects_load(tmp_path):
     from nfs.instrument import preset_path
     from nfs.config.scenario import load_scenario
     from nfs.config.presets import default_scenario_path
-    text = preset_path("default").read_text()
+    # a file of its own has a name of its own, and a levelled platform's tilt (0.05 and 0.03
+    # deg, inside nfs.ranges' typical 0-0.1 deg): the files load without a RangeWarning
+    text = preset_path("default").read_text().replace('name = "default"', 'name = "geom"', 1)
     text = text.replace("tilt_north_deg = 0.02", "tilt_north_deg = 0.0").replace(
         "tilt_east_deg = -0.015", "tilt_east_deg = 0.0")
     (tmp_path / "geom.toml").write_text(text + GEOMETRY_TOML)

@@ -115,8 +115,8 @@ def test_ramp_over_a_time_a_step_and_repeat(tmp_path):
     _, (t, c) = corners(tmp_path, "[{ ramp_to_c = 30.0, over_s = 600.0 }, { step_to_c = 0.0 },"
                                   " { repeat = 2, steps = [{ hold_s = 100.0 },"
                                   " { ramp_to_c = 10.0, rate_c_per_min = 2.0 },"
-                                  " { ramp_to_c = 0.0, over_s = 50.0 }] }]")
-    np.testing.assert_allclose(t, [0, 600, 601, 701, 1001, 1051, 1151, 1451, 1501])
+                                  " { ramp_to_c = 0.0, over_s = 60.0 }] }]")
+    np.testing.assert_allclose(t, [0, 600, 601, 701, 1001, 1061, 1161, 1461, 1521])
     np.testing.assert_allclose(c, [20, 30, 0, 0, 10, 0, 0, 10, 0])
 
 
@@ -227,7 +227,9 @@ def test_base_file_gives_every_key_left_out(tmp_path):
     # Oracle: the keys written in the base, overridden table by table by the file; paths in
     # the base stay relative to the base's folder; name and description are the file's.
     (tmp_path / "lib").mkdir()
-    (tmp_path / "lib" / "unit.toml").write_text(preset_path("default").read_text())
+    # the preset's text under a name of its own (a file named "default" would be warned about)
+    (tmp_path / "lib" / "unit.toml").write_text(
+        preset_path("default").read_text().replace('name = "default"', 'name = "unit"', 1))
     write(tmp_path / "lib", 'name = "parent"\ndescription = "the parent"\n'
           'instrument = "unit.toml"\nstart_temperatures_c = [-10.0, 30.0]\nseed = 5\n'
           + SHORT + "[compensation]\nmethods = ['ls']\ntest_repeats = 2\n"

@@ -89,8 +89,8 @@ def _rms_vs_sinc(model):
 @pytest.mark.filterwarnings("ignore::sklearn.exceptions.ConvergenceWarning")
 @parametrize_with_checks([SVRRegressor(), LSSVMRegressor(), IRLSSVMRegressor(),
                           IRLSSVMRegressor(weight="hampel"), RVRRegressor()])
-def test_sklearn_estimator_checks(estimator, check):
-    check(estimator)
+def test_sklearn_estimator_checks(estimator, check, sklearn_check):
+    sklearn_check(check, estimator)
 
 
 # ------------------------------------------------------------------ kernel

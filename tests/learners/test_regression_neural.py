@@ -30,18 +30,18 @@ DEFAULTS = [CubicLeastSquares(), StepwiseRegression(), BPNetwork(), RBFNetwork()
 
 @pytest.mark.filterwarnings("ignore::sklearn.exceptions.ConvergenceWarning")
 @parametrize_with_checks(CHECKED)
-def test_estimator_contract(estimator, check):
+def test_estimator_contract(estimator, check, sklearn_check):
     """Oracle: scikit-learn's own estimator checks (style practice 7).  None is marked
     xfail."""
-    check(estimator)
+    sklearn_check(check, estimator)
 
 
 @pytest.mark.slow
 @pytest.mark.filterwarnings("ignore::sklearn.exceptions.ConvergenceWarning")
 @parametrize_with_checks(DEFAULTS)
-def test_default_estimators_pass_checks(estimator, check):
+def test_default_estimators_pass_checks(estimator, check, sklearn_check):
     """Oracle: scikit-learn's estimator checks, on the default hyperparameters."""
-    check(estimator)
+    sklearn_check(check, estimator)
 
 
 # --------------------------------------------------------------------------------------

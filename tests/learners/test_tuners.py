@@ -8,10 +8,12 @@ regression problem, and scikit-learn's estimator checks.
 """
 
 import sys
+import warnings
 
 import numpy as np
 import pytest
 from sklearn.base import BaseEstimator, RegressorMixin, clone
+from sklearn.exceptions import SkipTestWarning
 from sklearn.linear_model import Ridge
 from sklearn.svm import SVR
 from sklearn.utils.estimator_checks import check_estimator
@@ -23,14 +25,9 @@ from nfs.learners.tuners import (TUNERS, TuningError, minimize, random_search,
 from nfs.learners.tuners import registry as tuner_registry
 from nfs.errors import NfsError
 
-try:
-    import optuna  # noqa: F401
-    HAVE_OPTUNA = True
-except ImportError:
-    HAVE_OPTUNA = False
-
-METHODS = [pytest.param(m, marks=pytest.mark.skipif(not HAVE_OPTUNA, reason="optuna missing"))
-           if m == "tpe" else m for m in TUNERS]
+#: every tuner; Optuna's TPE needs the optional package (the tune extra)
+METHODS = [pytest.param(m, marks=pytest.mark.requires("optuna")) if m == "tpe" else m
+           for m in TUNERS]
 
 C3 = np.array([0.37, -0.52, 0.61])  # shifted optimum in [-1, 1]^3
 C2 = C3[:2]
@@ -354,13 +351,21 @@ def test_n_jobs_does_not_change_the_result():
     assert a.best_params_ == b.best_params_
 
 
-def test_sklearn_estimator_checks():
+def test_sklearn_estimator_checks(optional_skip):
     # Oracle: scikit-learn's own estimator checks (R^2 scoring, 3-fold CV as they pass no
-    # groups).
+    # groups): none fails, and a check is skipped only for want of an optional dependency
+    # (counted on the run's last line, where scikit-learn would warn once per check).
     est = MetaheuristicSearchCV(Ridge(), {"alpha": Real(1e-3, 1e3, log=True)}, method="pso",
                                 budget=8, population=4, cv=3, scoring=None, random_state=0)
-    failed = [r for r in check_estimator(est, on_fail=None) if r["status"] == "failed"]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", SkipTestWarning)   # each skip is asserted on below
+        results = check_estimator(est, on_fail=None)
+    failed = [r for r in results if r["status"] == "failed"]
     assert not failed, [(r["check_name"], repr(r["exception"])) for r in failed]
+    skipped = [r for r in results if r["status"] == "skipped"]
+    assert all(optional_skip(str(r["exception"])) for r in skipped), \
+        [(r["check_name"], str(r["exception"])) for r in skipped]
+    assert len(results) - len(skipped) > 40        # the checks did run
     clone(est)
 
 

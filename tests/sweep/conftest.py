@@ -1,4 +1,6 @@
-"""A short scenario for sweep tests: two start temperatures, 40 min runs."""
+"""A short scenario for sweep tests: two start temperatures, 40 min runs (the start-up stage
+its first 30 min, the stable stage the last 10: the shortest stages inside the typical ranges
+of nfs.ranges)."""
 
 import pytest
 
@@ -17,8 +19,8 @@ dwell_s = 100.0
 move_s = 10.0
 
 [northfind]
-startup_end_s = 1200.0
-stable_start_s = 1300.0
+startup_end_s = 1800.0
+stable_start_s = 1800.0
 """
 
 

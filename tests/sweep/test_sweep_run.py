@@ -84,8 +84,8 @@ def test_one_and_two_jobs_give_the_same_bytes(tmp_path, short_scenario):
     assert {"time_to_spec_s", "time_to_spec_rmse_s"} <= set(rows[0])
 
 
+@pytest.mark.requires("dask", "distributed")
 def test_dask_local_cluster_gives_the_same_bytes(tmp_path, short_scenario):
-    pytest.importorskip("dask.distributed")
     from nfs.sweep import DaskExecutor
     spec = _short_sweep(tmp_path, short_scenario)
     run_sweep(spec, tmp_path / "local", executor=LocalExecutor(1), quiet=True, figures=False)
@@ -201,8 +201,9 @@ def test_compensated_sweep_has_both_methods(tmp_path, short_scenario):
                     for r in _rows(tmp_path / "plain" / "results.csv")]
 
 
+@pytest.mark.requires("pyarrow")
 def test_parquet_holds_the_csv_table(tmp_path, short_scenario):
-    pq = pytest.importorskip("pyarrow.parquet")
+    import pyarrow.parquet as pq
     spec = _short_sweep(tmp_path, short_scenario)
     res = run_sweep(spec, tmp_path / "out", executor=LocalExecutor(1), quiet=True,
                     figures=False)
