@@ -47,13 +47,14 @@ def test_diagnose_cli(tmp_path, cli, scen_text):
     code, out, err = cli("diagnose", str(tmp_path / "runs"), "--json",
                              str(tmp_path / "d.json"), "-q")
     assert code == 0, err
-    # the finding (nfs.rivals.Finding): the diagnosis, its settlement and the one answer
+    # the finding (nfs.rivals.Finding): the diagnosis's fields at the top, its settlement
+    # and the one answer
     doc = json.loads((tmp_path / "d.json").read_text())
-    assert doc["schema"] == "nfs-finding/1" and {"answer", "verdict", "provenance"} <= set(doc)
-    diagnosis = doc["diagnosis"]
-    assert {"ranking", "unexplained"} <= set(diagnosis) and diagnosis["ranking"]
-    assert {"effect", "target", "significant", "cv_rms_before", "cv_rms_after"} <= \
-        set(diagnosis["ranking"][0])
+    assert doc["schema"] == "nfs-finding/1"
+    assert {"answer", "verdict", "provenance", "settlement"} <= set(doc)
+    assert {"ranking", "unexplained", "not_tried"} <= set(doc) and doc["ranking"]
+    assert {"effect", "target", "significant", "cv_rms_before", "cv_rms_after", "cv_drop"} <= \
+        set(doc["ranking"][0])
     code, out, err = cli("diagnose", str(tmp_path / "runs"), "--apply",
                              "magnetic", "-o", str(tmp_path / "m2.toml"))
     assert code == 0, err
