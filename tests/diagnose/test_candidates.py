@@ -65,7 +65,8 @@ def test_builtin_grids_are_the_former_global_grid():
         assert get_effect(name).parameter(par).grid == grid, (name, par)
     for name in available_effects():
         spec = get_effect(name)
-        if spec.kind == "geometry":
+        # the package's own effects (a test elsewhere may have registered one of its own)
+        if spec.kind == "geometry" or not spec.function.__module__.startswith("nfs."):
             continue
         _, shapes, missing = split_parameters(spec)
         assert not missing, (name, missing)
