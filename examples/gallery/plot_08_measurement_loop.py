@@ -36,13 +36,11 @@ applied = chain.apply(finding.answer.labels[0])          # what the answer names
 after, again = chain.compare(), chain.diagnose()
 print("then:", again.verdict)
 
-fig, ax = plt.subplots(figsize=(7.5, 4.0))
+fig, ax = plt.subplots(figsize=(7.5, 4.0), layout="constrained")
 for comparison, label in ((before, "model fitted"), (after, f"with {applied.label} added")):
     run = comparison.per_run["gyro_drift_dph"][1]
-    ax.plot(run.time_s / 60.0, run.measured - run.model, ".", ms=3,
-            label=f"{label}: measured - model [deg/h]")
-ax.set(xlabel="time since power-on [min]", ylabel="gyro drift residual [deg/h]",
+    ax.plot(run.time_s / 60.0, run.measured - run.model, ".", ms=3, label=label)
+ax.set(xlabel="time since power-on [min]", ylabel="gyro drift: measured - model [deg/h]",
        title=f"Run at {runs[1].meta.start_temperature_c:g} C: the position pattern goes")
 ax.legend(fontsize=8)
-fig.tight_layout()
 plt.show()
