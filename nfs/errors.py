@@ -1,13 +1,20 @@
-"""Exception hierarchy (after python-control's ``exception.py``).
+"""Exception hierarchy (after python-control's ``exception.py``), and names that moved.
 
 Every error a user can cause by bad input is an :class:`NfsError` whose ``str`` is one line
 that locates the fault (file, key, column, row).  The CLI turns it into that line on stderr
 and exit code 2, never a traceback.
+
+A package whose public names moved keeps answering for them for one release
+(:func:`moved_names`, a PEP 562 module ``__getattr__``) with a :class:`DeprecationWarning`
+that names the new home.
 """
 
 from __future__ import annotations
 
+import warnings
+from importlib import import_module
 from pathlib import Path
+from typing import Any, Callable, Mapping
 
 from thermal.errors import ThermalError
 
@@ -19,6 +26,7 @@ __all__ = [
     "EffectError",
     "ThermalError",
     "USER_ERRORS",
+    "moved_names",
 ]
 
 
@@ -80,3 +88,17 @@ class EffectError(NfsError):
 #: thermal package stands alone and raises its own :class:`thermal.ThermalError`, a
 #: ValueError, for a network that is not physical). The CLI prints either as one line.
 USER_ERRORS = (NfsError, ThermalError)
+
+
+def moved_names(package: str, moved: Mapping[str, str]) -> Callable[[str], Any]:
+    """A module ``__getattr__`` for ``package`` that hands over each name of ``moved`` (name
+    -> the module that has it now) with a DeprecationWarning, and raises AttributeError for
+    any other."""
+    def __getattr__(name: str) -> Any:
+        module = moved.get(name)
+        if module is None:
+            raise AttributeError(f"module {package!r} has no attribute {name!r}")
+        warnings.warn(f"{package}.{name} moved to {module}.{name}; import it from there (the "
+                      "old name goes in the next release)", DeprecationWarning, stacklevel=2)
+        return getattr(import_module(module), name)
+    return __getattr__

@@ -14,9 +14,7 @@ The designed run's scenario file, report and figure are written by
 here before still are, with a :class:`DeprecationWarning`, for one release.
 """
 
-import warnings
-from importlib import import_module
-
+from ..errors import moved_names
 from .search import Design, Trial, current_separation, design_experiment
 from .space import Experiment, Space, base_conditions, default_space
 
@@ -28,12 +26,4 @@ _MOVED = dict.fromkeys(["Prediction", "noise_sigma", "predict", "quiet", "MODEL"
                         "rivals_from_diagnosis", "MARGIN_SIGMA", "RivalPrediction",
                         "Separation", "separation"], "nfs.rivals")
 
-
-def __getattr__(name: str):
-    """A name that moved to :mod:`nfs.rivals`: warn and hand it over (PEP 562)."""
-    module = _MOVED.get(name)
-    if module is None:
-        raise AttributeError(f"module 'nfs.design' has no attribute {name!r}")
-    warnings.warn(f"nfs.design.{name} moved to {module}.{name}; import it from there "
-                  "(the old name goes in the next release)", DeprecationWarning, stacklevel=2)
-    return getattr(import_module(module), name)
+__getattr__ = moved_names('nfs.design', _MOVED)

@@ -19,9 +19,7 @@ importable from here before the move (``fit_model``, ``compare``, ...) still are
 :class:`DeprecationWarning`, for one release.
 """
 
-import warnings
-from importlib import import_module
-
+from ..errors import moved_names
 from .apply import apply_candidate, fit_candidate
 from .candidates import candidates
 from .missing_effect import diagnose
@@ -42,12 +40,4 @@ _MOVED = {
     "write_report": "nfs.report.compare_report",
 }
 
-
-def __getattr__(name: str):
-    """A name that moved: warn once per use and hand it over (PEP 562)."""
-    module = _MOVED.get(name)
-    if module is None:
-        raise AttributeError(f"module 'nfs.diagnose' has no attribute {name!r}")
-    warnings.warn(f"nfs.diagnose.{name} moved to {module}.{name}; import it from there "
-                  "(the old name goes in the next release)", DeprecationWarning, stacklevel=2)
-    return getattr(import_module(module), name)
+__getattr__ = moved_names('nfs.diagnose', _MOVED)
