@@ -30,6 +30,8 @@ from ..instrument import Instrument
 from .candidates import Candidate
 from .columns import PreparedRun, candidate_columns, fit_shapes
 from .result import CandidateScore
+from ..fit.structure import positive_parameter
+from ..scoring.intervals import positive_interval
 from ..scoring.run_stats import RunGrams, augmented_grams, clustered_fit, group_cv_rms, run_grams, solve
 
 __all__ = ["ONE_SIDED", "ScoredCandidate", "ResidualChannel", "residual_channel",
@@ -126,7 +128,10 @@ def score_candidate(c: Candidate, ch: ResidualChannel,
         values += [shapes[s] for s in c.shapes]
     half = [fit.half_width(i) for i in idx]
     coef = {n: float(v) for n, v in zip(names, values)}
-    interval = {n: (float(v - h), float(v + h)) for n, v, h in zip(names, values, half)}
+    # a positive quantity's interval on its log: no negative time constant or power
+    interval = {n: (positive_interval(v, h) if positive_parameter(c.effect, n)
+                    else (float(v - h), float(v + h)))
+                for n, v, h in zip(names, values, half)}
     # partial correlation of the baseline residual e with the candidate's fitted signature
     # s = C b_c, the model's columns projected out of s (e is orthogonal to them already):
     # r = s^T e / (|s_perp| |e|), every term from the Gram blocks

@@ -46,7 +46,7 @@ from .params import set_params
 __all__ = ["StructuralAlternative", "split_node", "insert_node", "free_link",
            "thermometer_weight", "tec_set_point", "effect_alternative",
            "structural_alternatives",
-           "set_thermometer_fraction", "physical_lower"]
+           "set_thermometer_fraction", "physical_lower", "positive_parameter"]
 
 _WEIGHT = ".nodes."
 _PHYSICAL_LOWER = {("heat_source", "power"): 0.0, ("motor_heat", "power"): 0.0,
@@ -274,6 +274,17 @@ def physical_lower(effect: str, parameter: str) -> float | None:
     set point); a thermometer lag tau >= 0 s (causality).
     """
     return _PHYSICAL_LOWER.get((effect, parameter))
+
+
+def positive_parameter(effect: str, parameter: str) -> bool:
+    """Whether an effect's parameter is a positive quantity, whose interval is made on its
+    log (:func:`nfs.scoring.intervals.positive_interval`): a coefficient whose physical lower
+    bound is 0 (:func:`physical_lower`: a power, a TEC slope, a lag) or a shape measured in
+    seconds or kelvin (a time constant, a temperature period)."""
+    if physical_lower(effect, parameter) == 0.0:
+        return True
+    p = get_effect(effect).parameter(parameter)
+    return p.nonlinear and p.unit in ("s", "K")
 
 
 def effect_alternative(inst: Instrument, effect: str, target: str | None = None

@@ -43,6 +43,8 @@ from scipy.stats import norm
 
 from ..diagnose.result import Answer, Diagnosis
 from ..fit.calibration import check_fit_keywords
+from ..fit.structure import positive_parameter
+from ..scoring.intervals import positive_interval
 from ..effects.thermometer import THERMOMETERS
 from ..instrument import Instrument
 from ..run import Run
@@ -199,8 +201,10 @@ def winner_interval(r: Rival, diagnosis: Diagnosis | None, factor: float = 1.0
     out = {}
     for p, v in r.fit.params.items():
         if p.startswith(prefix):
-            se = factor * r.fit.stderr.get(p, float("inf"))
-            out[p[len(prefix):]] = (v - _Z95 * se, v + _Z95 * se)
+            name, h = p[len(prefix):], _Z95 * factor * r.fit.stderr.get(p, float("inf"))
+            # a positive quantity's interval on its log: no negative time constant or power
+            out[name] = (positive_interval(v, h) if positive_parameter(effect, name)
+                         else (v - h, v + h))
     return out
 
 

@@ -77,7 +77,7 @@ from scipy.stats import norm
 from ..docfields import document_fields
 
 __all__ = ["ClusterBootstrap", "PairedComparison", "cluster_bootstrap", "bc_interval", "bc_pvalue",
-           "holm", "compare_rows", "DEFAULT_N_BOOT", "LEVEL"]
+           "holm", "compare_rows", "DEFAULT_N_BOOT", "LEVEL", "positive_interval"]
 
 #: Replicates of the bootstrap (p-values resolve down to about 2/B: 5e-4).
 DEFAULT_N_BOOT = 4000
@@ -427,3 +427,18 @@ def compare_rows(boot: ClusterBootstrap, names: Sequence[str],
     adj = holm([t[5] for t in todo])
     return [PairedComparison(a, b, d, lo, hi, p, float(pa), alpha)
             for (a, b, d, lo, hi, p), pa in zip(todo, adj)]
+
+
+def positive_interval(value: float, half_width: float) -> tuple[float, float]:
+    """The interval of a positive quantity (a time constant, a power, a capacity) made on its
+    log: the half-width h of a symmetric interval around ``value`` is, to first order, the
+    half-width h / value of log(value)'s (the delta method), so the interval is
+    (value e^(-h/value), value e^(h/value)): it never holds a negative value and reads as a
+    factor either way, as the quantity's own uncertainty does.  A ``value`` <= 0 (a
+    positive quantity estimated unphysical) keeps the symmetric interval, so that what the
+    runs said stays visible."""
+    v, h = float(value), float(half_width)
+    if not (v > 0.0 and math.isfinite(h)):
+        return (v - h, v + h)
+    f = math.exp(min(h / v, 700.0))
+    return (v / f, v * f)
