@@ -328,8 +328,14 @@ def settlement(rivals: Sequence[Rival], decisions: Sequence[Decision],
             "these runs cannot tell apart: " + " and ".join(_words(x) for x in standing)
             + (f" ({', '.join(_words(x) for x in out)}: ruled out, another fits the runs "
                "better)" if out else ""))
-    text = head + f"; put to the runs, {weakest.text}"
+    text = head + f"; put to the runs, {weakest.text}" + _rejected(rivals)
     return Settlement(Answer("tie", tuple(standing), text), tuple(decisions), tuple(rivals))
+
+
+def _rejected(rivals: Sequence[Rival]) -> str:
+    """What the runs asked of the rivals that is not physical, in words (empty: nothing)."""
+    said = [f"{r.label}: {r.rejected}" for r in rivals if r.rejected]
+    return "" if not said else " (" + "; ".join(said) + ")"
 
 
 def _words(label: str) -> str:
@@ -349,8 +355,8 @@ def _settled(r: Rival, rivals: Sequence[Rival], decisions: Sequence[Decision],
            f"Z {abs(weakest.evidence.z):.1f}; a decision needs e^{LAMBDA_NAME:g} and Z "
            f"{Z_NAME:.3g})")
     if win == MODEL:
-        return Settlement(Answer("nothing", (), f"keep the model as it is: {why}"),
-                          tuple(decisions), tuple(rivals))
+        return Settlement(Answer("nothing", (), f"keep the model as it is: {why}"
+                                 + _rejected(rivals)), tuple(decisions), tuple(rivals))
     spec = next((e.spec for e in r.instrument.effects if e.label == win), None)
     if spec is None or win == RATE_ALTERNATIVE:
         # a change of structure fits better than any one effect: what is missing is the

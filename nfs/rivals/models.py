@@ -81,6 +81,9 @@ class Rival:
     thermal_refit: bool = False
     """Whether its fit refits the thermal stage (a thermal or thermometer effect, a
     structural alternative) rather than the drift stage alone."""
+    rejected: str = ""
+    """What the runs asked of it that is not physical and was not granted, in words (a heat
+    source's power whose sign the drift rejects, held at 0 W); empty when nothing."""
 
     def draws(self, n: int, rng: np.random.Generator) -> list[Instrument]:
         """``n`` instruments with parameters drawn from the fit's linearised posterior
@@ -225,7 +228,10 @@ def unseen_heat_rival(inst: Instrument, runs: Sequence[Run], label: str, **fit_k
                       stages=("drift",), **fit_kw)
     p_se = float(first.stderr.get(power, math.inf))
     start = first.instrument
+    rejected = ""
     if first.params[power] < 0.0:
+        rejected = (f"the drift asks for {first.params[power]:.3g} +- {p_se:.2g} W at {node} "
+                    "(heat taken away: a sink, not a source), held at 0 W")
         start, p_se = set_params(current, {power: 0.0}), math.inf
     around = fit_model(start, runs, free=[p for p in default_free(start) if p not in held],
                        **fit_kw)
@@ -236,7 +242,8 @@ def unseen_heat_rival(inst: Instrument, runs: Sequence[Run], label: str, **fit_k
         fits.append(usual)
     fr = min(fits, key=_drift_cost)
     return Rival(label, f"adds {name} at {node}, where no thermometer sits: its power fitted "
-                 "on the thermometers and the drift", fr.instrument, fr, 1, True)
+                 "on the thermometers and the drift", fr.instrument, fr, 1, True,
+                 rejected if fr is fits[0] else "")
 
 
 def check_label(inst: Instrument, runs: Sequence[Run], label: str) -> None:

@@ -112,3 +112,19 @@ def test_drift_cost_is_compared_in_the_stated_noise():
     # 4562 in the stated noise reported as 4562 / 1.54 + 2 once rescaled by s = sqrt(1.54)
     assert _drift_cost(fit(4562.0 / 1.54 + 2.0, 2.0, 1.54 ** 0.5)) == pytest.approx(4564.0)
     assert _drift_cost(fit(2963.0, 0.0, 1.54 ** 0.5)) > _drift_cost(fit(3546.8, 0.0, 1.0))
+
+
+def test_a_heat_sink_is_reported_not_silently_held_at_zero():
+    # Oracle: a unit whose coil loses heat (-0.5 W at coil_inner: a sink, which no heat
+    # source is): the drift-first fit asks for a negative power, the rival holds it at 0 W
+    # and says so, in words a settlement prints.
+    model = nfs.load_instrument("lumped")
+    truth = model.with_effects(list(model.effects) + [
+        make_effect("heat_source", {"node": "coil_inner", "power": -0.5})])
+    sc = nfs.load_scenario().nominal()
+    runs = [nfs.simulate_run(truth, dataclasses.replace(sc.conditions()[i], duration_s=3600.0)
+                             ).run for i in (1, 3, 5)]
+    heat = rival_model(model, runs, "heat_source:coil_inner", start_state=None)
+    assert heat.fit.params["effects.heat_source:coil_inner.power"] >= 0.0
+    assert heat.rejected.startswith("the drift asks for -"), heat.rejected
+    assert "W at coil_inner" in heat.rejected and "held at 0 W" in heat.rejected

@@ -99,3 +99,19 @@ def test_thermometers_only_between_rivals_that_treat_the_thermal_stage_alike(riv
     assert pair_channels(heat, transient) == DWELL_CHANNELS
     assert pair_channels(model, split) == DWELL_CHANNELS
     assert set(DWELL_CHANNELS) == {"drift_dph", "acc_x_g", "acc_y_g"}
+
+
+def test_what_the_runs_asked_and_were_refused_is_said(rivals):
+    # a rival whose power the drift wanted negative (held at 0 W): a tie and a kept model
+    # both say so, once
+    heat = "heat_source:coil_1"
+    sink = [Rival(heat, "adds heat", rivals[0].instrument, None, 1, True,
+                  "the drift asks for -0.31 +- 0.05 W at coil_1 (heat taken away: a sink, not "
+                  "a source), held at 0 W"), rivals[2]]
+    tie = settlement(sink, _decisions(sink, {}))
+    assert tie.answer.kind == "tie"
+    assert tie.answer.text.count(f"({heat}: the drift asks for -0.31") == 1
+    kept = settlement(sink, _decisions(sink, {(heat, MODEL): MODEL}))
+    assert kept.answer.kind == "nothing" and "held at 0 W" in kept.answer.text
+    quiet = settlement(rivals, _decisions(rivals, {}))
+    assert "held at 0 W" not in quiet.answer.text
