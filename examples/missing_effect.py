@@ -8,7 +8,7 @@ chamber; it imports nothing of ``nfs``), seven start temperatures x 2.5 h, with 
 (Faraday) bias hidden in the gyro: m cos(A - D_mag), m = 0.012 deg/h, D_mag = 40 deg, which
 follows the turntable position.  The default lumped model does not have it, and its thermal
 network is not the generator's.  The steps are those a user takes with a real unit's chamber
-runs; from the command line::
+runs (in Python, :class:`nfs.UnitChain`; from the command line the same)::
 
     python tests/independent/generator.py runs/ --hidden magnetic --seed 3
     nfs fit runs/ --model default -o fitted.toml
@@ -27,8 +27,6 @@ import tempfile
 from pathlib import Path
 
 import nfs
-from nfs.diagnose import apply_candidate, diagnose
-from nfs.fit import write_fitted_model
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests" / "independent"))
@@ -45,33 +43,34 @@ def main(out_dir: str | Path | None = None) -> dict:
     print(f"0. {len(runs)} runs from the independent generator, hidden: {truth['hidden']} "
           f"{truth['params']}")
 
-    fit = nfs.fit_unit(nfs.load_instrument("default"), runs)   # what `nfs fit` does
-    write_fitted_model(fit, out / "fitted.toml")
-    model = fit.instrument
+    chain = nfs.UnitChain("default", runs)          # the default model and the unit's runs
+    fit = chain.fit()                                # what `nfs fit` does
+    chain.write_model(out / "fitted.toml")
     print("1. nfs fit: thermometer residual "
           + ", ".join(f"{k} {v:.3g} K" for k, v in fit.rms_after.items() if k.startswith("temp"))
           + f"; drift {fit.rms_after.get('drift_dph', float('nan')):.3g} deg/h")
 
-    before = nfs.compare(model, runs)
+    before = chain.compare()
     gyro = before.summaries["gyro_drift_dph"]
     print("2. the fitted model beside the measurements:")
     print("   " + gyro.sentence)
     print("   " + before.heading.sentence(gyro.consistent, gyro.position_ratio >= 3.0))
 
-    d = diagnose(model, runs)
+    d = chain.diagnose().diagnosis
     own = [s for s in d.ranking if s.significant and s.explained_by is None]
     top = own[0] if own else d.ranking[0]
     print(f"3. diagnosis ({d.answer.kind}): " + d.verdict)
 
-    new, fit2, report = apply_candidate(model, runs, top.effect, top.target)
-    write_fitted_model(fit2, out / "fitted2.toml")
-    after = nfs.compare(new, runs)
+    applied = chain.apply(top.effect, top.target)    # the chain moves to the new model
+    chain.write_model(out / "fitted2.toml")
+    after = chain.compare()
     print(f"4. with {top.effect} added and refitted: "
-          + ", ".join(f"{k} = {v:.4g}" for k, v in fit2.params.items() if top.effect in k))
+          + ", ".join(f"{k} = {v:.4g}" for k, v in applied.fit.params.items()
+                      if top.effect in k))
     print("   " + after.summaries["gyro_drift_dph"].sentence)
     print("   " + after.heading.sentence())
-    print(f"   start-up heading RMSE {report['heading_rmse_before_deg']:.4f} -> "
-          f"{report['heading_rmse_after_deg']:.4f} deg")
+    print(f"   start-up heading RMSE {applied.heading_rmse_before_deg:.4f} -> "
+          f"{applied.heading_rmse_after_deg:.4f} deg")
     rms_b, floor = gyro.stages["all"]
     rms_a, _ = after.summaries["gyro_drift_dph"].stages["all"]
     return {"top": top.effect, "significant": [s.effect for s in own],
@@ -79,8 +78,8 @@ def main(out_dir: str | Path | None = None) -> dict:
             "rms_before": rms_b, "rms_after": rms_a, "floor": floor,
             "position_ratio_before": gyro.position_ratio,
             "position_ratio_after": after.summaries["gyro_drift_dph"].position_ratio,
-            "heading_before_deg": report.get("heading_rmse_before_deg"),
-            "heading_after_deg": report.get("heading_rmse_after_deg"),
+            "heading_before_deg": applied.heading_rmse_before_deg,
+            "heading_after_deg": applied.heading_rmse_after_deg,
             "verdict": d.verdict, "answer": d.answer.kind, "labels": d.answer.labels,
             "gyro_consistent_before": gyro.consistent,
             "heading_consistent_before": before.heading.consistent,
