@@ -46,7 +46,7 @@ class Answer:
     ``text`` is all finding."""
 
     @property
-    def finding(self) -> str:
+    def statement(self) -> str:
         """What the runs say, without the advice (``reason``, else ``text``)."""
         return self.reason or self.text
 
@@ -266,7 +266,8 @@ class Diagnosis:
         """The answer in one sentence (:attr:`answer`)."""
         return self.answer.text
 
-    def finding(self, effect: str, target: str | None = None) -> tuple[bool | None, str]:
+    def support_for(self, effect: str, target: str | None = None
+                    ) -> tuple[bool | None, str]:
         """What this diagnosis found for one candidate: (significant, a sentence);
         significant is None when it was not scored (:func:`candidate_finding`)."""
         return candidate_finding(self, effect, target)

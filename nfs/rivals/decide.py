@@ -322,7 +322,7 @@ def settlement(rivals: Sequence[Rival], decisions: Sequence[Decision],
     weakest = min((d for d in decisions if d.a in standing and d.b in standing),
                   key=lambda x: abs(x.evidence.z), default=decisions[0])
     out = [r.label for r in rivals if r.label in beaten]
-    head = (answer.finding
+    head = (answer.statement
             if answer is not None and answer.kind == "tie" and set(standing) == set(labels)
             else
             "these runs cannot tell apart: " + " and ".join(_words(x) for x in standing)

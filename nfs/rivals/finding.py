@@ -60,9 +60,10 @@ class Finding:
         """The explanations these runs could not tell apart (:func:`rivals_from_diagnosis`)."""
         return rivals_from_diagnosis(self)
 
-    def finding(self, effect: str, target: str | None = None) -> tuple[bool | None, str]:
-        """What the diagnosis found for one candidate (:meth:`Diagnosis.finding`)."""
-        return self.diagnosis.finding(effect, target)
+    def support_for(self, effect: str, target: str | None = None
+                    ) -> tuple[bool | None, str]:
+        """What the diagnosis found for one candidate (:meth:`Diagnosis.support_for`)."""
+        return self.diagnosis.support_for(effect, target)
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready data (:mod:`nfs.io.records`; schema :data:`FINDING_SCHEMA`): the

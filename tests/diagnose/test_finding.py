@@ -28,7 +28,7 @@ def test_significant_tied_not_significant_not_scored_and_unknown():
     sig, text = candidate_finding(DIAGNOSIS, "magnetic", None)
     assert sig is True and "'magnetic' is significant (Holm p = 1e-06" in text
     assert "rank 1 of 3" in text and "deg/h" in text and "tied" not in text
-    sig, text = DIAGNOSIS.finding("shupe_rate", "board")
+    sig, text = DIAGNOSIS.support_for("shupe_rate", "board")
     assert sig is True and "'shupe_rate:board' is significant" in text and "tied" in text
     sig, text = candidate_finding(DIAGNOSIS, "heat_source", "coil_outer")
     assert sig is False and "not significant" in text and " K, rank 3 of 3" in text
