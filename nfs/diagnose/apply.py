@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from typing import Any, Sequence
+from typing import Any, Mapping, Sequence
 
 import numpy as np
 
@@ -28,11 +28,13 @@ _THERMAL_STARTS = {"tau": 20.0}
 
 def fit_candidate(inst: Instrument, runs: Sequence[Run], name: str,
                   target: str | None = None, *, decimate_s: float = DEFAULT_DECIMATE_S,
-                  start_state: StartModel | None = DEFAULT_START
-                  ) -> FitResult:
+                  start_state: StartModel | None = DEFAULT_START,
+                  start_c: Mapping[str, np.ndarray] | None = None) -> FitResult:
     """Add effect ``name`` (on ``target``) to ``inst`` and refit: the fit (its
     ``instrument`` the new model), as :func:`apply_candidate` does without its before/after
-    report (what a rival of :mod:`nfs.design` needs)."""
+    report (what a rival of :mod:`nfs.design` needs).  ``start_c``: the start states of
+    ``inst`` estimated already (a fit's); a gyro or accelerometer effect leaves the network
+    as it is, so they serve its drift fit too."""
     runs = list(runs)
     if not runs:
         raise NfsError("a candidate needs runs to be fitted to: none given")
@@ -47,8 +49,9 @@ def fit_candidate(inst: Instrument, runs: Sequence[Run], name: str,
     c = Candidate(name, target, spec.kind, tuple(coefs), tuple(shapes), tried=True)
     starts: dict[str, float] = {k: 0.0 for k in coefs}
     if spec.kind in FAST_KINDS:
-        preps, _ = prepare_runs(inst, runs, decimate_s,
-                                start_c=start_states(inst, runs, decimate_s, start_state))
+        if start_c is None:
+            start_c = start_states(inst, runs, decimate_s, start_state)
+        preps, _ = prepare_runs(inst, runs, decimate_s, start_c=start_c)
         best, _ = fit_shapes(c, preps, bare_instrument(inst))
         starts.update(best)
     else:
@@ -59,7 +62,7 @@ def fit_candidate(inst: Instrument, runs: Sequence[Run], name: str,
     new_paths = [f"effects.{e.label}.{p}" for p in coefs + shapes]
     if spec.kind in FAST_KINDS:
         result = fit_model(new, runs, free=model_drift_paths(inst) + new_paths, stages=("drift",),
-                           decimate_s=decimate_s, start_state=start_state)
+                           decimate_s=decimate_s, start_state=start_state, start_c=start_c)
     else:
         free = list(dict.fromkeys(default_free(new) + new_paths))
         result = fit_model(new, runs, free=free, stages=("thermal", "drift"),
@@ -69,7 +72,8 @@ def fit_candidate(inst: Instrument, runs: Sequence[Run], name: str,
 
 def apply_candidate(inst: Instrument, runs: Sequence[Run], name: str,
                     target: str | None = None, *, decimate_s: float = DEFAULT_DECIMATE_S,
-                    start_state: StartModel | None = DEFAULT_START
+                    start_state: StartModel | None = DEFAULT_START,
+                    start_c: Mapping[str, np.ndarray] | None = None
                     ) -> tuple[Instrument, FitResult, dict[str, Any]]:
     """Add effect ``name`` (on ``target``) to ``inst``, refit, and report before/after.
 
@@ -87,7 +91,7 @@ def apply_candidate(inst: Instrument, runs: Sequence[Run], name: str,
     """
     runs = list(runs)
     result = fit_candidate(inst, runs, name, target, decimate_s=decimate_s,
-                           start_state=start_state)
+                           start_state=start_state, start_c=start_c)
     fitted = result.instrument
     start_c = result.start_c or start_states(fitted, runs, decimate_s, start_state)
 

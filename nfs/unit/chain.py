@@ -34,7 +34,7 @@ from typing import Any, Callable, Iterable, Mapping, Sequence
 import numpy as np
 
 from ..comparison import Comparison, compare
-from ..design import Design, base_conditions, default_space, design_experiment
+from ..design import Design, default_space, design_experiment
 from ..design.search import N_DRAWS
 from ..design.space import SOAK_H, Space
 from ..diagnose import Diagnosis, apply_candidate, diagnose
@@ -171,13 +171,14 @@ class UnitChain:
         get_effect(name)                       # an unknown name fails before any work
         label = name + (f":{target}" if target else "")
         found = finding if finding is not None else self.finding
-        supported, support = (None, "") if found is None else found.finding(name, target)
+        supported, support = (None, "") if found is None else found.support_for(name, target)
         warn = ()
         if found is not None and not supported:
             warn = (f"the diagnosis does not support {label}: {support}; added as asked",)
         new, fit, report = apply_candidate(self.model, self.runs, name, target,
                                            decimate_s=self.decimate_s,
-                                           start_state=self.start_state)
+                                           start_state=self.start_state,
+                                           start_c=self._starts())
         res = Applied(label, new, fit, dict(report["rms_before"]), dict(report["rms_after"]),
                       float(report["heading_rmse_before_deg"]),
                       float(report["heading_rmse_after_deg"]), support, supported,
@@ -205,12 +206,12 @@ class UnitChain:
                 raise NfsError("a design needs rivals: diagnose first, or name them "
                                "(rivals=['model', 'turn_on_transient'])")
             rivals = self.finding.rivals()
-        self.check_rivals(rivals)
         if space is None:
             space = self.design_space(soak_h=soak_h, start_temperatures_c=start_temperatures_c,
                                       max_hours=max_hours)
+        # rival_models refuses bad labels before its first fit
         fitted = rival_models(self.model, self.runs, list(rivals), start_state=self.start_state)
-        res = design_experiment(fitted, self.runs, base_conditions(self.runs), space,
+        res = design_experiment(fitted, self.runs, None, space,
                                 margin_sigma=margin_sigma, n_draws=n_draws, seed=seed,
                                 progress=progress)
         self.history.append(res)
@@ -244,10 +245,10 @@ class UnitChain:
         runs with a soak of ``soak_h`` [h], the start temperatures given, and a longest run
         that fits ``max_hours`` chamber hours with its soak (``option`` names it in the
         error when none fits)."""
-        temps = start_temperatures_c
         space = default_space(self.runs, soak_h=soak_h)
-        if temps is not None:
-            space = replace(space, start_temperatures_c=tuple(float(t) for t in temps))
+        if start_temperatures_c is not None:
+            space = replace(space, start_temperatures_c=tuple(float(t)
+                                                              for t in start_temperatures_c))
         if max_hours is not None:
             step = space.duration_step_s
             longest = step * np.floor((max_hours - soak_h) * 3600.0 / step + 1e-9)

@@ -12,7 +12,13 @@ import pytest
 
 import nfs
 from nfs.cli import main
+from nfs.comparison import compare_runs
+from nfs.diagnose import apply as apply_module
+from nfs.diagnose import missing_effect
 from nfs.unit import chain as chain_module
+
+#: Every module that estimates start states when it is not handed them.
+ESTIMATORS = (chain_module, compare_runs, missing_effect, apply_module)
 
 
 def _round_trip(result):
@@ -35,15 +41,17 @@ def worked(runs):
     """The chain worked as a user does, every result kept."""
     chain = nfs.UnitChain("default", runs)
     calls = []
-    original = chain_module.start_states
-    chain_module.start_states = lambda *a, **k: calls.append(1) or original(*a, **k)
+    originals = [m.start_states for m in ESTIMATORS]
+    out = {"fit": chain.fit()}
+    for m, original in zip(ESTIMATORS, originals):
+        m.start_states = lambda *a, _f=original, **k: calls.append(1) or _f(*a, **k)
     try:
-        out = {"fit": chain.fit(), "comparison": chain.compare(),
-               "finding": chain.diagnose(decide=True)}
+        out.update(comparison=chain.compare(), finding=chain.diagnose(decide=True),
+                   applied=chain.apply("magnetic"))
     finally:
-        chain_module.start_states = original
+        for m, original in zip(ESTIMATORS, originals):
+            m.start_states = original
     out["start_state_estimates"] = len(calls)
-    out["applied"] = chain.apply("magnetic")
     out["chain"] = chain
     return out
 
@@ -53,7 +61,8 @@ def test_the_runs_of_the_model_itself_leave_nothing_to_add(worked):
     finding = worked["finding"]
     assert finding.answer.kind == "nothing", finding.verdict
     assert finding.settlement is None and finding.tie is None
-    # the fit's start states served the comparison and the diagnosis
+    # the fit's start states served the comparison, the diagnosis and the drift effect added
+    # (it leaves the network as it is): no module estimated them again
     assert worked["start_state_estimates"] == 0
     assert finding.diagnosis.baseline is worked["fit"]
 
