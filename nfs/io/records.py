@@ -14,11 +14,11 @@ type annotations, so the JSON schema is the class itself and nothing parses pros
   file ``nfs fit`` writes), read back by its class's ``from_toml_text``;
 - a field marked ``field(metadata={"record": False})`` (a trace kept for a figure, which
   the inputs reproduce) is left out and read back as its default (an empty array);
-- a nested result as an object, with the properties its class lists in ``DERIVED`` (an
-  answer, a ratio) written beside its fields for a reader and recomputed when read; where the annotation does not say which result
-  (``Any``), the object carries its class's name under ``"record"``, looked up in
-  :data:`RECORDS` (only classes registered with :func:`record`: reading a file never
-  imports or runs anything it names).
+- a nested result as an object that names its class (``"record"``), with the properties
+  its class lists in ``DERIVED`` (an answer, a ratio) written beside its fields for a reader
+  and recomputed when read; where the annotation does not say which result (``Any``), that
+  name is looked up in :data:`RECORDS` (only classes registered with :func:`record`: reading
+  a file never imports or runs anything it names).
 
 Nothing is pickled: a results file is data, safe to read from anywhere.
 """
@@ -93,7 +93,7 @@ def encode(value: Any, tag: bool = False) -> Any:
             return [encode(x) for x in value.tolist()] if value.ndim else _float(value)
         return value.tolist()
     if dataclasses.is_dataclass(value) and not isinstance(value, type):
-        out = {f.name: encode(getattr(value, f.name), _tag_field(f))
+        out = {f.name: encode(getattr(value, f.name), True)
                for f in dataclasses.fields(value) if f.init and f.metadata.get("record", True)}
         # what a reader wants beside the fields (a property: an answer, a ratio), written for
         # reading and recomputed, not read, by decode
@@ -104,11 +104,6 @@ def encode(value: Any, tag: bool = False) -> Any:
     if isinstance(value, (list, tuple)):
         return [encode(v, True) for v in value]
     raise TypeError(f"cannot write {type(value).__name__} as JSON")
-
-
-def _tag_field(f: dataclasses.Field) -> bool:
-    """Whether a field's annotation leaves its class unsaid (then the value names it)."""
-    return "Any" in str(f.type)
 
 
 def decode(data: Any, hint: Any, where: str = "") -> Any:
