@@ -43,8 +43,9 @@ def _chain(args, check=None):
     runs = read_runs(args.data)
     if check is not None:
         check(inst, runs)
-    return UnitChain(inst, runs, start_state=start_model(args),
-                     decimate_s=getattr(args, "decimate_s", 10.0))
+    # only nfs fit has --decimate-s; the others take the chain's default
+    grid = {"decimate_s": args.decimate_s} if hasattr(args, "decimate_s") else {}
+    return UnitChain(inst, runs, start_state=start_model(args), **grid)
 
 
 def cmd_fit(args) -> int:
