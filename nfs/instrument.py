@@ -230,7 +230,7 @@ class Instrument:
 
 
 _TOP_KEYS = ("name", "description", "t_ref_c", "thermal", "coil", "gyro", "accelerometers",
-             "turntable", "thermometers", "aux", "effects")
+             "turntable", "thermometers", "aux", "effects", "fit")
 _GYRO_KEYS = tuple(GyroModel.__dataclass_fields__)
 _ACC_KEYS = tuple(AccelerometerModel.__dataclass_fields__)
 _TT_KEYS = tuple(TurntableModel.__dataclass_fields__)
@@ -541,10 +541,28 @@ def _instrument_from_dict(d: dict[str, Any], file: Any) -> Instrument:
                       effects=effects, aux=aux, t_ref_c=number(d, "t_ref_c", "", file, T_REF_C),
                       description=string(d, "description", "", file, ""), coil=coil)
     check_effect_targets(inst, file)
-    check_tree(d, file=file, error=ScenarioError)
+    fitted = _fit_departures(d, file)
+    check_tree(d, file=file, error=ScenarioError, skip=("fit.*",), quiet=fitted)
+    if fitted:
+        warn_unusual(f"{len(fitted)} fitted values lie beyond their typical range, as the fit "
+                     f"that wrote this file states in its header ({', '.join(fitted)})",
+                     file=file, key="fit.departures", once=("fit.departures", str(file)))
     _check_winding(inst, file)
     check_heating(network, file, inst.effects)
     return inst
+
+
+def _fit_departures(d: dict[str, Any], file: Any) -> tuple[str, ...]:
+    """The keys a fitted model's ``[fit] departures`` lists (what
+    :func:`nfs.fit.write_fitted_model` writes: values its fit put beyond their typical range,
+    stated in the file's header): they load with one line, not one warning each."""
+    fit = table(d, "fit", "", file, {})
+    check_keys(fit, ("departures",), "fit", file)
+    keys = fit.get("departures", [])
+    if not isinstance(keys, list) or not all(isinstance(k, str) for k in keys):
+        raise ScenarioError(f"must be a list of key paths (strings), got {keys!r}",
+                            file=file, key="fit.departures")
+    return tuple(keys)
 
 
 def preset_names() -> list[str]:

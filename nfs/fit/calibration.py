@@ -2,10 +2,12 @@
 
 Bounded nonlinear least squares (:func:`scipy.optimize.least_squares`, method ``trf``,
 ``x_scale="jac"``; :mod:`nfs.fit.stage`) in two stages.  By default every free
-parameter has a Gaussian prior centred on its start value (the preset) with the widths of
-:mod:`nfs.fit.prior`, entered as rows (p - p0) / sigma beside the data rows, which are
-divided by their noise level: the solution is the maximum a posteriori estimate, and a
-parameter the runs do not determine stays near its preset instead of running to a bound.
+parameter has a Gaussian prior from its row in the table of ranges (:mod:`nfs.fit.prior`: the
+typical range of real units as its one-sigma band, on the log for a positive quantity),
+entered as rows beside the data rows, which are divided by their noise level: the solution
+is the maximum a posteriori estimate, a parameter the runs do not determine stays inside
+what real units have instead of running to a bound, and a fit started from another fit's
+result meets the same prior.  The box of every parameter lies inside its hard range.
 
 **thermal**
     Free thermal parameters (capacities, conductances, node powers, thermal-effect
@@ -79,6 +81,7 @@ from .fit_warnings import fit_warnings
 from .free_set import FIT_STAGES, THERMAL_KINDS, default_free, stage_of
 from .noise_fit import GyroNoiseEstimate, gyro_noise_from_residual, noise_record
 from .params import expand_paths, fit_bounds, get_param, param_paths, set_params
+from .departures import departures
 from .prior import Prior, build_prior
 from .sensor_fit import LEVEL_PATHS, LevelData, level_from_means
 from .soak import anchor_offsets, soak_offsets
@@ -384,11 +387,10 @@ def fit_model(inst: Instrument, runs: Sequence[Run], free: Iterable[str] | None 
         Measured drift to fit: window means of gyro - projection, or the wavelet-denoised
         drift of :func:`nfs.denoise.separate_drift`.
     prior : ``"default"``, mapping or None
-        Gaussian prior on every free parameter, centred on its start value
-        (:mod:`nfs.fit.prior`): ``"default"`` takes the widths of
-        :data:`~nfs.fit.prior.PRIOR_WIDTHS`; a mapping {path or pattern: width}
-        overrides some (a number: absolute width; ``"30%"``: relative); None: no prior
-        (unregularised least squares).
+        Gaussian prior on every free parameter (:mod:`nfs.fit.prior`): ``"default"``
+        takes it from the table of ranges (:func:`~nfs.fit.prior.range_prior`); a mapping
+        {path or pattern: width} overrides some, centred on the start value (a number:
+        absolute width; ``"30%"``: relative); None: no prior (unregularised least squares).
     prior_scale : float
         Multiplies every prior width; inf switches the prior off.
     soak_anchor : bool
@@ -475,8 +477,10 @@ def fit_model(inst: Instrument, runs: Sequence[Run], free: Iterable[str] | None 
     params = {p: get_param(current, p) for p in paths}
     advice = {p: bound_advice(p, params[p], bounds[p]) for p in at_bound}
     shifts = {} if pr is None else pr.shift([params[q] for q in pr.paths])
+    departed = departures({**params, **({} if noise is None else noise.values())},
+                          {**stderr, **({} if noise is None else noise.stderr())})
     warnings = fit_warnings(runs, paths, params, initial_params, kinds, bounds, reports,
-                            at_bound, advice, shifts, unident, soak)
+                            at_bound, advice, shifts, unident, soak, departed=tuple(departed))
     current = replace(current, name=fitted_name(inst.name, runs))
     return FitResult(instrument=current, initial=inst, params=params,
                      initial_params=initial_params, stderr=stderr, bounds=bounds,
@@ -485,7 +489,8 @@ def fit_model(inst: Instrument, runs: Sequence[Run], free: Iterable[str] | None 
                      rms_after={k: v for o in outcomes for k, v in o.rms_after.items()},
                      warnings=tuple(warnings),
                      prior_centre={} if pr is None else dict(zip(pr.paths, pr.centre.tolist())),
-                     prior_sigma={} if pr is None else dict(zip(pr.paths, pr.sigma.tolist())),
+                     prior_sigma={} if pr is None else dict(zip(pr.paths, pr.linear_sigma().tolist())),
                      prior_shift=shifts,
-                     bound_advice=advice, soak=soak, noise=noise, start_c=start_c,
+                     bound_advice=advice, departures=departed, soak=soak, noise=noise,
+                     start_c=start_c,
                      start_amplitudes_c=amplitudes)

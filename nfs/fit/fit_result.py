@@ -14,6 +14,7 @@ from ..docfields import document_fields
 from ..instrument import Instrument
 from ..io.atomic import atomic_write_text
 from ..io.records import from_record, record, to_record
+from .departures import canonical_key
 from .noise_fit import GyroNoiseEstimate
 from .soak import SoakAnchor
 from .stage import StageReport
@@ -65,6 +66,10 @@ class FitResult:
     """(fitted - p0) / sigma_p: how far the data moved each parameter, in prior widths."""
     bound_advice: dict[str, str] = field(default_factory=dict)
     """For each parameter at a bound: what the bound says about the model's structure."""
+    departures: dict[str, str] = field(default_factory=dict)
+    """For each fitted parameter beyond its typical range in the table of ranges: one line
+    with its value, error, the range and the structure it points to
+    (:func:`nfs.fit.departures.departures`)."""
     soak: SoakAnchor | None = None
     """The thermometer offsets read from the soak at power-on (None: not used)."""
     noise: GyroNoiseEstimate | None = None
@@ -120,6 +125,10 @@ class FitResult:
                          f"{self.rms_after[ch]:.4g}")
         if self.structure is not None:
             lines.append(self.structure.summary())
+        if self.departures:
+            lines.append(f"{len(self.departures)} of {len(self.params)} fitted values beyond "
+                         "their typical range (what each points to):")
+            lines += [f"  {d}" for d in self.departures.values()]
         lines += [f"warning: {w}" for w in self.warnings]
         return "\n".join(lines)
 
@@ -128,7 +137,7 @@ def _parameter(result: FitResult, p: str) -> tuple[str, str, list[str]]:
     """One fitted parameter in words: ``"path = value +- error"``, ``"start value[, how
     far the data moved it in prior widths]"`` and its flags (at bound, not identifiable)."""
     shift = result.prior_shift.get(p, math.nan)
-    moved = f", {shift:+.2f} prior widths" if math.isfinite(shift) else ""
+    moved = f", {shift:+.2f} sigma from the prior's centre" if math.isfinite(shift) else ""
     flags = [f for f, on in (("at bound", p in result.at_bound),
                              ("not identifiable", p in result.unidentifiable)) if on]
     return (f"{p} = {result.params[p]:.6g} +- {result.stderr.get(p, math.nan):.3g}",
@@ -139,7 +148,9 @@ def write_fitted_model(result: FitResult, path: str | Path) -> Path:
     """Write the fitted instrument as a TOML file a user can read and edit.
 
     A header comment lists every fitted parameter with its standard error and start value,
-    the parameters at a bound or not identifiable, and each stage's convergence.  Written
+    the parameters at a bound or not identifiable, each stage's convergence, and the values
+    beyond their typical range with what each points to; a ``[fit]`` table lists the latter
+    (``departures``), so that the file loads with one line about them, not one per value.  Written
     atomically (:func:`nfs.io.atomic.atomic_write_text`).
     """
     path = Path(path)
@@ -162,7 +173,17 @@ def write_fitted_model(result: FitResult, path: str | Path) -> Path:
         lines.append(f"# residual RMS {ch}: {result.rms_before.get(ch, math.nan):.4g} -> {v:.4g}")
     if result.structure is not None:
         lines += [f"# {line}" for line in result.structure.summary().splitlines()]
+    if result.departures:
+        lines.append(f"# {len(result.departures)} fitted values beyond their typical range "
+                     "(what each points to; listed in [fit] departures, so that loading this "
+                     "file says so once):")
+        lines += [f"#   {d}" for d in result.departures.values()]
     for w in result.warnings:
         lines.append(f"# warning: {w}")
-    atomic_write_text(path, "\n".join(lines) + "\n" + result.instrument.to_toml())
+    toml = result.instrument.to_toml().rstrip("\n") + "\n"
+    if result.departures:
+        keys = ", ".join(f'"{canonical_key(p)}"' for p in result.departures)
+        toml += ("\n[fit]\n# values the fit put beyond their typical range, stated above\n"
+                 f"departures = [{keys}]\n")
+    atomic_write_text(path, "\n".join(lines) + "\n" + toml)
     return path

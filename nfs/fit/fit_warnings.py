@@ -50,12 +50,14 @@ def fit_warnings(runs: Sequence[Run], paths: Sequence[str], params: Mapping[str,
                  bounds: Mapping[str, tuple[float, float]], reports: Mapping[str, StageReport],
                  at_bound: Sequence[str], advice: Mapping[str, str],
                  shifts: Mapping[str, float], unident: Mapping[str, str],
-                 soak: SoakAnchor | None) -> list[str]:
+                 soak: SoakAnchor | None, departed: Sequence[str] = ()) -> list[str]:
     """Everything a user should know of a fit, in words, in this order: a stage that did
     not converge, a parameter at a bound (with its ``advice``) or moved far from its start
     (:func:`far_from_start`; ``shifts``: in prior widths), the soak anchor's warnings, a
     chamber assumed, a parameter not identifiable (``unident``: with the reason), a single
-    run.  ``kinds``: the kind of every parameter path (:data:`nfs.parameters.PARAM_KINDS`)."""
+    run.  ``kinds``: the kind of every parameter path (:data:`nfs.parameters.PARAM_KINDS`).
+    A parameter in ``departed`` (beyond its typical range: :mod:`nfs.fit.departures` says what
+    it points to) gets no "moved" warning besides."""
     warnings = []
     for s, rep in reports.items():
         if not rep.converged:
@@ -64,7 +66,7 @@ def fit_warnings(runs: Sequence[Run], paths: Sequence[str], params: Mapping[str,
         warnings.append(f"{p} ended at its bound {bounds[p]} (value {params[p]:.6g}): "
                         f"{advice[p]}")
     for p in paths:
-        if p not in at_bound and p not in unident:
+        if p not in at_bound and p not in unident and p not in departed:
             far = far_from_start(initial_params[p], params[p], shifts.get(p),
                                  by_ratio=_has_scale(p, kinds[p]))
             if far:

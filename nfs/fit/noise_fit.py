@@ -102,6 +102,24 @@ class GyroNoiseEstimate:
     method: str
     """How the gaps at the moves were handled."""
 
+    def values(self) -> dict[str, float]:
+        """{gyro parameter path: fitted value} of N, B and K."""
+        return {"gyro.arw_deg_per_rth_h": self.arw_deg_per_rth_h,
+                "gyro.bias_instability_dph": self.bias_instability_dph,
+                "gyro.rrw_deg_per_h_per_rth_h": self.rrw_deg_per_h_per_rth_h}
+
+    def stderr(self) -> dict[str, float]:
+        """{gyro parameter path: approximate standard error}: each value times the relative
+        error of the Allan point that sets it (N: the shortest tau; B: the curve's floor; K:
+        the longest tau).  A rough figure: the fit pools correlated points."""
+        if len(self.adev_rel_err) == 0:
+            return {p: math.nan for p in self.values()}
+        rel = np.asarray(self.adev_rel_err, dtype=float)
+        where = {"gyro.arw_deg_per_rth_h": 0,
+                 "gyro.bias_instability_dph": int(np.argmin(self.adev_dph)),
+                 "gyro.rrw_deg_per_h_per_rth_h": len(rel) - 1}
+        return {p: abs(v) * float(rel[where[p]]) for p, v in self.values().items()}
+
     def adev_model_dph(self, taus_s: np.ndarray) -> np.ndarray:
         """The fitted curve sqrt((60 N)^2/tau + (0.6643 B)^2 + (K/60)^2 tau/3) [deg/h]."""
         tau = np.asarray(taus_s, dtype=float)

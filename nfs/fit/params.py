@@ -47,7 +47,7 @@ def default_bounds(path: str, value: float, unit: str | None = None) -> tuple[fl
     capacity and face contacts              capacities and conductances
     a wound coil's radii and height         value/2 .. value*2 (its drawing: rarely freed)
     node powers                             0 .. max(10 value, 1 W) (negative: 10 value .. 0)
-    thermometer lag_s                       0 .. 300 s
+    thermometer lag_s                       0 .. 300 s, anchored (below) when > 0
     thermometer offset_c                    -2 .. +2 K
     noise, quantum, ARW, BI, RRW fields     0 .. inf
     tilts                                   -1 .. +1 deg
@@ -59,6 +59,8 @@ def default_bounds(path: str, value: float, unit: str | None = None) -> tuple[fl
     angles (unit ``deg``)                   value - 360 .. value + 360
     other coefficients, biases              unbounded
     ======================================  =====================================================
+
+    :func:`fit_bounds` cuts every box to the parameter's hard range in the table of ranges.
 
     ``unit`` is the effect parameter's unit (looked up by :func:`fit_bounds`); without it
     an effect parameter is unbounded.  Anchored: a box relative to the value stops a decade
@@ -75,7 +77,7 @@ def default_bounds(path: str, value: float, unit: str | None = None) -> tuple[fl
         return (0.0, max(10.0 * v, 1.0)) if v >= 0 else (10.0 * v, 0.0)
     if path.startswith("thermometers."):
         if leaf == "lag_s":
-            return (0.0, 300.0)
+            return _anchored(path, v, 0.0, 300.0) if v > 0 else (0.0, 300.0)
         if leaf == "offset_c":
             return (-2.0, 2.0)
         return (0.0, _INF)
@@ -115,7 +117,23 @@ def fit_bounds(inst, path: str) -> tuple[float, float]:
         physical = inst.effect(label).spec.parameter(name).bounds
         if physical is not None:
             lo, hi = max(lo, physical[0]), min(hi, physical[1])
-    return lo, hi
+    return _within_hard(path, lo, hi)
+
+
+def _within_hard(path: str, lo: float, hi: float) -> tuple[float, float]:
+    """The box (lo, hi) cut to the hard range of ``path`` in the table of ranges
+    (:func:`nfs.ranges.find`): a fitted model never holds a value the table calls impossible.
+    A magnitude's hard range bounds |value|; an open low end of 0 is kept just above 0."""
+    found = ranges.find(path)
+    if found is None:
+        return lo, hi
+    h_lo, h_hi = found.hard
+    if found.magnitude:
+        h_lo = -h_hi
+    elif found.low_open:
+        h_lo = h_lo + max(abs(h_lo), 1.0) * 1e-12 if h_lo == 0 else h_lo
+    new_lo, new_hi = max(lo, h_lo), min(hi, h_hi)
+    return (new_lo, new_hi) if new_lo < new_hi else (lo, hi)
 
 
 def _anchored(path: str, value: float, lo: float, hi: float) -> tuple[float, float]:

@@ -161,7 +161,7 @@ def solve_stage(name: str, fun, x0: np.ndarray, lb: np.ndarray, ub: np.ndarray,
             # least_squares asks for the Jacobian where it has just evaluated the residual
             f0 = last[1] if last[0] is not None and np.array_equal(last[0], x) else None
             j = forward_jacobian(batch, x, lb, ub, f0) / scale
-            return np.vstack([j, prior.jacobian()]) if use_prior else j
+            return np.vstack([j, prior.jacobian(x)]) if use_prior else j
         return jac
 
     best, nfev, tried = None, 0, 0
@@ -202,7 +202,7 @@ def solve_stage(name: str, fun, x0: np.ndarray, lb: np.ndarray, ub: np.ndarray,
                          n_starts=tried, noise_scale=noise_scale)
     jac = np.asarray(res.jac, dtype=float)
     stderr, unident, corr = _errors(jac[:m], res.fun[:m], paths,
-                                    prior.jacobian() if use_prior else None)
+                                    prior.jacobian(res.x) if use_prior else None)
     report = dataclasses.replace(report, correlation=corr)
     span = ub - lb
     at = [p for i, p in enumerate(paths)

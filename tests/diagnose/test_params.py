@@ -134,7 +134,9 @@ def test_bad_path(lumped, bad, close):
 def test_default_bounds(inst):
     assert default_bounds("thermal.nodes.housing.capacity_j_per_k", 3500.0) == (350.0, 35000.0)
     assert default_bounds("thermal.links.a-b.conductance_w_per_k", 1.6) == (0.16, 16.0)
-    assert default_bounds("thermometers.fog.lag_s", 30.0) == (0.0, 300.0)
+    # anchored: a decade below the typical 10-60 s, never 0 (a log prior's row)
+    assert default_bounds("thermometers.fog.lag_s", 30.0) == (1.0, 300.0)
+    assert default_bounds("thermometers.fog.lag_s", 0.0) == (0.0, 300.0)
     assert default_bounds("thermometers.fog.offset_c", 0.0) == (-2.0, 2.0)
     assert default_bounds("effects.shupe_gradient.k_r", 0.1) == (-math.inf, math.inf)
     assert fit_bounds(inst, "effects.tec_power.c_h") == (0.0, 1.0)

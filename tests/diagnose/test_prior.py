@@ -1,7 +1,9 @@
-"""The preset as a Gaussian prior of the fit (nfs.fit.prior, fit_model's prior=).
+"""The table of ranges as a Gaussian prior of the fit (nfs.fit.prior, fit_model's prior=).
 
-Oracles: the documented table (a capacity's width is 50 % of its preset, an offset's 1 K),
-the closed form of the prior rows (x - p0) / sigma; a node no thermometer sees (a bracket
+Oracles: the documented rule (a capacity of typical range 40-100 J/K: log-normal of median
+sqrt(40 x 100) and sigma ln(100/40)/2 on the log; a magnitude of typical |x| <= hi: 0 +- hi),
+the closed form of the prior rows ((ln x - ln p0) / sigma, (x - p0) / sigma); the same prior
+whatever the start (a chain of fits cannot walk); a node no thermometer sees (a bracket
 hung on the housing by 0.01 W/K) whose capacity the unregularised fit sends to its bound
 (a known failure, checked here so that the contrast is real) and the MAP fit keeps within one
 prior width of the preset; with the prior switched off, the fit is plain least squares on the
@@ -45,20 +47,46 @@ def test_table_widths(scenario):
              "effects.shupe_gradient.k_r", "accelerometers.bias_x_g"]
     start = {p: get_param(inst, p) for p in paths}
     pr = build_prior(inst, paths, start)
-    np.testing.assert_allclose(pr.sigma, [0.5 * 95.0, 1.0, 3.0, 0.01])
-    np.testing.assert_array_equal(pr.centre, [start[p] for p in paths])
-    # overrides: absolute, relative, and a global scale
+    # coil_outer 40-100 J/K (log-normal); offset |x| <= 0.5 K, k_r |x| 0.1-1, bias |x| <= 4 mg
+    np.testing.assert_allclose(pr.sigma, [math.log(100 / 40) / 2, 0.5, 1.0, 0.004])
+    np.testing.assert_allclose(pr.centre, [math.sqrt(40 * 100), 0.0, 0.0, 0.0])
+    np.testing.assert_array_equal(pr.is_log, [True, False, False, False])
+    # the prior does not depend on where the fit starts: a chain of fits meets the same one
+    moved = {**start, "thermal.nodes.coil_outer.capacity_j_per_k": 9.5,
+             "effects.shupe_gradient.k_r": -3.0}
+    again = build_prior(inst, paths, moved)
+    np.testing.assert_array_equal(again.centre, pr.centre)
+    np.testing.assert_array_equal(again.sigma, pr.sigma)
+    # overrides (centred on the start value): absolute, relative, and a global scale
     pr2 = build_prior(inst, paths, start, {"thermometers.*.offset_c": 0.1,
                                            "thermal.nodes.*": "20%"}, prior_scale=2.0)
-    np.testing.assert_allclose(pr2.sigma, [2 * 0.2 * 95.0, 0.2, 6.0, 0.02])
-    x = pr.centre + np.array([47.5, -0.5, 0.0, 0.02])
+    np.testing.assert_allclose(pr2.sigma, [2 * 0.2 * 95.0, 0.2, 2.0, 0.008])
+    np.testing.assert_allclose(pr2.centre[:2], [95.0, 0.0])
+    # the rows: on the log for the capacity (one sigma up: x = median e^sigma)
+    sig = math.log(2.5) / 2
+    x = np.array([math.sqrt(4000) * math.exp(sig), -0.25, 0.0, 0.008])
     np.testing.assert_allclose(pr.rows(x), [1.0, -0.5, 0.0, 2.0])
     assert pr.shift(x)["thermometers.fog.offset_c"] == pytest.approx(-0.5)
+    # the Jacobian of a log row is 1 / (x sigma); a linear row's 1 / sigma
+    np.testing.assert_allclose(np.diag(pr.jacobian(x)),
+                               [1 / (x[0] * sig), 1 / 0.5, 1.0, 1 / 0.004])
+    # a width in the parameter's unit: the half-width of the one-sigma band, which for the
+    # geometric centre is half the typical range exactly
+    assert pr.linear_sigma()[0] == pytest.approx((100 - 40) / 2)
     assert all(w.reason for w in PRIOR_WIDTHS.values())
     with pytest.raises(NfsError, match="thermometers.fog.offset_c"):
         build_prior(inst, paths, start, {"thermometers.fog.offset_c": -1.0})
     with pytest.raises(NfsError, match="prior_scale"):
         build_prior(inst, paths, start, prior_scale=0.0)
+
+
+def test_drawing_and_unknown_parameters_keep_the_start_centred_prior(scenario):
+    inst = load_instrument("default")
+    paths = ["coil.outer_radius_m"]
+    start = {p: get_param(inst, p) for p in paths}
+    pr = build_prior(inst, paths, start)
+    assert pr.centre[0] == start[paths[0]]
+    assert pr.sigma[0] == pytest.approx(0.05 * start[paths[0]])
 
 
 def test_unseen_capacity_stays_at_its_prior(scenario):
@@ -78,7 +106,8 @@ def test_unseen_capacity_stays_at_its_prior(scenario):
     res = fit_model(inst, runs, free, stages=("thermal",), start_state=None)
     assert res.at_bound == ()
     assert abs(res.prior_shift[bracket]) <= 1.0
-    assert res.prior_sigma[bracket] == pytest.approx(30.0)
+    # a node of a north finder: 10-10000 J/K, log-normal (a weak prior, wide in J/K)
+    assert res.prior_sigma[bracket] == pytest.approx(math.sqrt(1e5) * math.sinh(math.log(1000) / 2))
     # the posterior is never wider than the prior, and the seen parameters barely move
     assert res.stderr[bracket] <= res.prior_sigma[bracket]
     for p in free[1:]:

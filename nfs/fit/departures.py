@@ -1,0 +1,130 @@
+"""Fitted values beyond what real units have, and the structure each points to.
+
+A fit identifies a unit: its numbers are the unit's capacities, conductances, powers, lags
+and coefficients, and the one table of ranges (:mod:`nfs.ranges`) says what real units have.
+Where the runs push a fitted number beyond its typical range (inside the hard range: the
+fit's box never leaves it, :func:`nfs.fit.params.fit_bounds`), the number is rarely a
+measurement of an unusual unit: the model lacks a structure and the nearest parameter
+stands in for it.  :func:`departures` gives one line per such parameter, with its value,
+its standard error, the typical range and what the side it left by points to (a layered
+coil, a heat path, a thermometer mounted elsewhere, an effect the model lacks).
+
+The significance is stated, not decided: a departure whose +-2 standard errors reach the
+typical range is marked "within 2 sigma of typical".
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from typing import Mapping
+
+from .. import ranges
+
+__all__ = ["departures", "departure_line", "points_to", "canonical_key"]
+
+_COIL_NODE = re.compile(r"^(coil|spool|coil_[a-z0-9_]+|layer[_0-9]*)$")
+
+
+def canonical_key(path: str) -> str:
+    """The key of a fit parameter path as the table of ranges and the file checks name it:
+    an effect ``effects.name:target.p`` as ``effects.name.p``."""
+    m = re.fullmatch(r"effects\.([^.:]+):[^.]*\.(.+)", path)
+    return f"effects.{m.group(1)}.{m.group(2)}" if m else path
+
+
+def _is_coil_node(node: str) -> bool:
+    return bool(_COIL_NODE.match(node)) or node.startswith("coil")
+
+
+def points_to(path: str, side: str) -> str:
+    """What a fitted ``path`` beyond its typical range on ``side`` (``"below"`` or
+    ``"above"``) points to: the structure the model likely lacks, in a few words."""
+    parts = path.split(".")
+    leaf = parts[-1]
+    if path.startswith("thermal.nodes."):
+        node = ".".join(parts[2:-1])
+        coil = _is_coil_node(node)
+        if leaf == "capacity_j_per_k":
+            if side == "below":
+                return (f"the thermometer sees a faster response than {node} can give: "
+                        + ("the coil's winding in layers (its faces lead its bulk; "
+                           "refine_structure tries the wound coil)" if coil else
+                           f"a thermometer on a smaller part than {node}, or {node} split "
+                           "in two (a layered part)"))
+            return (f"{node} lumps a larger mass than such a part has: a heat path to a larger "
+                    f"mass (the housing) or a node between {node} and its heat is missing")
+        if leaf == "power_w":
+            if side == "below":
+                return (f"heat leaves {node} by a path the model lacks (a link to the housing "
+                        "or the chamber), or its thermometer sits elsewhere")
+            if coil:
+                return ("heat inside a passive coil: a heater, or heat reaching a coil face "
+                        "through a hub or outer-face path the model lacks")
+            return f"a heat source near {node} the model lacks (a heater, a neighbour)"
+    if path.startswith("thermal.links."):
+        link = ".".join(parts[2:-1])
+        if side == "below":
+            return (f"a thermal resistance in {link} (a gap, a mount), or the heat goes "
+                    "another way (a node between)")
+        return f"the ends of {link} behave as one node, or a second path between them is missing"
+    if path.startswith("coil."):
+        return ("the winding's radial time constant or its face contacts differ from the "
+                "drawing's: a contact or a potting the model lacks")
+    if path.startswith("thermometers."):
+        name = parts[1]
+        if leaf == "lag_s":
+            if side == "below":
+                return (f"the {name} thermometer leads its node: mounted on a faster part "
+                        "(nearer the heat)")
+            return (f"the {name} thermometer sits behind a conductance: mounted on a larger "
+                    "mass, or a node between it and its node")
+        if leaf == "offset_c":
+            return (f"the {name} thermometer is calibrated off, or the runs were not soaked "
+                    "at their T0")
+        return f"the {name} thermometer's noise or resolution differs from its datasheet"
+    if leaf.startswith("tilt_"):
+        return "the table is not levelled, or the accelerometer axes are not the model's"
+    if path.startswith("accelerometers."):
+        return "an accelerometer beyond its datasheet: check its mounting and axes"
+    if path.startswith("gyro."):
+        return "a gyro beyond its class: check the data's units and the gyro's calibration"
+    if path.startswith("effects."):
+        label = path[len("effects."):].rsplit(".", 1)[0]
+        if side == "below":
+            return f"{label} is weaker here than in typical units (or absent)"
+        return (f"{label} is standing in for an effect the model lacks (nfs diagnose names "
+                "it)")
+    return "the model lacks a structure here"
+
+
+def departure_line(path: str, value: float, stderr: float = math.nan) -> str | None:
+    """One line for a fitted ``value`` of ``path`` beyond its typical range, or None when
+    it lies inside (or the table has no row, or the value switches the term off)."""
+    row = ranges.find(canonical_key(path))
+    if row is None or not row.unusual(value):
+        return None
+    lo, hi = row.typical
+    v = abs(value) if row.magnitude else value
+    side = "below" if v < lo else "above"
+    unit = f" {row.unit}" if row.unit else ""
+    err = f" +- {stderr:.2g}" if math.isfinite(stderr) else ""
+    near = ""
+    if math.isfinite(stderr) and (v + 2 * stderr >= lo if side == "below"
+                                   else v - 2 * stderr <= hi):
+        near = " (within 2 sigma of typical)"
+    return (f"{path} = {value:.4g}{err}{unit}, {side} the typical {row.typical_text()}"
+            f"{near}: {points_to(path, side)}")
+
+
+def departures(params: Mapping[str, float],
+               stderr: Mapping[str, float] | None = None) -> dict[str, str]:
+    """{path: one line} for every fitted parameter beyond its typical range
+    (:func:`departure_line`), in the order of ``params``."""
+    stderr = stderr or {}
+    out = {}
+    for p, v in params.items():
+        line = departure_line(p, float(v), float(stderr.get(p, math.nan)))
+        if line is not None:
+            out[p] = line
+    return out
