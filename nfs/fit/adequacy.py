@@ -16,8 +16,14 @@ not measured from the residual's high-frequency part: with the default 0.0625 K 
 0.01 K noise, consecutive samples of a slowly moving temperature round to the same level,
 so a difference-based estimate comes out far below the true per-sample error.  The
 structure is adequate when every channel is within :data:`ADEQUACY_FACTOR` (1.5x) of its
-floor and no structural alternative beats the model (its CV RMS lower by more than
-:data:`~nfs.fit.alternative_score.CV_DROP`).
+floor, times what sampling allows on the channel's n knots, and no structural alternative
+beats the model (its CV RMS lower by more than :data:`~nfs.fit.alternative_score.CV_DROP`).
+Sampling: with the structure right, the held-out residuals are the thermometer's noise, and
+n sum(r^2) / (n floor^2) follows chi^2_n / n, whose :data:`ADEQUACY_QUANTILE` quantile
+bounds the squared ratio noise alone gives; the limit is therefore 1.5 sqrt(chi^2_{n,
+0.99} / n) (1.95x on 30 knots, a 5-minute stable stage of three runs at 30 s; 1.55x on
+3000).  The 1.5x factor is the model error allowed; the square root, the sampling error of
+an RMS on few knots, without which a short run's stable stage fails on noise alone.
 
 :func:`beats_structure` says whether a thermal candidate beats the model and the best
 structural alternative, pooled and run by run (the diagnosis names a thermal candidate only
@@ -30,6 +36,8 @@ import math
 import time
 from dataclasses import dataclass, field
 from typing import Any, Callable, Sequence
+
+from scipy.stats import chi2
 
 from ..docfields import document_fields
 from ..errors import NfsError
@@ -44,11 +52,14 @@ from .thermometer_cv import (ADEQUACY_STAGES, STAGE_WORDS, ChordModel, Thermomet
                              chord_refit, sum_of_squares)
 
 __all__ = ["ChannelFit", "ThermalAdequacy", "thermal_adequacy", "beats_structure",
-           "structure_rival", "MODEL_RIVAL", "ADEQUACY_FACTOR", "STARTUP_S",
+           "structure_rival", "MODEL_RIVAL", "ADEQUACY_FACTOR", "ADEQUACY_QUANTILE", "STARTUP_S",
            "DEFAULT_DECIMATE_S", "REFINE_TOP"]
 
-#: A channel is adequate when its residual RMS is within this factor of its noise floor.
+#: A channel is adequate when its residual RMS is within this factor of its noise floor
+#: (times the sampling allowance of :data:`ADEQUACY_QUANTILE`).
 ADEQUACY_FACTOR = 1.5
+#: Quantile of chi^2_n / n that bounds a channel's squared RMS ratio under noise alone.
+ADEQUACY_QUANTILE = 0.99
 #: End of the start-up stage [s] after power-on (docs/physics.md section 1: 30-90 min).
 STARTUP_S = 3600.0
 #: Default spacing of the residual grid [s].
@@ -84,9 +95,18 @@ class ChannelFit:
         return self.cv_rms_k / self.floor_k if self.floor_k > 0 else math.inf
 
     @property
+    def limit(self) -> float:
+        """The ratio allowed: factor sqrt(chi^2_{n, q} / n) on the channel's n knots
+        (module docstring; q = :data:`ADEQUACY_QUANTILE`)."""
+        if self.n_knots <= 0:
+            return math.inf
+        return self.factor * math.sqrt(chi2.ppf(ADEQUACY_QUANTILE, self.n_knots)
+                                       / self.n_knots)
+
+    @property
     def adequate(self) -> bool:
-        """ratio <= factor (a channel without knots counts as adequate)."""
-        return self.n_knots == 0 or self.ratio <= self.factor
+        """ratio <= limit (a channel without knots counts as adequate)."""
+        return self.n_knots == 0 or self.ratio <= self.limit
 
 
 @document_fields
@@ -178,10 +198,18 @@ def _message(channels: Sequence[ChannelFit], structural: Sequence[AlternativeSco
             f"{STAGE_WORDS[worst.stage]} stage is {worst.ratio:.1f}x its floor "
             f"({worst.floor_k:.3f} K)")
     n_alt = len(structural)
-    if worst.ratio <= factor and not improves:
+    if all(c.adequate for c in channels) and not improves:
         return (f"the thermal structure fits: every thermometer residual is within "
-                f"{factor:g}x its floor in both stages (worst: {head[4:]}); none of {n_alt} "
+                f"{factor:g}x its floor in both stages, allowing for the sampling of few "
+                f"knots (worst: {head[4:]}, limit {worst.limit:.2f}x); none of {n_alt} "
                 "generic structural alternatives beats it")
+    failing = [c for c in channels if not c.adequate]
+    if failing:
+        worst = max(failing, key=lambda c: c.ratio / c.limit)
+        who = "FOG" if worst.thermometer == "fog" else worst.thermometer
+        head = (f"the {who} thermometer residual (held out by start temperature) in the "
+                f"{STAGE_WORDS[worst.stage]} stage is {worst.ratio:.1f}x its floor "
+                f"({worst.floor_k:.3f} K; limit {worst.limit:.2f}x on {worst.n_knots} knots)")
     if not improves:
         return (f"{head}: the thermal structure does not fit there, and none of {n_alt} "
                 "generic alternatives (one more node, a free link, the FOG thermometer "
@@ -189,7 +217,7 @@ def _message(channels: Sequence[ChannelFit], structural: Sequence[AlternativeSco
                 "thermometer channels")
     best = structural[0]
     after = best.cv_channels_after_k[worst.thermometer][worst.stage] / worst.floor_k
-    lead = (f"{head}: the thermal structure does not fit there" if worst.ratio > factor else
+    lead = (f"{head}: the thermal structure does not fit there" if not worst.adequate else
             f"{head}, yet a structural alternative lowers the CV RMS by "
             f"{100 * best.cv_drop:.0f} %")
     out = (f"{lead}; the best alternative, {best.name}, brings it to {after:.1f}x "

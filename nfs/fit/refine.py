@@ -180,7 +180,7 @@ def fit_unit(inst: Instrument, runs: Sequence[Run], *, refine: bool = True,
         result.instrument, runs, factor=factor, max_steps=max_steps,
         decimate_s=fit_kwargs.get("decimate_s", 10.0), start_state=start_state)
     if not ref.steps:
-        warn = () if ref.adequacy.worst.ratio <= factor else (f"thermal {ref.stopped}",)
+        warn = () if ref.adequacy.worst.adequate else (f"thermal {ref.stopped}",)
         return replace(result, structure=ref, warnings=result.warnings + warn)
     new_paths = [p for s in ref.steps for p in s.params
                  if not (p.startswith("thermometers.") and ".nodes." in p)]
