@@ -12,9 +12,11 @@ package changes nothing here.
 
 from __future__ import annotations
 
+import functools
 import importlib
 import inspect
 import os
+import re
 import sys
 from pathlib import Path
 
@@ -116,17 +118,59 @@ def _data_doc(package, name, obj) -> list[str]:
     return list(docs.get(("", key), []))
 
 
+@functools.cache
+def _exported_by_subpackages() -> frozenset[int]:
+    """The ids of the objects that the API pages of packages other than ``nfs`` document
+    (every ``.. nfs-exports::`` in docs/api names one)."""
+    ids = set()
+    for page in sorted((Path(__file__).parent / "api").glob("*.rst")):
+        for modname in re.findall(r"^\.\. nfs-exports:: (\S+)",
+                                  page.read_text(encoding="utf-8"), flags=re.M):
+            if modname != "nfs":
+                mod = importlib.import_module(modname)
+                ids |= {id(getattr(mod, n)) for n in getattr(mod, "__all__", ())}
+    return frozenset(ids)
+
+
+def _documented_elsewhere(name: str) -> bool:
+    """``nfs.<name>`` is an object a subpackage's API page documents (and indexes) too."""
+    return id(getattr(nfs, name)) in _exported_by_subpackages()
+
+
+def _source_module(app, modname, attribute):
+    """viewcode: the module whose source holds the object documented as ``modname.attribute``.
+
+    A class or function: the module defining it. A re-export of the top-level package that a
+    subpackage's page documents (``:no-index:`` on the nfs page): the package itself, whose
+    ``__init__`` defines no such object, so that only the page with the object's anchor gets
+    a ``[source]`` link and the source's ``[docs]`` link lands on it. Anything else (a
+    constant): its documented module, which shows no source for it, instead of the module of
+    the value's type (a tuple's is ``builtins``, a page that viewcode never writes).
+    """
+    if not modname or not modname.split(".")[0] in ("nfs", "thermal"):
+        return None
+    try:
+        obj = getattr(importlib.import_module(modname), attribute.split(".")[0])
+    except (ImportError, AttributeError):
+        return modname
+    if modname == "nfs" and _documented_elsewhere(attribute.split(".")[0]):
+        return modname
+    if inspect.isclass(obj) or inspect.isroutine(obj):
+        return obj.__module__
+    return modname
+
+
 def _export_rst(modname: str) -> list[str]:
     """reST documenting every name in ``modname.__all__``: a summary, then each object."""
     mod = importlib.import_module(modname)
     names = list(getattr(mod, "__all__", ()))
     lines = [f".. currentmodule:: {modname}", "", ".. autosummary::", "   :nosignatures:", ""]
     lines += [f"   {n}" for n in names if n != "__version__"] + [""]
-    # the top-level package re-exports names its subpackages document: list them there
-    # without indexing them twice
-    opts = ["   :no-index:"] if modname == "nfs" else []
     for n in names:
         obj = getattr(mod, n)
+        # the top-level package re-exports names its subpackages document: list them there
+        # without indexing them twice (what only the top level exports is indexed here)
+        opts = ["   :no-index:"] if modname == "nfs" and _documented_elsewhere(n) else []
         if n == "__version__":
             lines += [f".. py:data:: {modname}.__version__", "",
                       "   The installed package's version (``nfs-startup``).", ""]
@@ -163,6 +207,7 @@ def setup(app):
             return container.children
 
     app.add_directive("nfs-exports", Exports)
+    app.connect("viewcode-follow-imported", _source_module)
     app.connect("autodoc-skip-member",
                 lambda app, what, name, obj, skip, options:
                 True if name in _SKLEARN_MEMBERS else None)
