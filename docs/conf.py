@@ -54,7 +54,12 @@ templates_path: list[str] = []
 
 # -- MyST: the user guide pages are Markdown that reads the same on GitHub ------------------
 myst_heading_anchors = 4
-myst_enable_extensions = ["colon_fence"]
+# $...$ and $$...$$ math (GitHub renders the same); a display equation carries its own number,
+# \tag{2.4}, the number the code cites ("docs/physics.md (2.4)"). Its rows are separated with
+# \cr, not \\, which Sphinx would wrap in a split environment that refuses the \tag.
+myst_enable_extensions = ["colon_fence", "dollarmath", "amsmath"]
+# An unlabelled code block is plain text (a printout, a command line), never guessed as Python
+highlight_language = "text"
 
 # -- autodoc / numpydoc ---------------------------------------------------------------------
 autodoc_default_options = {"member-order": "bysource"}
@@ -86,10 +91,14 @@ html_theme = "alabaster"
 html_theme_options = {
     "description": "Start-up experiments on FOG north finders",
     "fixed_sidebar": True,
-    "page_width": "1180px",
-    "sidebar_width": "240px",
+    # at a 1280 px window the text column is 960 px: an 88-character code line fits
+    # (docs/_static/nfs.css scrolls what does not); below 1240 px the narrow layout
+    "page_width": "1240px",
+    "sidebar_width": "220px",
+    "body_max_width": "none",
 }
-html_static_path: list[str] = []
+html_static_path = ["_static"]
+html_css_files = ["nfs.css"]
 html_title = f"nfs-startup {release}"
 
 
