@@ -58,8 +58,10 @@ myst_heading_anchors = 4
 # \tag{2.4}, the number the code cites ("docs/physics.md (2.4)"). Its rows are separated with
 # \cr, not \\, which Sphinx would wrap in a split environment that refuses the \tag.
 myst_enable_extensions = ["colon_fence", "dollarmath", "amsmath"]
-# An unlabelled code block is plain text (a printout, a command line), never guessed as Python
-highlight_language = "text"
+# An unlabelled code block (a docstring's literal block) is not highlighted, never guessed as
+# Python; the pages label theirs: ```text for a program's printout (wrapped, nfs.css), ```sh
+# for commands, ```none for data
+highlight_language = "none"
 
 # -- autodoc / numpydoc ---------------------------------------------------------------------
 autodoc_default_options = {"member-order": "bysource"}
