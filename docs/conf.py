@@ -106,27 +106,32 @@ html_title = f"nfs-startup {release}"
 
 # -- the API reference: a package's exports, read from its __all__ --------------------------
 
-def _defining_module(package, name, obj):
-    """The module under ``package`` whose top level binds ``name`` to ``obj`` (data only)."""
-    prefix = package.__name__ + "."
-    for modname, mod in sorted(sys.modules.items()):
-        if (modname == package.__name__ or modname.startswith(prefix)) and mod is not None:
-            for key, value in vars(mod).items():
-                if value is obj and modname != package.__name__:
-                    return modname, key
-    return package.__name__, name
+def _bindings(package, name, obj):
+    """(module, name) of every module of the project whose top level binds ``obj``: first
+    those binding it under ``name``, then those inside ``package`` (a constant is often
+    imported where it is used, and re-exported from another subpackage)."""
+    top = package.__name__.split(".")[0]
+    found = [(modname, key) for modname, mod in sorted(sys.modules.items())
+             if (modname == top or modname.startswith(top + ".")) and mod is not None
+             for key, value in list(vars(mod).items()) if value is obj]
+
+    def inside(modname):
+        return modname == package.__name__ or modname.startswith(package.__name__ + ".")
+    return sorted(found, key=lambda pair: (pair[1] != name, not inside(pair[0])))
 
 
 def _data_doc(package, name, obj) -> list[str]:
     """The ``#:`` comment or docstring of a re-exported constant, from the module defining it."""
     from sphinx.pycode import ModuleAnalyzer
 
-    modname, key = _defining_module(package, name, obj)
-    try:
-        docs = ModuleAnalyzer.for_module(modname).find_attr_docs()
-    except Exception:  # pragma: no cover - a module without source
-        return []
-    return list(docs.get(("", key), []))
+    for modname, key in _bindings(package, name, obj):
+        try:
+            docs = ModuleAnalyzer.for_module(modname).find_attr_docs()
+        except Exception:  # pragma: no cover - a module without source
+            continue
+        if ("", key) in docs:
+            return list(docs[("", key)])
+    return []
 
 
 @functools.cache
@@ -183,7 +188,7 @@ def _export_rst(modname: str) -> list[str]:
         # without indexing them twice (what only the top level exports is indexed here)
         opts = ["   :no-index:"] if modname == "nfs" and _documented_elsewhere(n) else []
         if n == "__version__":
-            lines += [f".. py:data:: {modname}.__version__", "",
+            lines += [".. py:data:: __version__", "",
                       "   The installed package's version (``nfs-startup``).", ""]
         elif inspect.isclass(obj) and issubclass(obj, BaseException):
             lines += [f".. autoexception:: {modname}.{n}", "   :show-inheritance:", *opts, ""]
@@ -193,9 +198,27 @@ def _export_rst(modname: str) -> list[str]:
             lines += [f".. autofunction:: {modname}.{n}", *opts, ""]
         else:
             doc = _data_doc(mod, n, obj)
-            lines += [f".. py:data:: {modname}.{n}", ""]
+            # the name is relative to the current module: ``nfs.effects.KINDS``
+            lines += [f".. py:data:: {n}", *opts, ""]
             lines += [f"   {d}" if d.strip() else "" for d in doc] + [""]
     return lines
+
+
+def _constant_summary(app, what, name, obj, options, lines):
+    """autosummary's line for a constant: its ``#:`` comment, not its type's docstring.
+
+    A re-exported constant's comment sits in the module that defines it, where autodoc,
+    reading the package, does not look: the summary table would show ``str(object='') ->
+    str`` for a string constant.
+    """
+    if what != "data" or type(obj).__module__ != "builtins":
+        return              # a constant of a type of ours documents itself
+    modname, _, attr = name.rpartition(".")
+    try:
+        package = importlib.import_module(modname)
+    except ImportError:
+        return
+    lines[:] = _data_doc(package, attr, obj)   # nothing rather than the type's docstring
 
 
 def setup(app):
@@ -219,6 +242,7 @@ def setup(app):
 
     app.add_directive("nfs-exports", Exports)
     app.connect("viewcode-follow-imported", _source_module)
+    app.connect("autodoc-process-docstring", _constant_summary)
     app.connect("autodoc-skip-member",
                 lambda app, what, name, obj, skip, options:
                 True if name in _SKLEARN_MEMBERS else None)
