@@ -3,7 +3,8 @@
 Oracles: the effect registry (every built-in effect has an entry in docs/effects.md, and no
 registered effect is still announced as coming); the file system (every page README.md and
 the docs link to exists); the section and equation numbers of docs/physics.md (every
-"docs/physics.md section N" or "(N.M)" the code cites exists there); the bibliography (every
+"docs/physics.md section N" or "(N.M)" the code cites exists there, as a heading or as the
+``\\tag{N.M}`` of a display equation); the bibliography (every
 "Author (year)" a page cites has an entry in docs/references.md, and the papers the package
 reproduces carry a year).
 """
@@ -161,7 +162,8 @@ def _physics_sections() -> set[int]:
 
 
 def _physics_equations() -> set[str]:
-    return set(re.findall(r"\((\d+\.\d+)\)\s*$", _read("physics.md"), flags=re.M))
+    """The numbers of the page's display equations: ``\\tag{N.M}`` in their ``$$`` blocks."""
+    return set(re.findall(r"\\tag\{(\d+\.\d+)\}", _read("physics.md")))
 
 
 def _citing_files():

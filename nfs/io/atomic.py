@@ -109,7 +109,9 @@ def atomic_output(path: str | os.PathLike, mode: str = "w", *, encoding: str = "
                   newline: str | None = "") -> Iterator[IO]:
     """Open *path* for writing so that it is replaced only when the block succeeds.
 
-    Use it for writers that stream into a file object::
+    Use it for writers that stream into a file object:
+
+    .. code-block:: python
 
         with atomic_output("fig.png", "wb") as f:
             figure.savefig(f, format="png")
