@@ -24,7 +24,9 @@ from .effects import CoilLayout, EffectInstance, check_geometry, make_effect
 from .effects.thermometer import THERMOMETERS
 from .errors import EffectError, ScenarioError, ThermalError
 from .io.tomlio import (check_keys, dumps_toml, load_toml, number, string, table)
-from .ranges import check, check_tree, deferred_warnings, warn_unusual
+from .io.unit_files import drawn_unit_entry
+from .ranges import (check, check_tree, collected_warnings, deferred_warnings, find, leaves,
+                     warn_unusual)
 from .sensors import ThermometerModel
 
 __all__ = [
@@ -572,8 +574,30 @@ def load_instrument(name_or_path: str | Path, base: Path | None = None) -> Instr
         if base is not None and not path.is_absolute():
             path = base / path
     with deferred_warnings():
-        inst = instrument_from_dict(load_toml(path), file=path)
+        tree = load_toml(path)
+        entry = drawn_unit_entry(path)
+        if entry is None:
+            inst = instrument_from_dict(tree, file=path)
+        else:
+            with collected_warnings() as notes:
+                inst = instrument_from_dict(tree, file=path)
+            _drawn_note(path, tree, entry, len(notes))
         return _own_name(inst, path)
+
+
+def _drawn_note(path: Path, tree: dict, entry: dict, n_unusual: int) -> None:
+    """One line for a drawn unit's file whose draw lies outside typical ranges (module
+    :mod:`nfs.io.unit_files`): how many values, which keys, and why that is no fault."""
+    if not n_unusual:
+        return
+    keys = [shown for shown, canonical, v in leaves(tree)
+            if isinstance(v, (int, float)) and not isinstance(v, bool)
+            and (r := find(canonical)) is not None and r.unusual(v)]
+    shown = ", ".join(keys[:4]) + (", ..." if len(keys) > 4 else "")
+    warn_unusual(f"{n_unusual} value(s) outside their typical ranges ({shown}): unit "
+                 f"{entry.get('unit')} of scenario '{entry.get('scenario')}' as its "
+                 "variability drew it (nfs-manifest.json beside it), a draw's tail, not a "
+                 "slip", file=path, once=("drawn unit", str(path)))
 
 
 def _own_name(inst: Instrument, path: Path) -> Instrument:
