@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import json
 import math
+import os
 import sys
 from pathlib import Path
 
@@ -216,6 +217,7 @@ def cmd_sweep(args) -> int:
         raise NfsError("give --dask-local N or --scheduler ADDRESS, not both")
     spec = load_sweep(args.sweep)                   # the whole sweep checked before any work
     log = None if args.quiet else (lambda msg: print(f"sweep: {msg}", file=sys.stderr))
+    _gate_sweep(spec, args)
     plan = plan_sweep(spec, args.output)            # the store prepared, its cells listed once
     res = stored_sweep(plan)
     if res is not None:
@@ -238,3 +240,17 @@ def cmd_sweep(args) -> int:
     for p in res.paths:
         print(p)
     return 0
+
+
+def _gate_sweep(spec, args) -> None:
+    """The sweep's missing cells estimated before the folder is prepared (:func:`gate`)."""
+    from ..sweep.estimate import estimate_sweep, missing_cells, sweep_samples
+    n = missing_cells(spec, args.output)
+    if args.dask_local is not None:
+        workers = args.dask_local
+    elif args.scheduler is not None:
+        workers = 1                     # a cluster's size is not known here: one worker
+    else:
+        workers = (os.cpu_count() or 1) if args.jobs == -1 else args.jobs
+    gate(lambda: estimate_sweep(spec, n, workers), sweep_samples(spec, n), args, rows=False,
+         fewer="or fewer cells: fewer seeds or axis values")

@@ -83,6 +83,7 @@ def build_parser() -> argparse.ArgumentParser:
     t.add_argument("--tolerance", type=float, default=None,
                    help="relative change a worse cell must also exceed (default 0.05: 5 %%)")
     t.add_argument("-q", "--quiet", action="store_true", help="no progress on stderr")
+    _yes_option(t)
     _trust_effects_option(t)
     t.add_argument("--overwrite", action="store_true",
                    help="replace an existing --json file, and write into a folder that holds "
@@ -367,6 +368,7 @@ def build_parser() -> argparse.ArgumentParser:
                          "dask extra, and nfs installed on the workers)")
     sw.add_argument("-q", "--quiet", action="store_true",
                     help="no progress bar or log lines on standard error")
+    _yes_option(sw)
     sw.set_defaults(func=cmd_sweep)
     return p
 

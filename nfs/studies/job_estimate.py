@@ -44,7 +44,7 @@ from .startup_study import test_scenario, train_scenario
 
 __all__ = ["JobLimits", "JOB_LIMITS", "JOB_NOTICE", "CALIBRATION_SAMPLES", "Calibration",
            "SIDECAR_BYTES", "JobEstimate", "JobTooBig", "calibrate", "run_samples", "might_exceed",
-           "estimate_runs", "table_scenarios", "check_job", "gate_job", "ignored_keys"]
+           "estimate_runs", "estimate_table", "table_scenarios", "check_job", "gate_job", "ignored_keys"]
 
 
 @document_fields
@@ -211,11 +211,12 @@ def _held(obj, seen: set) -> int:
     return 0
 
 
-def calibrate(scenario: Scenario, *, northfind: bool = False,
+def calibrate(scenario: Scenario, *, northfind: bool = False, csv: bool = True,
               min_samples: int = CALIBRATION_SAMPLES, conditions=None) -> Calibration:
     """Time the first runs of ``scenario`` (``min_samples`` samples at least, whole runs)
-    on this machine: simulated together, each formatted as its CSV file and (``northfind``)
-    north-found (module docstring).  ``conditions``: the scenario's, when at hand."""
+    on this machine: simulated together, each formatted as its CSV file (``csv``) and
+    (``northfind``) north-found (module docstring).  ``conditions``: the scenario's, when
+    at hand."""
     conds = scenario.conditions() if conditions is None else conditions
     k, n = 0, 0
     while k < len(conds) and n < min_samples:
@@ -223,7 +224,7 @@ def calibrate(scenario: Scenario, *, northfind: bool = False,
         k += 1
     t0 = time.perf_counter()
     sims = list(iter_simulate_runs(scenario.instrument, conds[:k]))
-    csv_bytes = sum(len(format_csv(s.run.columns).encode("utf-8")) for s in sims)
+    csv_bytes = sum(len(format_csv(s.run.columns).encode("utf-8")) for s in sims) if csv else 0
     simulate_s = time.perf_counter() - t0
     t0 = time.perf_counter()
     if northfind:
@@ -266,6 +267,20 @@ def estimate_runs(command: str, scenarios: list[Scenario], *, write: bool = Fals
     return JobEstimate(command=command, runs=len(samples), samples=total, seconds=seconds,
                        disk_bytes=disk + extra_bytes,
                        memory_bytes=total * cal.held_bytes if hold else 0.0, how=how)
+
+
+def estimate_table(scenario: Scenario, settings: CompensationSettings | None = None,
+                   compensate: bool = True) -> JobEstimate:
+    """The estimate of ``nfs table`` (:class:`nfs.ModelChain`): the runs of
+    :func:`table_scenarios` simulated, north-found and held in memory (the chain's result
+    keeps them); the compensators' training is not counted."""
+    s = settings or scenario.compensation or CompensationSettings()
+    leaves_out = ""
+    if compensate:
+        leaves_out = (f"the training of {len(s.methods)} method(s) (budget {s.budget}, "
+                      f"{s.tuner_seeds} tuner seed(s)) comes on top")
+    return estimate_runs("nfs table", table_scenarios(scenario, s, compensate), hold=True,
+                         northfind=True, leaves_out=leaves_out)
 
 
 def check_job(estimate: JobEstimate, *, yes: bool = False, limits: JobLimits = JOB_LIMITS,
