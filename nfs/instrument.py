@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import functools
 import tomllib
+from contextlib import nullcontext
 from dataclasses import dataclass, replace
 from importlib import resources
 from pathlib import Path
@@ -24,9 +25,8 @@ from .effects import CoilLayout, EffectInstance, check_geometry, make_effect
 from .effects.thermometer import THERMOMETERS
 from .errors import EffectError, ScenarioError, ThermalError
 from .io.tomlio import (check_keys, dumps_toml, load_toml, number, string, table)
-from .io.unit_files import drawn_unit_entry
-from .ranges import (check, check_tree, collected_warnings, deferred_warnings, find, leaves,
-                     warn_unusual)
+from .io.unit_files import drawn_unit_entry, drawn_unit_note
+from .ranges import check, check_tree, collected_warnings, deferred_warnings, warn_unusual
 from .sensors import ThermometerModel
 
 __all__ = [
@@ -565,7 +565,8 @@ def preset_path(name: str) -> Path:
 
 
 def load_instrument(name_or_path: str | Path, base: Path | None = None) -> Instrument:
-    """A built-in preset by name, or an instrument TOML file (relative to ``base``)."""
+    """A preset by name, or an instrument TOML file (relative to ``base``; a drawn unit's
+    file, :mod:`nfs.io.unit_files`, warns in one line)."""
     s = str(name_or_path)
     if not s.endswith(".toml") and "/" not in s and "\\" not in s:
         path = preset_path(s)
@@ -574,30 +575,12 @@ def load_instrument(name_or_path: str | Path, base: Path | None = None) -> Instr
         if base is not None and not path.is_absolute():
             path = base / path
     with deferred_warnings():
-        tree = load_toml(path)
-        entry = drawn_unit_entry(path)
-        if entry is None:
+        tree, entry = load_toml(path), drawn_unit_entry(path)
+        with collected_warnings() if entry is not None else nullcontext([]) as notes:
             inst = instrument_from_dict(tree, file=path)
-        else:
-            with collected_warnings() as notes:
-                inst = instrument_from_dict(tree, file=path)
-            _drawn_note(path, tree, entry, len(notes))
+        if notes:
+            warn_unusual(drawn_unit_note(tree, entry, len(notes)), file=path, once=str(path))
         return _own_name(inst, path)
-
-
-def _drawn_note(path: Path, tree: dict, entry: dict, n_unusual: int) -> None:
-    """One line for a drawn unit's file whose draw lies outside typical ranges (module
-    :mod:`nfs.io.unit_files`): how many values, which keys, and why that is no fault."""
-    if not n_unusual:
-        return
-    keys = [shown for shown, canonical, v in leaves(tree)
-            if isinstance(v, (int, float)) and not isinstance(v, bool)
-            and (r := find(canonical)) is not None and r.unusual(v)]
-    shown = ", ".join(keys[:4]) + (", ..." if len(keys) > 4 else "")
-    warn_unusual(f"{n_unusual} value(s) outside their typical ranges ({shown}): unit "
-                 f"{entry.get('unit')} of scenario '{entry.get('scenario')}' as its "
-                 "variability drew it (nfs-manifest.json beside it), a draw's tail, not a "
-                 "slip", file=path, once=("drawn unit", str(path)))
 
 
 def _own_name(inst: Instrument, path: Path) -> Instrument:

@@ -163,8 +163,10 @@ class Scenario:
 
     def drawn_units(self) -> dict[int, Instrument]:
         """{unit: :meth:`unit_instrument`} of the units that make this scenario's start-ups
-        (:attr:`unit_ids`, each once, in order)."""
-        return {u: self.unit_instrument(u) for u in dict.fromkeys(self.unit_ids)}
+        (each once, in the order of their first start-up: with fewer ``repeats`` than
+        units, some units make none)."""
+        made = [self.unit_ids[r % len(self.unit_ids)] for r in range(self.repeats)]
+        return {u: self.unit_instrument(u) for u in dict.fromkeys(made)}
 
     def run_name(self, i_temp: int, repeat: int, unit: int = 0) -> str:
         """File stem of start-up ``repeat`` of ``unit`` at T0 number ``i_temp``:

@@ -18,11 +18,12 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-from .outdir import read_manifest
+from ..ranges import find, leaves
+from .outdir import MANIFEST_NAME, read_manifest
 from .provenance import sha256_of_file
 
 __all__ = ["UNIT_SIDECAR_KEY", "unit_file_name", "unit_file_text", "unit_entry",
-           "drawn_unit_entry"]
+           "drawn_unit_entry", "drawn_unit_note"]
 
 #: Key of a run's sidecar (``NAME.toml``) that names the unit file the run was made by.
 UNIT_SIDECAR_KEY = "unit_file"
@@ -80,3 +81,16 @@ def drawn_unit_entry(path: str | os.PathLike) -> dict | None:
     except OSError:
         return None
     return entry if same else None
+
+
+def drawn_unit_note(tree: dict, entry: dict, n_unusual: int) -> str:
+    """The one line that stands for the ``n_unusual`` range warnings of a drawn unit's file
+    (its parsed TOML ``tree``, its manifest record ``entry``): how many values, which keys,
+    and why that is no slip."""
+    keys = [shown for shown, canonical, v in leaves(tree)
+            if isinstance(v, (int, float)) and not isinstance(v, bool)
+            and (r := find(canonical)) is not None and r.unusual(v)]
+    shown = ", ".join(keys[:4]) + (", ..." if len(keys) > 4 else "")
+    return (f"{n_unusual} value(s) outside their typical ranges ({shown}): unit "
+            f"{entry.get('unit')} of scenario '{entry.get('scenario')}' as its variability "
+            f"drew it ({MANIFEST_NAME} beside it), a draw's tail, not a slip")

@@ -75,7 +75,7 @@ def runs_folder(scenario: Scenario, path, *, overwrite: bool = False,
     (:class:`~nfs.io.outdir.OutputFolder`, its job :func:`scenario_job`): a partial folder of
     the same scenario is resumed (``resume``: None: then; True: resume or refuse; False:
     write anew)."""
-    expected = {unit_file_name(u) for u in scenario.unit_ids}
+    expected = {unit_file_name(u) for u in scenario.drawn_units()}
     for cond in scenario.conditions():
         expected.update(_run_files(cond.name))
     return OutputFolder(path, command, overwrite=overwrite, job=scenario_job(scenario),

@@ -44,7 +44,7 @@ def estimate_sweep(spec: SweepSpec, n_cells: int, workers: int = 1) -> JobEstima
     docstring)."""
     sc = spec.scenario
     conds = sc.conditions()
-    cal = calibrate(sc, northfind=True, conditions=conds, csv=False)
+    cal = calibrate(sc, northfind=True, conditions=conds)
     runs = n_cells * len(conds)
     samples = sweep_samples(spec, n_cells)
     cycles = sum(c.duration_s // sc.schedule.cycle_s for c in conds)
