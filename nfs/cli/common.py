@@ -11,7 +11,8 @@ import time
 from ..errors import NfsError
 
 __all__ = ["EXIT_USAGE", "FEATURES_MODE_HELP", "Progress", "output_folder", "output_file",
-           "finish", "recorded_arguments", "say_removed", "gate", "say_ignored", "with_overrides", "circular_mean_deg", "fmt", "start_model"]
+           "finish", "recorded_arguments", "say_removed", "gate", "say_ignored",
+           "with_overrides", "circular_mean_deg", "fmt", "start_model"]
 
 
 EXIT_USAGE = 2

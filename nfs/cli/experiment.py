@@ -24,10 +24,10 @@ __all__ = ["cmd_simulate", "cmd_northfind", "cmd_preset", "cmd_init", "cmd_effec
 def cmd_simulate(args) -> int:
     from .. import load_scenario
     from ..studies.job_estimate import estimate_runs, run_samples
-    from ..studies.runs_folder import runs_folder, simulate_to_folder
+    from ..studies.runs_folder import check_runs_folder, simulate_to_folder
     scenario = with_overrides(load_scenario(args.scenario), args)
     say_ignored(scenario, "simulate")
-    folder = runs_folder(scenario, args.output, overwrite=args.overwrite,
+    folder = check_runs_folder(scenario, args.output, overwrite=args.overwrite,
                          resume=True if args.resume else None)
     conds = scenario.conditions()
     done = {c.name for c in conds

@@ -5,8 +5,9 @@ While a long command writes its folder (``nfs simulate``: a run at a time), the 
 manifest says ``"partial": true`` with the command and its job (the scenario's hash), and
 every group of files written atomically (a run's ``NAME.csv`` and ``NAME.toml``) is recorded
 as it lands by one line appended to ``nfs-progress.jsonl``: each file's path, size,
-modification time and SHA-256.  A file is complete only when it was written atomically (:mod:`nfs.io.atomic`: it
-exists whole or not at all) and recorded; a line cut by the interruption is not a record.
+modification time and SHA-256.  A file is complete only when it was written atomically
+(:mod:`nfs.io.atomic`: it exists whole or not at all) and recorded; a line cut by the
+interruption is not a record.
 The command's final manifest replaces the partial one and the journal is removed.
 """
 
@@ -38,9 +39,9 @@ class Journal:
         self.path = self.folder / JOURNAL_NAME
 
     def read(self) -> dict[str, dict]:
-        """{relative path: {"bytes", "mtime_ns", "sha256"}} of every file recorded, a later record of a
-        path replacing an earlier one; lines that do not parse (a line cut by an
-        interruption) are no record."""
+        """{relative path: {"bytes", "mtime_ns", "sha256"}} of every file recorded, a later
+        record of a path replacing an earlier one; lines that do not parse (a line cut by
+        an interruption) are no record."""
         out: dict[str, dict] = {}
         try:
             text = self.path.read_text(encoding="utf-8")

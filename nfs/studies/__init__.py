@@ -21,12 +21,13 @@ from .scenario_runs import (ScenarioResult, floor_deg, northfind_runs, run_scena
 from .job_estimate import (JOB_LIMITS, JOB_NOTICE, JobEstimate, JobLimits, JobTooBig,
                            check_job, estimate_runs, estimate_table, ignored_keys,
                            table_scenarios)
-from .runs_folder import SimulatedFolder, runs_folder, simulate_to_folder, unit_file_instrument
+from .runs_folder import (SimulatedFolder, check_runs_folder, simulate_to_folder,
+                          unit_file_instrument)
 from .startup_study import CompensationStudy, run_study
 
 __all__ = ["ScenarioResult", "run_scenario", "northfind_runs", "uncompensated_table", "floor_deg",
            "CompensationStudy", "run_study", "CycleStudy", "run_cycle_study", "run_runs_study",
            "ParameterStudy", "run_parameter_study",
-           "SimulatedFolder", "simulate_to_folder", "runs_folder", "unit_file_instrument",
+           "SimulatedFolder", "simulate_to_folder", "check_runs_folder", "unit_file_instrument",
            "JobEstimate", "JobLimits", "JOB_LIMITS", "JOB_NOTICE", "JobTooBig", "estimate_runs",
            "estimate_table", "check_job", "ignored_keys", "table_scenarios"]

@@ -14,8 +14,8 @@ How the figures are estimated:
   simulates them, written as the job writes them (``nfs simulate``: files and record, in a
   temporary folder) or north-found (a table, a sweep), give seconds per sample, multiplied
   by the job's samples.  A long job stacks more runs in one thermal march than the
-  calibration's few, so that part is an upper bound; measured against ``nfs simulate``
-  itself: 1.0x for 98 runs of 1300 samples, 0.8x for 140 of 9000; a table's training of its
+  calibration's few, so that part is an upper bound (``nfs simulate`` took 1.0x the
+  estimate for 98 runs of 1300 samples, 0.8x for 140 of 9000); a table's training of its
   compensators is not in it (said in the line);
 - the disk from the calibration's files: CSV bytes per row and sidecar bytes per run;
 - a table's memory from the bytes of the calibration's simulation results (every
@@ -47,7 +47,8 @@ from .startup_study import test_scenario, train_scenario
 
 __all__ = ["JobLimits", "JOB_LIMITS", "JOB_NOTICE", "CALIBRATION_SAMPLES", "Calibration",
            "JobEstimate", "JobTooBig", "calibrate", "run_samples", "might_exceed",
-           "estimate_runs", "estimate_table", "table_scenarios", "check_job", "gate_job", "ignored_keys"]
+           "estimate_runs", "estimate_table", "table_scenarios", "check_job", "gate_job",
+           "ignored_keys"]
 
 
 @document_fields

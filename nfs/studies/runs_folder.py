@@ -32,7 +32,7 @@ from ..io.unit_files import UNIT_SIDECAR_KEY, unit_entry, unit_file_name, unit_f
 from ..ranges import RangeWarning
 from ..scenario import Scenario
 
-__all__ = ["SimulatedFolder", "scenario_job", "runs_folder", "simulate_to_folder",
+__all__ = ["SimulatedFolder", "scenario_job", "check_runs_folder", "simulate_to_folder",
            "unit_file_instrument"]
 
 
@@ -69,7 +69,7 @@ def _run_files(name: str) -> tuple[str, str]:
     return f"{name}.csv", f"{name}.toml"
 
 
-def runs_folder(scenario: Scenario, path, *, overwrite: bool = False,
+def check_runs_folder(scenario: Scenario, path, *, overwrite: bool = False,
                 resume: bool | None = None, command: str = "simulate") -> OutputFolder:
     """The output folder of ``scenario``'s runs, checked before any work
     (:class:`~nfs.io.outdir.OutputFolder`, its job :func:`scenario_job`): a partial folder of
@@ -115,8 +115,9 @@ def simulate_to_folder(scenario: Scenario, folder, *,
     scenario : Scenario
         The experiment (:func:`nfs.load_scenario`).
     folder : OutputFolder or path
-        The folder, checked before any work by :func:`runs_folder` (a path is checked here,
-        with its defaults: a folder of another command or of unknown files is refused).
+        The folder, checked before any work by :func:`check_runs_folder` (a path is checked
+        here, with its defaults: a folder of another command or of unknown files is
+        refused).
     progress : callable, optional
         ``progress(i, n, name)`` before each run simulated (``n``: the runs left).
     arguments : list of str, optional
@@ -127,7 +128,7 @@ def simulate_to_folder(scenario: Scenario, folder, *,
     SimulatedFolder
     """
     if not isinstance(folder, OutputFolder):
-        folder = runs_folder(scenario, folder)
+        folder = check_runs_folder(scenario, folder)
     out = folder.path
     inputs = {"scenario": scenario_provenance(scenario)}
     folder.begin(arguments=arguments, inputs=inputs)

@@ -180,3 +180,16 @@ def test_drawn_units_are_those_that_make_start_ups(tmp_path):
     with pytest.raises(nfs.NfsError, match="units 0..3"):
         sc.unit_instrument(4)
     assert dataclasses.replace(sc, units=4).unit_instrument(3) != sc.unit_instrument(0)
+
+
+@pytest.mark.integration
+def test_nfs_fit_takes_the_unit_file_as_its_model(tmp_path, cli):
+    # 3 s: a fit of the drift stage from the unit itself, whose file warns in one line
+    scen = _scenario(tmp_path)
+    assert cli("simulate", scen, "-o", tmp_path / "runs", "-q")[0] == 0
+    code, out, err = cli("fit", tmp_path / "runs", "--model", tmp_path / "runs" / "unit_00.toml",
+                         "-o", tmp_path / "fitted.toml", "--stages", "drift", "--no-refine",
+                         "--no-noise-fit", "-q")
+    assert code == 0, err
+    warned = [l for l in err.splitlines() if l.startswith("nfs: warning:") and "unit_00" in l]
+    assert len(warned) == 1 and "3 value(s) outside their typical ranges" in warned[0]
