@@ -48,6 +48,7 @@ _PUBLIC = {
     # the chain and its stages
     "simulate_run": "nfs.experiment", "simulate_runs": "nfs.experiment",
     "RunConditions": "nfs.conditions", "SimulationResult": "nfs.experiment",
+    "simulate_to_folder": "nfs.studies.runs_folder",
     "run_scenario": "nfs.studies.scenario_runs", "north_find": "nfs.northfind",
     "separate_drift": "nfs.denoise",
     "CompensationSettings": "nfs.compensate.settings",

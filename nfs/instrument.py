@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import functools
 import tomllib
+from contextlib import nullcontext
 from dataclasses import dataclass, replace
 from importlib import resources
 from pathlib import Path
@@ -24,7 +25,8 @@ from .effects import CoilLayout, EffectInstance, check_geometry, make_effect
 from .effects.thermometer import THERMOMETERS
 from .errors import EffectError, ScenarioError, ThermalError
 from .io.tomlio import (check_keys, dumps_toml, load_toml, number, string, table)
-from .ranges import check, check_tree, deferred_warnings, warn_unusual
+from .io.unit_files import drawn_unit_entry, drawn_unit_note
+from .ranges import check, check_tree, collected_warnings, deferred_warnings, warn_unusual
 from .sensors import ThermometerModel
 
 __all__ = [
@@ -581,7 +583,8 @@ def preset_path(name: str) -> Path:
 
 
 def load_instrument(name_or_path: str | Path, base: Path | None = None) -> Instrument:
-    """A built-in preset by name, or an instrument TOML file (relative to ``base``)."""
+    """A preset by name, or an instrument TOML file (relative to ``base``; a drawn unit's
+    file, :mod:`nfs.io.unit_files`, warns in one line)."""
     s = str(name_or_path)
     if not s.endswith(".toml") and "/" not in s and "\\" not in s:
         path = preset_path(s)
@@ -590,7 +593,11 @@ def load_instrument(name_or_path: str | Path, base: Path | None = None) -> Instr
         if base is not None and not path.is_absolute():
             path = base / path
     with deferred_warnings():
-        inst = instrument_from_dict(load_toml(path), file=path)
+        tree, entry = load_toml(path), drawn_unit_entry(path)
+        with collected_warnings() if entry is not None else nullcontext([]) as notes:
+            inst = instrument_from_dict(tree, file=path)
+        if notes:
+            warn_unusual(drawn_unit_note(tree, entry, len(notes)), file=path, once=str(path))
         return _own_name(inst, path)
 
 

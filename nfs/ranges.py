@@ -53,6 +53,7 @@ from .errors import InputError
 
 __all__ = ["Range", "RANGES", "RangeWarning", "find", "check", "check_tree", "leaves",
            "warn", "warn_unusual", "one_line_warnings", "deferred_warnings",
+           "collected_warnings",
            "MAX_SAMPLES_PER_RUN", "TEMPERATURE_RANGE_C", "G_N_M_PER_S2", "KELVIN_OFFSET"]
 
 #: 0 degC in kelvin (the offset of a temperature written in K).
@@ -662,6 +663,22 @@ def deferred_warnings():
         _PENDING.reset(token)
     for message in held.values():
         _emit(message)
+
+
+@contextmanager
+def collected_warnings() -> Iterator[list[str]]:
+    """Collect the :class:`RangeWarning` messages of a block into the list it yields,
+    without showing them: the caller says them in its own words (one summary line of a
+    drawn unit's file, :func:`nfs.instrument.load_instrument`) with :func:`warn`, which an
+    enclosing :func:`deferred_warnings` holds as usual.  An error inside drops them."""
+    held: dict = {}
+    token = _PENDING.set(held)
+    out: list[str] = []
+    try:
+        yield out
+    finally:
+        _PENDING.reset(token)
+    out.extend(held.values())
 
 
 @contextmanager

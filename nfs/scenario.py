@@ -17,7 +17,7 @@ from .errors import NfsError
 from .conditions import RunConditions
 from .instrument import Instrument
 from .sensors import Schedule
-from .variability import NO_VARIABILITY, Variability
+from .variability import NO_VARIABILITY, Variability, unit_instrument
 
 __all__ = ["NorthFindSettings", "ChamberProfile", "Scenario"]
 
@@ -145,6 +145,28 @@ class Scenario:
     def unit_ids(self) -> tuple[int, ...]:
         """The units that make the start-ups, in turn."""
         return tuple(range(self.units)) if self.run_units is None else tuple(self.run_units)
+
+    def unit_instrument(self, unit: int = 0) -> Instrument:
+        """The instrument unit ``unit`` is: the scenario's instrument with every parameter
+        that scatters from unit to unit drawn once (:func:`nfs.variability.unit_instrument`),
+        or the instrument itself when units do not differ.
+
+        It is the instrument each run of the unit was simulated with (the
+        :attr:`~nfs.experiment.SimulationResult.instrument` of its runs), so it holds the
+        values a fit of the unit's runs should find: ``nfs simulate`` writes it beside the
+        runs as ``unit_00.toml``, ``unit_01.toml``, ... (:meth:`drawn_units`).
+        """
+        if not 0 <= unit < self.units:
+            raise NfsError(f"unit {unit}: scenario '{self.name}' has units 0..{self.units - 1}")
+        var = self.variability
+        return unit_instrument(self.instrument, var, unit) if var.per_unit else self.instrument
+
+    def drawn_units(self) -> dict[int, Instrument]:
+        """{unit: :meth:`unit_instrument`} of the units that make this scenario's start-ups
+        (each once, in the order of their first start-up: with fewer ``repeats`` than
+        units, some units make none)."""
+        made = [self.unit_ids[r % len(self.unit_ids)] for r in range(self.repeats)]
+        return {u: self.unit_instrument(u) for u in dict.fromkeys(made)}
 
     def run_name(self, i_temp: int, repeat: int, unit: int = 0) -> str:
         """File stem of start-up ``repeat`` of ``unit`` at T0 number ``i_temp``:

@@ -11,7 +11,8 @@ import time
 from ..errors import NfsError
 
 __all__ = ["EXIT_USAGE", "FEATURES_MODE_HELP", "Progress", "output_folder", "output_file",
-           "finish", "with_overrides", "circular_mean_deg", "fmt", "start_model"]
+           "finish", "recorded_arguments", "say_removed", "gate", "say_ignored",
+           "with_overrides", "circular_mean_deg", "fmt", "start_model"]
 
 
 EXIT_USAGE = 2
@@ -63,10 +64,14 @@ def output_file(path, option: str, overwrite: bool = False):
         raise NfsError(f"{option} {p}: the file exists; give --overwrite to replace it")
 
 
-def finish(folder, args, inputs: dict) -> None:
-    """Write the folder's manifest and say what happened to an earlier output's files."""
-    # The command line without the folder itself: the same command into two folders writes
-    # the same manifest.
+#: Options that change how a command runs, not what it writes: left out of the manifest's
+#: command line, so that a resumed or confirmed folder is the folder written at once.
+_NOT_RECORDED = ("--resume", "--yes")
+
+
+def recorded_arguments(args) -> list[str]:
+    """The command line as the manifest records it: without the folder itself (the same
+    command into two folders writes the same manifest) and without :data:`_NOT_RECORDED`."""
     argv, skip = [], False
     for tok in getattr(args, "argv", []):
         if skip:
@@ -74,9 +79,20 @@ def finish(folder, args, inputs: dict) -> None:
         elif tok in ("-o", "--output"):
             skip = True
         elif not tok.startswith("--output=") and not (tok.startswith("-o") and
-                                                      not tok.startswith("--")):
+                                                      not tok.startswith("--")) \
+                and tok not in _NOT_RECORDED:
             argv.append(tok)
-    folder.finish(arguments=argv, inputs=inputs)
+    return argv
+
+
+def finish(folder, args, inputs: dict) -> None:
+    """Write the folder's manifest and say what happened to an earlier output's files."""
+    folder.finish(arguments=recorded_arguments(args), inputs=inputs)
+    say_removed(folder)
+
+
+def say_removed(folder) -> None:
+    """One line on stderr on what happened to an earlier output's files (if anything)."""
     note = folder.summary()
     if note:
         print(f"nfs: {note}", file=sys.stderr)
@@ -110,3 +126,23 @@ def start_model(args):
     """The start model of ``--start`` (nfs.fit.start_state)."""
     from ..fit.thermal_residual import DEFAULT_START
     return DEFAULT_START if args.start == "estimated" else None
+
+
+def gate(make_estimate, samples: int, args, *, held: bool = False, rows: bool = True,
+         fewer: str = "") -> None:
+    """Before a job that may be long: its estimate (:func:`nfs.studies.job_estimate.gate_job`),
+    refused past the limits without ``--yes`` (exit 2, the figures in one line), stated on
+    stderr past the notice (unless ``-q``)."""
+    from ..studies.job_estimate import JOB_NOTICE, gate_job
+    estimate = gate_job(make_estimate, samples, yes=args.yes, rows=rows, held=held,
+                        fewer=fewer)
+    if estimate is not None and estimate.exceeds(JOB_NOTICE) and not args.quiet:
+        print(f"nfs: {estimate.line()}", file=sys.stderr)
+
+
+def say_ignored(scenario, command: str, settings=None, compensate: bool = True) -> None:
+    """One line on stderr per count of the scenario the command ignores
+    (:func:`nfs.studies.job_estimate.ignored_keys`)."""
+    from ..studies.job_estimate import ignored_keys
+    for line in ignored_keys(scenario, command, settings, compensate):
+        print(f"nfs: note: {line}", file=sys.stderr)

@@ -12,7 +12,8 @@ import math
 import sys
 
 from ..errors import NfsError
-from .common import (Progress, finish, output_file, output_folder, with_overrides)
+from .common import (Progress, finish, gate, output_file, output_folder, say_ignored,
+                     with_overrides)
 
 __all__ = ["cmd_table", "cmd_train", "cmd_compensate"]
 
@@ -20,14 +21,22 @@ __all__ = ["cmd_table", "cmd_train", "cmd_compensate"]
 def cmd_table(args) -> int:
     from .. import CompensationSettings, ModelChain, load_scenario
     from ..compensate.modes import check_features_mode
+    from ..studies.job_estimate import estimate_table, run_samples, table_scenarios
     if args.features_mode is not None:
         check_features_mode(args.features_mode, "--features-mode")
     scenario = with_overrides(load_scenario(args.scenario), args)
     output_file(args.json, "--json", args.overwrite)
     settings = _table_settings(args, scenario.compensation or CompensationSettings())
-    chain = ModelChain(scenario, settings, compensate=not args.no_compensation)
+    compensate = not args.no_compensation
+    if args.repeats is None:            # --repeats sets the table's start-ups: none ignored
+        say_ignored(scenario, "table", settings, compensate)
+    chain = ModelChain(scenario, settings, compensate=compensate)
     baseline = _baseline(args, chain)
     folder = output_folder(args, "table")
+    scenarios = table_scenarios(scenario, settings, compensate)
+    gate(lambda: estimate_table(scenario, settings, compensate),
+         sum(n for sc in scenarios for n in run_samples(sc.conditions())), args, rows=False,
+         held=True, fewer="or fewer test start-ups: --repeats N")
     chain.progress = Progress("simulating" if args.no_compensation else "", args.quiet)
     # what is printed and written is what the chain's result holds
     result = chain.run_model()

@@ -9,31 +9,39 @@ from __future__ import annotations
 
 import json
 import math
+import os
 import sys
 from pathlib import Path
 
 from ..errors import NfsError
-from .common import (Progress, circular_mean_deg, finish, fmt, output_file, output_folder,
+from .common import (Progress, circular_mean_deg, finish, fmt, gate, output_file,
+                     output_folder, recorded_arguments, say_ignored, say_removed,
                      with_overrides)
 
 __all__ = ["cmd_simulate", "cmd_northfind", "cmd_preset", "cmd_init", "cmd_effects", "cmd_sweep"]
 
 
 def cmd_simulate(args) -> int:
-    from .. import load_scenario, simulate_run, write_run
-    from ..io.provenance import scenario_provenance
+    from .. import load_scenario
+    from ..studies.job_estimate import estimate_runs, run_samples
+    from ..studies.runs_folder import check_runs_folder, simulate_to_folder
     scenario = with_overrides(load_scenario(args.scenario), args)
-    folder = output_folder(args, "simulate")
-    out = Path(args.output)
+    say_ignored(scenario, "simulate")
+    folder = check_runs_folder(scenario, args.output, overwrite=args.overwrite,
+                         resume=True if args.resume else None)
     conds = scenario.conditions()
-    progress = Progress("simulating", args.quiet)
-    written = []
-    for i, cond in enumerate(conds):
-        progress(i, len(conds), cond.name)
-        written.append(write_run(simulate_run(scenario.instrument, cond).run, out))
-    progress(len(conds), len(conds), "done")
-    finish(folder, args, {"scenario": scenario_provenance(scenario)})
-    for p in written:
+    done = {c.name for c in conds
+            if f"{c.name}.csv" in folder.done and f"{c.name}.toml" in folder.done}
+    gate(lambda: estimate_runs("nfs simulate", [scenario], write=True, skip=done),
+         sum(run_samples([c for c in conds if c.name not in done])), args,
+         fewer="or fewer runs: --repeats N")
+    if folder.resuming and not args.quiet:
+        print(f"nfs: resuming {args.output}: {len(done)} of {len(conds)} runs already "
+              "written", file=sys.stderr)
+    res = simulate_to_folder(scenario, folder, progress=Progress("simulating", args.quiet),
+                             arguments=recorded_arguments(args))
+    say_removed(folder)
+    for p in res.runs:
         print(p)
     return 0
 
@@ -209,6 +217,7 @@ def cmd_sweep(args) -> int:
         raise NfsError("give --dask-local N or --scheduler ADDRESS, not both")
     spec = load_sweep(args.sweep)                   # the whole sweep checked before any work
     log = None if args.quiet else (lambda msg: print(f"sweep: {msg}", file=sys.stderr))
+    _gate_sweep(spec, args)
     plan = plan_sweep(spec, args.output)            # the store prepared, its cells listed once
     res = stored_sweep(plan)
     if res is not None:
@@ -231,3 +240,17 @@ def cmd_sweep(args) -> int:
     for p in res.paths:
         print(p)
     return 0
+
+
+def _gate_sweep(spec, args) -> None:
+    """The sweep's missing cells estimated before the folder is prepared (:func:`gate`)."""
+    from ..sweep.estimate import estimate_sweep, missing_cells, sweep_samples
+    n = missing_cells(spec, args.output)
+    if args.dask_local is not None:
+        workers = args.dask_local
+    elif args.scheduler is not None:
+        workers = 1                     # a cluster's size is not known here: one worker
+    else:
+        workers = (os.cpu_count() or 1) if args.jobs == -1 else args.jobs
+    gate(lambda: estimate_sweep(spec, n, workers), sweep_samples(spec, n), args, rows=False,
+         fewer="or fewer cells: fewer seeds or axis values")

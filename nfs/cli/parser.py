@@ -27,6 +27,12 @@ def _trust_effects_option(p: argparse.ArgumentParser) -> None:
                         "otherwise")
 
 
+def _yes_option(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--yes", action="store_true",
+                   help="run a job estimated past 10 min, 2 GB written or 4 GB of memory "
+                        "(nfs.studies.job_estimate.JOB_LIMITS) instead of refusing it")
+
+
 def _runs_and_model_arguments(p: argparse.ArgumentParser) -> None:
     _runs_argument(p)
     p.add_argument("--model", default="default",
@@ -77,6 +83,7 @@ def build_parser() -> argparse.ArgumentParser:
     t.add_argument("--tolerance", type=float, default=None,
                    help="relative change a worse cell must also exceed (default 0.05: 5 %%)")
     t.add_argument("-q", "--quiet", action="store_true", help="no progress on stderr")
+    _yes_option(t)
     _trust_effects_option(t)
     t.add_argument("--overwrite", action="store_true",
                    help="replace an existing --json file, and write into a folder that holds "
@@ -145,6 +152,11 @@ def build_parser() -> argparse.ArgumentParser:
                     help="write into a folder that holds another command's output or files "
                          "of unknown origin (files of the earlier output that are not "
                          "rewritten are removed)")
+    s.add_argument("--resume", action="store_true",
+                   help="keep the runs the folder holds of this scenario and write the "
+                        "rest (automatic for a folder an interrupted nfs simulate of the "
+                        "same scenario left)")
+    _yes_option(s)
     s.set_defaults(func=cmd_simulate)
 
     n = sub.add_parser("northfind", help="north-find measured or simulated runs",
@@ -356,6 +368,7 @@ def build_parser() -> argparse.ArgumentParser:
                          "dask extra, and nfs installed on the workers)")
     sw.add_argument("-q", "--quiet", action="store_true",
                     help="no progress bar or log lines on standard error")
+    _yes_option(sw)
     sw.set_defaults(func=cmd_sweep)
     return p
 

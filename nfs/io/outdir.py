@@ -14,6 +14,12 @@ goes through :class:`OutputFolder`:
    manifest ``nfs-manifest.json``: the command, its arguments, what it read, the library
    versions and platform (:mod:`nfs.io.provenance`) and every written file with its SHA-256.
 
+A long command that writes its folder file by file (``nfs simulate``) calls
+:meth:`OutputFolder.begin` first: the manifest then says the folder is partial, and each
+group of files is recorded as it lands (:meth:`OutputFolder.record`, :mod:`nfs.io.resume`).
+The same command on the same job (``job``: the scenario's hash) finds such a folder and
+resumes it: the recorded files are kept, the rest is written (``resume``).
+
 The manifest holds no time stamp, so the same command on the same inputs writes the same
 bytes. Stale files are removed only after everything new is in place: a command that fails
 midway leaves the earlier experiment's files (and manifest) as they were, apart from the
@@ -31,6 +37,7 @@ from pathlib import Path
 from ..errors import NfsError
 from .atomic import atomic_write_text
 from .provenance import library_versions, platform_tag, sha256_of_file
+from .resume import JOURNAL_NAME, Journal
 
 __all__ = ["MANIFEST_NAME", "OutputFolder", "check_output_file", "read_manifest"]
 
@@ -132,18 +139,38 @@ class OutputFolder:
         files of unknown origin are left alone (and reported).
     option : str
         The option that named the folder, for messages.
+    job : str, optional
+        What the output is made of (e.g. the scenario's SHA-256), recorded in the manifest:
+        the same command on the same job resumes a partial folder.
+    resume : bool, optional
+        None: resume a partial folder of the same command and job (:meth:`begin`), write
+        anew otherwise; True: resume (a complete folder of the same job too, whose files are
+        then kept), refused when the folder holds another job; False: write anew.
+    expected : collection of str
+        Relative paths the command writes: in a folder resumed, such a file that is not
+        recorded is the interrupted command's own (written after its last record) and is
+        written again.
     """
 
     path: Path
     command: str
     overwrite: bool = False
     option: str = "-o"
+    job: str | None = None
+    resume: bool | None = None
+    expected: frozenset = frozenset()
     removed: list[str] = field(default_factory=list, init=False)
     """Files of the earlier experiment removed by :meth:`finish`."""
     foreign: list[str] = field(default_factory=list, init=False)
     """Files of unknown origin left in the folder (only with ``overwrite``)."""
+    done: dict = field(default_factory=dict, init=False)
+    """{relative path: its record} of the files a resumed folder already holds complete
+    (empty when the folder is written anew): the command skips what makes them."""
+    resuming: bool = field(default=False, init=False)
+    """True when the folder is resumed."""
     _before: dict = field(default_factory=dict, init=False, repr=False)
     _earlier: list[str] = field(default_factory=list, init=False, repr=False)
+    _journal: Journal | None = field(default=None, init=False, repr=False)
 
     def __post_init__(self) -> None:
         self.path = Path(self.path)
@@ -155,12 +182,17 @@ class OutputFolder:
             self._before = _files(p)
         manifest = read_manifest(p) if p.is_dir() else None
         listed = set()
+        journal = Journal(p)
         if manifest is not None:
             listed = {f["path"] for f in manifest.get("files", []) if isinstance(f, dict)
                       and isinstance(f.get("path"), str)}
-            self._earlier = sorted(listed)
-        unknown = sorted(set(self._before) - listed - {MANIFEST_NAME})
+            if manifest.get("partial") is True:
+                listed |= set(journal.read()) | {JOURNAL_NAME}
+            self._earlier = sorted(listed - {JOURNAL_NAME})
         other_command = manifest is not None and manifest.get("command") != self.command
+        self._resume_from(manifest, journal)
+        unknown = sorted(set(self._before) - listed - {MANIFEST_NAME}
+                         - (set(self.expected) if self.resuming else set()))
         if not self.overwrite:
             if other_command:
                 raise NfsError(
@@ -175,7 +207,57 @@ class OutputFolder:
                     "--overwrite to write into it anyway")
         self.foreign = unknown  # the folder itself is made by the writers, when there is output
 
-    def finish(self, *, arguments: list[str] | None = None, inputs: dict | None = None) -> Path:
+    def _resume_from(self, manifest: dict | None, journal: Journal) -> None:
+        """Decide whether the folder is resumed, and what it holds complete."""
+        same = (manifest is not None and self.job is not None
+                and manifest.get("command") == self.command and manifest.get("job") == self.job)
+        if self.resume and not same:
+            what = ("no output of this package" if manifest is None else
+                    f"the output of 'nfs {manifest.get('command')}' of another job "
+                    f"({'partial' if manifest.get('partial') else 'complete'})")
+            raise NfsError(f"{self.option} {self.path}: nothing to resume: the folder holds "
+                           f"{what}, not this command on the same inputs (the scenario, its "
+                           "instrument, --seed and --repeats must be the same)")
+        partial = same and manifest.get("partial") is True
+        self.resuming = same and (self.resume is True or (self.resume is None and partial))
+        if not self.resuming:
+            return
+        if partial:
+            self.done = journal.complete()
+        else:
+            # a complete folder resumed: every file its manifest lists that is still there
+            self.done = {f["path"]: {"sha256": f.get("sha256")}
+                         for f in manifest.get("files", []) if isinstance(f, dict)
+                         and isinstance(f.get("path"), str) and (self.path / f["path"]).is_file()}
+
+    def begin(self, *, arguments: list[str] | None = None, inputs: dict | None = None) -> None:
+        """Make the folder and mark it partial (before any file is written), so that an
+        interrupted command leaves a folder the same command resumes; then
+        :meth:`record` each group of files as it lands and :meth:`finish` at the end."""
+        self.path.mkdir(parents=True, exist_ok=True)
+        journal = Journal(self.path)
+        if not self.resuming:
+            journal.remove()            # an earlier partial folder's record, not ours
+        if self.done and not journal.path.exists():
+            journal.append(self.path / rel for rel in sorted(self.done))
+        partial = {"format": _FORMAT, "command": self.command, "job": self.job,
+                   "partial": True, "arguments": list(arguments or []),
+                   "inputs": inputs or {},
+                   # what the folder held before: still this package's output, until
+                   # finish removes what is not rewritten
+                   "files": [{"path": rel} for rel in self._earlier]}
+        atomic_write_text(self.path / MANIFEST_NAME, json.dumps(partial, indent=1) + "\n")
+        self._journal = journal
+
+    def record(self, paths) -> None:
+        """Record files just written atomically (a run's pair) as complete (:meth:`begin`
+        first)."""
+        if self._journal is None:
+            raise RuntimeError("OutputFolder.record before begin")
+        self._journal.append(paths)
+
+    def finish(self, *, arguments: list[str] | None = None, inputs: dict | None = None,
+               units: list[dict] | None = None) -> Path:
         """Remove the earlier experiment's stale files and write the manifest; return its path.
 
         Parameters
@@ -185,11 +267,15 @@ class OutputFolder:
         inputs : dict, optional
             What the output was made from (scenario name and hash, data files, model), as
             JSON-serialisable values.
+        units : list of dict, optional
+            The unit files among the output (:func:`nfs.io.unit_files.unit_entry`).
         """
         self.path.mkdir(parents=True, exist_ok=True)
         after = _files(self.path)
+        recorded = Journal(self.path).read() if self._journal is not None else {}
         written = sorted(k for k, v in after.items()
-                         if k != MANIFEST_NAME and self._before.get(k) != v)
+                         if k not in (MANIFEST_NAME, JOURNAL_NAME)
+                         and (self._before.get(k) != v or k in self.done))
         stale = [k for k in self._earlier if k not in written and k in after]
         for rel in stale:
             (self.path / rel).unlink(missing_ok=True)
@@ -202,11 +288,24 @@ class OutputFolder:
             "versions": library_versions(),
             "platform": platform_tag(),
             "inputs": inputs or {},
-            "files": [{"path": rel, "sha256": sha256_of_file(self.path / rel)} for rel in written],
         }
+        if self.job is not None:
+            manifest["job"] = self.job
+        if units is not None:
+            manifest["units"] = units
+        manifest["files"] = [{"path": rel, "sha256": self._sha256(rel, recorded.get(rel))}
+                             for rel in written]
         out = self.path / MANIFEST_NAME
         atomic_write_text(out, json.dumps(manifest, indent=1, sort_keys=False) + "\n")
+        Journal(self.path).remove()
         return out
+
+    def _sha256(self, rel: str, record: dict | None) -> str:
+        """A file's SHA-256: its journal record's while the folder holds the file as
+        recorded (:meth:`~nfs.io.resume.Journal.holds`), else read again."""
+        if record is not None and record.get("sha256") and Journal(self.path).holds(rel, record):
+            return record["sha256"]
+        return sha256_of_file(self.path / rel)
 
     def summary(self) -> str:
         """One line on what happened to files of an earlier experiment ('' when nothing)."""

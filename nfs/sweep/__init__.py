@@ -10,6 +10,7 @@
 - :mod:`~nfs.sweep.figures`: heading RMSE and time to spec against each axis;
 - :mod:`~nfs.sweep.plan`: the store prepared, the missing cells, the table and the figures'
   record (a fully stored rerun is this alone: :func:`~nfs.sweep.plan.stored_sweep`);
+- :mod:`~nfs.sweep.estimate`: the missing cells' runs, time and disk before they run;
 - :mod:`~nfs.sweep.run`: the whole sweep.
 
 The names below load on first use (SPEC 1 lazy loading, as :mod:`nfs` itself does): each
@@ -34,6 +35,7 @@ _PUBLIC = {
     "write_parquet": "results_table",
     "write_figures": "figures",
     "SweepResult": "plan", "stored_sweep": "plan",
+    "estimate_sweep": "estimate", "missing_cells": "estimate",
     "run_sweep": "run",
 }
 

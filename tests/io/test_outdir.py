@@ -101,10 +101,11 @@ def test_simulate_twice_into_one_folder_leaves_one_experiment(tmp_path, cli, sce
     assert len(list(d.glob("*.csv"))) == 6
     code, out, err = cli("simulate", scen, "-o", d, "--repeats", "1", "-q")
     assert code == 0 and "removed 8 file(s) of the earlier output" in err
-    assert len(list(d.glob("*.csv"))) == 2 and len(list(d.glob("*.toml"))) == 2
+    # two runs and the unit that made them (unit_00.toml)
+    assert len(list(d.glob("*.csv"))) == 2 and len(list(d.glob("*.toml"))) == 3
     m = read_manifest(d)
     assert m["command"] == "simulate" and m["inputs"]["scenario"]["name"] == "small"
-    assert len(m["files"]) == 4
+    assert len(m["files"]) == 5 and m["units"][0]["file"] == "unit_00.toml"
     code, out, _ = cli("northfind", d)
     assert code == 0 and sum(line.startswith("| small") for line in out.splitlines()) == 2
 
