@@ -5,6 +5,8 @@
 - :mod:`~nfs.comparison.channel_residual`: the residual of each channel and its RMS;
 - :mod:`~nfs.comparison.channel_summary`: "where it fails" in words;
 - :mod:`~nfs.comparison.heading`: the heading's verdict with its interval;
+- :mod:`~nfs.comparison.dwell_traces`: each dwell's bias and each cycle's heading error
+  against time, measured and predicted, for the figures;
 - :mod:`~nfs.comparison.allan_runs`: the gyro's noise read from the runs dwell by dwell, N, B,
   K with their intervals beside the instrument's stated values (:func:`allan_of_runs`,
   ``nfs allan``).
