@@ -298,7 +298,7 @@ def _stretches(values: np.ndarray) -> list[tuple[int, int]]:
 
 
 def allan_of_runs(runs: Sequence[Run], *, model: Instrument | str | None = None,
-                  settle_s: float = 0.0, startup_s: float = STARTUP_S, level: float = 0.95,
+                  stated_source: str | None = None, settle_s: float = 0.0, startup_s: float = STARTUP_S, level: float = 0.95,
                   n_boot: int = 400, seed: int = 0) -> AllanReport:
     """The overlapping Allan deviation of every dwell's gyro at rest, N, B and K fitted with
     their intervals, and the values the instrument states (module docstring).
@@ -310,6 +310,9 @@ def allan_of_runs(runs: Sequence[Run], *, model: Instrument | str | None = None,
         sample rate.
     model : Instrument or str, optional
         Whose stated N, B, K to set beside the fit (:func:`stated_instrument`).
+    stated_source : str, optional
+        Where ``model`` comes from, in words, when it is an instrument
+        :func:`stated_instrument` already resolved (default: its own words).
     settle_s : float
         Seconds dropped at the start of every dwell [s], as the north finder's ``settle_s``
         (default 0, the north finder's).
@@ -342,6 +345,7 @@ def allan_of_runs(runs: Sequence[Run], *, model: Instrument | str | None = None,
                 raise InputError(f"run '{r.name}' has no column '{col}', which the Allan "
                                  "deviation of its dwells needs", file=r.path, column=col)
     inst, source = stated_instrument(runs, model)
+    source = source if stated_source is None else stated_source
     fs = _sample_rate_hz(runs)
     records, owner, start, theta, limit = [], [], [], [], []
     left_out = 0
