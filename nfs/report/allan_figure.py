@@ -71,9 +71,22 @@ def _limits(report: AllanReport, pooled) -> tuple[tuple[float, float], tuple[flo
             _decades(0.8 * shown.min(), 1.5 * shown.max()))
 
 
-def plot_allan(report: AllanReport) -> Figure:
-    """The report's Allan deviations, fitted and stated lines (module docstring; a matplotlib
-    Figure, made without pyplot).  Every line carries a label in words and units."""
+def plot_allan(report: AllanReport, fig: Figure | None = None) -> Figure:
+    """The report's Allan deviations, fitted and stated lines (module docstring).  Every line
+    carries a label in words and units.
+
+    Parameters
+    ----------
+    report : AllanReport
+        What :func:`nfs.comparison.allan_of_runs` found.
+    fig : matplotlib.figure.Figure, optional
+        An empty figure to draw into (e.g. ``matplotlib.pyplot.figure()``), resized to fit;
+        default a new Figure made without pyplot.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
     taus = report.taus_s
     pooled = report.pooled
     (x_lo, x_hi), (y_lo, y_hi) = _limits(report, pooled)
@@ -82,7 +95,10 @@ def plot_allan(report: AllanReport) -> Figure:
     decade = min(2.4, 5.6 / n_y, 6.0 / n_x)
     left, bottom, top, legend = 0.9, 1.25, 0.45, 4.8
     width, height = left + n_x * decade + legend, bottom + n_y * decade + top
-    fig = Figure(figsize=(width, height), dpi=100)
+    if fig is None:
+        fig = Figure(figsize=(width, height), dpi=100)
+    else:
+        fig.set_size_inches(width, height)
     ax = fig.add_axes((left / width, bottom / height, n_x * decade / width,
                        n_y * decade / height))
     startup = report.dwell_start_s < report.startup_s
