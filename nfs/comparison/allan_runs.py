@@ -197,7 +197,7 @@ class AllanReport:
     def table(self) -> str:
         """N, B, K fitted [interval] against stated, as a Markdown table."""
         pct = f"{100 * self.noise.level:g} %"
-        lines = [f"| term | fitted | {pct} interval | stated | unit | |",
+        lines = [f"| term | fitted | {pct} interval | stated | unit | stated vs fitted |",
                  "|---|---:|---:|---:|---|---|"]
         for words, sym, _, unit in TERMS:
             value, (lo, hi) = self.fitted(sym)
