@@ -58,6 +58,7 @@ _PUBLIC = {
     # measurements against the model
     "fit_model": "nfs.fit", "fit_unit": "nfs.fit", "compare": "nfs.comparison",
     "UnitChain": "nfs.unit", "FitResult": "nfs.fit", "Comparison": "nfs.comparison",
+    "allan_of_runs": "nfs.comparison", "AllanReport": "nfs.comparison",
     "Diagnosis": "nfs.diagnose", "Finding": "nfs.rivals", "Settlement": "nfs.rivals",
     "Applied": "nfs.unit", "Design": "nfs.design",
     # many cells

@@ -8,6 +8,7 @@
     nfs compensate DATA... --model MODEL -o DIR      apply it
     nfs fit DATA... [--model M] -o FITTED.toml       calibrate a model to measured runs
     nfs compare DATA... --model M -o DIR             the model beside the runs
+    nfs allan DATA... [--model M] [-o DIR]           the gyro's Allan deviation, dwell by dwell
     nfs diagnose DATA... --model M [--apply NAME]    the missing effect, ranked
     nfs design DATA... --model M --diagnosis D -o DIR   the run that would decide a tie
     nfs preset [NAME]                                print a built-in instrument or scenario
@@ -15,7 +16,8 @@
     nfs effects                                      list the registered physical effects
 
 The commands live in :mod:`nfs.cli.compensation`, :mod:`nfs.cli.experiment`,
-:mod:`nfs.cli.measured` and :mod:`nfs.cli.design`, their arguments in :mod:`nfs.cli.parser`.
+:mod:`nfs.cli.measured`, :mod:`nfs.cli.noise` and :mod:`nfs.cli.design`, their arguments in
+:mod:`nfs.cli.parser` (``nfs allan``'s in :mod:`nfs.cli.noise`).
 """
 
 from __future__ import annotations

@@ -12,6 +12,7 @@ from .experiment import (cmd_effects, cmd_init, cmd_northfind, cmd_preset, cmd_s
                          cmd_sweep)
 from .design import cmd_design
 from .measured import cmd_compare, cmd_diagnose, cmd_fit
+from .noise import add_allan_command
 
 __all__ = ["build_parser", "check_options"]
 
@@ -234,6 +235,7 @@ def build_parser() -> argparse.ArgumentParser:
                          "another command's output or files of unknown origin (files of the "
                          "earlier output that are not rewritten are removed)")
     cm.set_defaults(func=cmd_compare)
+    add_allan_command(sub)
 
     dg = sub.add_parser("diagnose", help="which physical effect the model is missing",
                         description="Try every registered effect the model lacks (on each of "

@@ -38,7 +38,9 @@ Noise floor (what the residual would be if the model were right), per sample, sq
 Each channel of each run gets its statistics by stage and turntable position
 (:mod:`nfs.comparison.channel_residual`); over the runs, the channel is consistent with noise or
 its failure is put into words (:mod:`nfs.comparison.channel_summary`); the heading RMSE gets a
-verdict of its own (:mod:`nfs.comparison.heading`).
+verdict of its own (:mod:`nfs.comparison.heading`).  For the figures, each dwell's bias and
+each cycle's heading error are kept against time, measured and predicted
+(:mod:`nfs.comparison.dwell_traces`).
 """
 
 from __future__ import annotations
@@ -61,6 +63,7 @@ from ..northfind import heading_rmse, north_find
 from ..io.records import RecordError, encode, from_record
 from .channel_residual import CHANNELS, ChannelRun, ChannelSpec, StageBounds, channel_run
 from .channel_summary import POSITION_RATIO, ChannelSummary, format_sig, summarise
+from .dwell_traces import DwellBias, HeadingTrace, dwell_bias, heading_trace
 from .heading import (HEADING_ALPHA, HeadingComparison, RunHeading, heading_comparison,
                       json_value)
 from ..fit.start_state import StartModel
@@ -103,6 +106,11 @@ class Comparison:
     (:func:`~nfs.comparison.heading.heading_comparison`)."""
     assumptions: tuple[str, ...] = ()
     """What the comparison assumed where the runs do not say (a missing chamber record)."""
+    dwell_biases: tuple[DwellBias, ...] = ()
+    """Per run: each dwell's mean gyro rate less the Earth-rate projection, measured and as
+    the model predicts it, with the noise of a dwell mean (:mod:`nfs.comparison.dwell_traces`)."""
+    heading_traces: tuple[HeadingTrace, ...] = ()
+    """Per run: each cycle's heading error, measured and as the model predicts it."""
 
     def sentences(self) -> list[str]:
         """"Where it fails", one sentence per channel, in channel order."""
@@ -271,9 +279,10 @@ def _heading_rmse_deg(nf, bounds: StageBounds) -> tuple[float, float]:
 
 def _compare_run(inst: Instrument, clean: Instrument, run: Run, k: int, seed,
                  bounds: StageBounds, start_c: np.ndarray | None
-                 ) -> tuple[dict[str, ChannelRun], RunHeading]:
+                 ) -> tuple[dict[str, ChannelRun], RunHeading, DwellBias, HeadingTrace]:
     """Run ``k`` beside the model (two noisy simulations and a noise-free one, started at
-    ``start_c``): every channel, and the heading RMSE measured and predicted."""
+    ``start_c``): every channel, the heading RMSE measured and predicted, each dwell's bias
+    and each cycle's heading error (:mod:`nfs.comparison.dwell_traces`)."""
     sim_a, sim_b, expect = (simulate_run(model, conditions_from_run(
         run, seed=_run_seed(seed, k, role), initial_c=start_c))
         for model, role in ((inst, 0), (inst, 1), (clean, 2)))
@@ -298,7 +307,10 @@ def _compare_run(inst: Instrument, clean: Instrument, run: Run, k: int, seed,
 
     (mu, ms), (pu, ps) = _heading_rmse_deg(nf_meas, bounds), _heading_rmse_deg(nf_model, bounds)
     heading = RunHeading(run.name, float(run.meta.start_temperature_c), mu, ms, pu, ps)
-    return out, heading
+    noisy = (sim_a.run, sim_b.run)
+    return (out, heading, dwell_bias(run, expect, noisy, nf_meas),
+            heading_trace(run, nf_meas, north_find(expect),
+                          (nf_model, north_find(sim_b.run))))
 
 
 # --------------------------------------------------------------------------------------------
@@ -361,12 +373,15 @@ def compare(inst: Instrument, runs: Sequence[Run], *, seed=0, startup_end_s: flo
     else:
         starts = start_states(inst, runs) if start_state is not None else {}
     per_run: dict[str, list[ChannelRun]] = {c.key: [] for c in CHANNELS}
-    headings = []
+    headings, biases, traces = [], [], []
     for k, run in enumerate(runs):
-        chans, heading = _compare_run(inst, clean, run, k, seed, bounds, starts.get(run.name))
+        chans, heading, bias, trace = _compare_run(inst, clean, run, k, seed, bounds,
+                                                   starts.get(run.name))
         for key, cr in chans.items():
             per_run[key].append(cr)
         headings.append(heading)
+        biases.append(bias)
+        traces.append(trace)
     summaries = {c.key: summarise(c, per_run[c.key]) for c in CHANNELS}
     settings = {"seed": str(seed), "startup_end_s": bounds.startup_end_s,
                 "stable_start_s": bounds.stable_start_s, "window_s": bounds.window_s}
@@ -376,4 +391,5 @@ def compare(inst: Instrument, runs: Sequence[Run], *, seed=0, startup_end_s: flo
         settings=settings, per_run={k: tuple(v) for k, v in per_run.items()},
         summaries=summaries, headings=tuple(headings),
         heading=heading_comparison(headings, HEADING_ALPHA),
-        assumptions=tuple(a for a in (chamber_assumption(runs),) if a))
+        assumptions=tuple(a for a in (chamber_assumption(runs),) if a),
+        dwell_biases=tuple(biases), heading_traces=tuple(traces))

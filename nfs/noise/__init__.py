@@ -1,6 +1,7 @@
 """Noise: the gyro's angle random walk, bias instability and rate random walk, white noise,
 the overlapping Allan deviation with the fit of the noise coefficients
-(IEEE Std 952-2020 Annex C; NIST SP 1065), the covariance of window means of the gyro's noise
+(IEEE Std 952-2020 Annex C; NIST SP 1065), pooled over many short records (a north finder's
+dwells) with bootstrap intervals of N, B, K, the covariance of window means of the gyro's noise
 and the test of whether a residual is that noise (Ljung & Box 1978 on the whitened
 residual)."""
 
@@ -32,6 +33,13 @@ from nfs.noise.generators import (
     rate_random_walk_noise_dph,
     white_noise,
 )
+from nfs.noise.pooled import (
+    NoiseFitIntervals,
+    PooledAllan,
+    fit_pooled_noise,
+    half_octave_taus_s,
+    pooled_allan,
+)
 from nfs.noise.whiteness import (
     WhitenessResult,
     WindowNoiseFit,
@@ -47,6 +55,8 @@ __all__ = [
     "DEFAULT_CORRELATION_TIME_S",
     "GyroNoise",
     "NoiseFit",
+    "NoiseFitIntervals",
+    "PooledAllan",
     "WhitenessResult",
     "WindowNoiseFit",
     "allan_deviation",
@@ -57,10 +67,13 @@ __all__ = [
     "bias_instability_noise_dph",
     "cholesky_lower",
     "fit_noise_coefficients",
+    "fit_pooled_noise",
     "fit_window_noise",
     "gyro_noise_dph",
+    "half_octave_taus_s",
     "ljung_box_q",
     "octave_taus_s",
+    "pooled_allan",
     "rate_random_walk_noise_dph",
     "rest_window_segments",
     "segment_sum_covariance",

@@ -5,7 +5,9 @@ the heading RMSE; per channel and run, per turntable position), ``comparison.jso
 (:meth:`~nfs.comparison.compare_runs.Comparison.to_dict`) and PNG figures: per run, the measured
 channels beside the model's deterministic prediction with its noise band
 (:func:`plot_overlay`) and the residuals over time (:func:`plot_residuals`); over the runs,
-the residual RMS against the start temperature (:func:`plot_rms_vs_t0`).  Figures are made
+the residual RMS against the start temperature (:func:`plot_rms_vs_t0`), each dwell's bias by
+turntable position against time (:func:`plot_dwell_bias`) and each cycle's heading error
+against time (:func:`plot_heading_vs_time`), measured beside the model.  Figures are made
 with matplotlib's object API (no pyplot state) and saved with pinned metadata, so the same
 comparison gives the same bytes.
 """
@@ -26,7 +28,8 @@ from ..comparison.channel_residual import CHANNEL_BY_KEY, CHANNELS, COMPARISON_S
 from ..comparison.channel_summary import format_sig
 from ..comparison.compare_runs import Comparison
 
-__all__ = ["plot_overlay", "plot_residuals", "plot_rms_vs_t0", "to_markdown", "write_report"]
+__all__ = ["plot_overlay", "plot_residuals", "plot_rms_vs_t0", "plot_dwell_bias",
+           "plot_heading_vs_time", "to_markdown", "write_report"]
 
 
 def _safe(name: str) -> str:
@@ -126,6 +129,87 @@ def plot_rms_vs_t0(comparison: Comparison):
     return fig
 
 
+def _run_title(comparison: Comparison, i_run: int) -> str:
+    return (f"{comparison.run_names[i_run]} (T0 = "
+            f"{comparison.start_temperatures_c[i_run]:g} C)")
+
+
+def plot_dwell_bias(comparison: Comparison):
+    """Each dwell's mean gyro rate less the Earth-rate projection against time, one panel
+    per run, one colour per turntable position: measured (points, +-1 sigma of a dwell mean
+    under the model's noise) and the model's prediction (line)
+    (:class:`nfs.comparison.dwell_traces.DwellBias`).  Every panel's y axis holds 0."""
+    biases = comparison.dwell_biases
+    fig = Figure(figsize=(10.0, 1.0 + 2.3 * max(1, len(biases))), dpi=100)
+    ax = None
+    for i, b in enumerate(biases):
+        ax = fig.add_subplot(len(biases), 1, i + 1, sharex=ax)
+        t_min = b.time_s / 60.0
+        angles = np.round(np.mod(b.theta_deg, 360.0), 1)
+        for j, a in enumerate(np.unique(angles)):
+            at = angles == a
+            colour = f"C{j % 10}"
+            ax.errorbar(t_min[at], b.measured_dph[at], yerr=b.noise_dph, fmt="o", ms=3,
+                        color=colour, elinewidth=0.8, capsize=0,
+                        label=f"theta = {a:g} deg: measured, +-1 sigma of a dwell mean")
+            ax.plot(t_min[at], b.model_dph[at], "-", lw=1.2, color=colour,
+                    label=f"theta = {a:g} deg: model")
+        ax.axhline(0.0, color="k", lw=0.5)
+        ax.set_ylim(min(0.0, ax.get_ylim()[0]), max(0.0, ax.get_ylim()[1]))
+        ax.set_ylabel("dwell mean - Earth rate\n[deg/h]", fontsize=8)
+        ax.set_title(f"{_run_title(comparison, i)}: +-1 sigma of a dwell mean "
+                     f"{format_sig(b.noise_dph)} deg/h (the model's noise)", fontsize=9)
+        ax.grid(alpha=0.3)
+        if i == 0:
+            ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0),
+                      borderaxespad=0.0)
+    if ax is not None:
+        ax.set_xlabel("time after power-on [min] (dwell mid-time)")
+    fig.suptitle("gyro bias per turntable position: each dwell's mean rate less the "
+                 "Earth-rate projection, measured vs model", fontsize=10)
+    fig.tight_layout()
+    return fig
+
+
+def plot_heading_vs_time(comparison: Comparison):
+    """Each cycle's north-finding heading error against the time the cycle ends, one panel
+    per run: measured (points) and the model's prediction (line) with its +-1 sigma noise
+    band (:class:`nfs.comparison.dwell_traces.HeadingTrace`); one y scale for every run,
+    symmetric about 0."""
+    traces = comparison.heading_traces
+    fig = Figure(figsize=(10.0, 1.0 + 2.0 * max(1, len(traces))), dpi=100)
+    values = np.concatenate([np.concatenate([h.measured_deg, h.model_deg + h.noise_deg,
+                                             h.model_deg - h.noise_deg]) for h in traces]
+                            or [np.zeros(1)])
+    values = values[np.isfinite(values)]
+    half = 1.1 * float(np.max(np.abs(values))) if values.size and np.any(values) else 1.0
+    ax = None
+    for i, h in enumerate(traces):
+        ax = fig.add_subplot(len(traces), 1, i + 1, sharex=ax)
+        t_min = h.time_s / 60.0
+        ax.fill_between(t_min, h.model_deg - h.noise_deg, h.model_deg + h.noise_deg,
+                        color="tab:red", alpha=0.2, lw=0,
+                        label="model +-1 sigma heading noise of a cycle (value in the title)")
+        ax.plot(t_min, h.model_deg, "-", lw=1.2, color="tab:red",
+                label="model (noise-free prediction)")
+        ax.plot(t_min, h.measured_deg, "o", ms=3.5, color="0.2", label="measured")
+        ax.axhline(0.0, color="k", lw=0.5)
+        ax.set_ylim(-half, half)
+        ax.set_ylabel("heading error\n[deg]", fontsize=8)
+        ax.set_title(f"{_run_title(comparison, i)}: +-1 sigma heading noise of a cycle "
+                     f"{format_sig(h.noise_deg)} deg (the model's noise)", fontsize=9)
+        ax.grid(alpha=0.3)
+        if i == 0:
+            ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0),
+                      borderaxespad=0.0)
+    if ax is not None:
+        ax.set_xlabel("time after power-on [min] (end of the north-finding cycle)")
+    fig.suptitle("north-finding heading error (heading - true heading) per cycle, measured "
+                 "vs model", fontsize=10)
+    fig.tight_layout()
+    return fig
+
+
 def _md_table(head: list[str], rows: list[list[str]]) -> str:
     lines = ["| " + " | ".join(head) + " |",
              "|" + "|".join(["---"] + ["---:"] * (len(head) - 1)) + "|"]
@@ -215,7 +299,9 @@ def write_report(comparison: Comparison, out_dir: str | Path) -> list[Path]:
     (out / "figures").mkdir(parents=True, exist_ok=True)
     written: list[Path] = []
     figures: dict[str, list[str]] = {"Measured vs model": [], "Residuals over time": [],
-                                     "Residual RMS vs start temperature": []}
+                                     "Residual RMS vs start temperature": [],
+                                     "Gyro bias per position vs time": [],
+                                     "Heading error vs time": []}
 
     def save(fig, rel: str, group: str) -> None:
         path = out / rel
@@ -230,6 +316,12 @@ def write_report(comparison: Comparison, out_dir: str | Path) -> list[Path]:
              "Residuals over time")
     save(plot_rms_vs_t0(comparison), "figures/rms_vs_t0.png",
          "Residual RMS vs start temperature")
+    if comparison.dwell_biases:
+        save(plot_dwell_bias(comparison), "figures/dwell_bias.png",
+             "Gyro bias per position vs time")
+    if comparison.heading_traces:
+        save(plot_heading_vs_time(comparison), "figures/heading_vs_time.png",
+             "Heading error vs time")
     js = out / "comparison.json"
     atomic_write_text(js, json.dumps(comparison.to_dict(), indent=2, allow_nan=False) + "\n")
     md = out / "report.md"

@@ -25,6 +25,8 @@ def test_fit_then_compare(tmp_path, cli, scen_text):
     # Oracle: the model fitted to runs it could have made itself explains them to the noise.
     assert out.count("consistent with noise") == 6, out
     assert (tmp_path / "rep" / "report.md").exists()
+    for name in ("dwell_bias.png", "heading_vs_time.png"):      # against time, per run
+        assert (tmp_path / "rep" / "figures" / name).exists()
     json.loads((tmp_path / "c.json").read_text())
 
 
