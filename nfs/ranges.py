@@ -565,6 +565,9 @@ _TABLE: list[Range] = [
        (MINUTES,), low_open=True),
     _R("measurement.move_s", "s", (0, 3600), _MOVE_S, "a move between positions lasts",
        _MOVE_SRC, (MINUTES,), off=0.0),
+    _R("measurement.duration_s", "s", (0, 30 * 86400), (60, 7 * 86400),
+       "a logged run lasts", f"{_PHYS} 1 and 5: a start-up stage of 30-90 min, a stable "
+       "stage after it", (MINUTES, HOURS), low_open=True),
     # ---------------------------------------------------------------- measurement columns
     _R("measurement.columns.temp_*_c.at_power_on", "K", (0, 100), (0, 20),
        "a soaked unit's thermometers read at power-on, from start_temperature_c,",

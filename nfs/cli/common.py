@@ -9,9 +9,11 @@ import sys
 import time
 
 from ..errors import NfsError
+from ..run import run_caveats
 
 __all__ = ["EXIT_USAGE", "FEATURES_MODE_HELP", "Progress", "output_folder", "output_file",
-           "finish", "with_overrides", "circular_mean_deg", "fmt", "start_model"]
+           "finish", "with_overrides", "circular_mean_deg", "fmt", "start_model",
+           "read_command_runs"]
 
 
 EXIT_USAGE = 2
@@ -110,3 +112,15 @@ def start_model(args):
     """The start model of ``--start`` (nfs.fit.start_state)."""
     from ..fit.thermal_residual import DEFAULT_START
     return DEFAULT_START if args.start == "estimated" else None
+
+
+def read_command_runs(args, *, say: bool = True) -> list:
+    """The runs a command's DATA name, read as its ``--partial`` and ``--allow-nan`` ask
+    (:func:`nfs.read_runs`); what they let through printed a line each on standard output
+    (``say=False``: the command's own result states it, as a fit's warnings do)."""
+    from .. import read_runs
+    runs = read_runs(args.data, partial=args.partial, allow_nan=args.allow_nan)
+    if say:
+        for line in run_caveats(runs):
+            print(f"note: {line}")
+    return runs

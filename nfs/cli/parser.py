@@ -18,6 +18,13 @@ __all__ = ["build_parser", "check_options"]
 
 def _runs_argument(p: argparse.ArgumentParser) -> None:
     p.add_argument("data", nargs="+", help="NAME.csv files, NAME.toml files or folders")
+    p.add_argument("--partial", action="store_true",
+                   help="read a run that is not whole (shorter than its duration_s, or its "
+                        "last line cut while written) instead of refusing it; every output "
+                        "says so")
+    p.add_argument("--allow-nan", action="store_true",
+                   help="read missing samples (empty fields, nan) as missing instead of "
+                        "refusing them; every output names their columns and rows")
 
 
 def _trust_effects_option(p: argparse.ArgumentParser) -> None:
