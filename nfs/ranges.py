@@ -578,7 +578,7 @@ _TABLE: list[Range] = [
        "positions' least spread,",
        f"{_PHYS} 5: w_k = Omega_ie cos L cos A_k + b, Omega_ie = 15.041 deg/h",
        ((3600.0, 0.0, "deg/s"), (180 * 3600 / math.pi, 0.0, "rad/s"),
-        (180 / math.pi, 0.0, "rad/h"), (60.0, 0.0, "deg/min"))),
+        (180 / math.pi, 0.0, "rad/h"), (60.0, 0.0, "deg/min"), (1e-3, 0.0, "mdeg/h"))),
     _R("measurement.columns.temp_*_c", "C", (-273.15, 500), (-273.15, 500),
        "a north finder's thermometer reads", "absolute zero; no working unit reaches 500 C "
        "(solders melt near 220 C)"),

@@ -11,6 +11,7 @@ from .compensation import cmd_compensate, cmd_table, cmd_train
 from .experiment import (cmd_effects, cmd_init, cmd_northfind, cmd_preset, cmd_simulate,
                          cmd_sweep)
 from .design import cmd_design
+from .importing import add_import_parser
 from .measured import cmd_compare, cmd_diagnose, cmd_fit
 
 __all__ = ["build_parser", "check_options"]
@@ -364,6 +365,7 @@ def build_parser() -> argparse.ArgumentParser:
     sw.add_argument("-q", "--quiet", action="store_true",
                     help="no progress bar or log lines on standard error")
     sw.set_defaults(func=cmd_sweep)
+    add_import_parser(sub)
     return p
 
 

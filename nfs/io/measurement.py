@@ -65,7 +65,7 @@ from .csv_columns import format_csv, read_columns
 from .measurement_checks import check_columns, check_header, check_sample_rate, check_units
 from .tomlio import toml_key, toml_value
 
-__all__ = ["FORMAT", "read_run", "read_runs", "find_runs", "write_run"]
+__all__ = ["FORMAT", "read_run", "read_runs", "find_runs", "write_run", "meta_from_dict"]
 
 #: The format tag written to and required in ``NAME.toml``.
 FORMAT = "nfs-measurement/1"
@@ -158,12 +158,37 @@ def _number(doc: Mapping, key: str, file: Path, *, required: bool = False,
     return value
 
 
-def _meta_from_toml(doc: Mapping, file: Path, warn: bool = True) -> RunMeta:
-    """Check the parsed ``NAME.toml`` and turn it into a :class:`RunMeta`; every number
-    against its range (:mod:`nfs.ranges`, ``measurement.*``; ``warn``: unusual values warn)."""
-    meta = _meta_fields(doc, file)
+def meta_from_dict(doc: Mapping, *, file: str | os.PathLike | None = None, shown: str = "",
+                   warn: bool = True) -> RunMeta:
+    """The keys of a sidecar as parsed from TOML, checked as the reader checks
+    ``NAME.toml``, as a :class:`RunMeta`.
+
+    Parameters
+    ----------
+    doc : mapping
+        ``format`` (exactly :data:`FORMAT`), ``latitude_deg``, ``start_temperature_c`` and
+        the optional keys of docs/measurement-format.md; any other key goes to ``extra``.
+    file : path, optional
+        The file named in an error.
+    shown : str
+        The table the keys sit in, when not at the file's top (``"run"``: an error names
+        ``run.latitude_deg``).
+    warn : bool
+        Warn about unusual values (:mod:`nfs.ranges`, ``measurement.*``).
+
+    Raises
+    ------
+    MeasurementError
+        A missing or mistyped key, a value outside its range.
+    """
+    try:
+        meta = _meta_fields(doc, file)
+    except MeasurementError as exc:
+        if not shown or exc.key is None:
+            raise
+        raise MeasurementError(exc.message, file=exc.file, key=f"{shown}.{exc.key}") from None
     check_tree(dict(doc), file=file, error=MeasurementError, canonical="measurement",
-               quiet=not warn)
+               shown=shown, quiet=not warn)
     return meta
 
 
@@ -221,7 +246,7 @@ def _read_meta(path: Path) -> RunMeta:
         raise MeasurementError(f"not UTF-8 text: {exc.reason}", file=path) from None
     except OSError as exc:
         raise MeasurementError(f"cannot read: {exc.strerror}", file=path) from None
-    return _meta_from_toml(doc, path)
+    return meta_from_dict(doc, file=path)
 
 
 # The TOML value writer is nfs.io.tomlio's (tomllib only reads TOML); errors get the file here.
@@ -416,7 +441,7 @@ def write_run(run: Run, target: str | os.PathLike) -> Path:
     columns = _columns_for_writing(run, csv_path)
     toml_text = _format_meta(run.meta, toml_path)
     try:
-        meta = _meta_from_toml(tomllib.loads(toml_text), toml_path, warn=False)
+        meta = meta_from_dict(tomllib.loads(toml_text), file=toml_path, warn=False)
     except tomllib.TOMLDecodeError as exc:  # a bug of _format_meta, not of the run
         raise AssertionError(f"nfs wrote invalid TOML for {toml_path}: {exc}") from exc
     check_sample_rate(meta, columns["time_s"], toml_path, csv_path)
