@@ -1,4 +1,4 @@
-"""``nfs import``: a chamber log of three files (tests/io/conftest.py) made one run.
+"""``nfs import``: a chamber log of three files (tests/io/chamber_logs.py) made one run.
 
 Oracles:
 - the log is written from a run the package simulated, every value in its shortest exact
