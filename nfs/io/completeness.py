@@ -192,4 +192,5 @@ def check_missing(columns: Mapping[str, np.ndarray], *, file: str | os.PathLike 
             "(read_run(..., allow_nan=True))",
             file=file, column=first if len(missing) == 1 else None, row=row)
     return (f"{total} missing sample{'s' if total > 1 else ''} read with --allow-nan "
-            f"(left out of the dwell means and the fit's windows): {text}")
+            f"(left out where they fall: a dwell mean, a fit window; a chamber record with a "
+            f"gap is set aside for T0): {text}")

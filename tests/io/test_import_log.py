@@ -296,7 +296,8 @@ def test_missing_samples_refused_then_read_with_allow_nan(log, cli, tmp_path):
     # 2-3 s) is missing too; at 1 s and 3 s the samples there are given as they are
     assert (nan[0], nan[-1], nan.size) == (11, 29, 19)
     assert run.caveats == ("thermometers.csv: 1 missing sample read with --allow-nan (left "
-                           "out of the dwell means and the fit's windows): T_fog_K: 1 (row 4)",)
+                           "out where they fall: a dwell mean, a fit window; a chamber "
+                           "record with a gap is set aside for T0): T_fog_K: 1 (row 4)",)
     code, out, _ = cli("import", log, "-o", tmp_path / "out", "--allow-nan")
     assert code == 0 and "note: thermometers.csv: 1 missing sample" in out
 

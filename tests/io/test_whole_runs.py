@@ -119,8 +119,9 @@ def test_missing_samples_are_refused_naming_columns_and_rows(tmp_path):
     back = read_run(path, allow_nan=True)
     assert np.array_equal(np.isnan(back["gyro_dph"]), np.isnan(gyro))
     assert back.caveats == (
-        "8 missing samples read with --allow-nan (left out of the dwell means and the fit's "
-        "windows): gyro_dph: 7 (rows 5, 19, 20, 21, 42, ...); temp_fog_c: 1 (row 9)",)
+        "8 missing samples read with --allow-nan (left out where they fall: a dwell mean, a "
+        "fit window; a chamber record with a gap is set aside for T0): gyro_dph: 7 (rows 5, "
+        "19, 20, 21, 42, ...); temp_fog_c: 1 (row 9)",)
 
 
 def test_a_switched_off_unit_records_nothing_and_misses_nothing(tmp_path):
