@@ -27,9 +27,11 @@ from __future__ import annotations
 
 import os
 from collections.abc import Callable, Mapping
+from dataclasses import dataclass
 
 import numpy as np
 
+from ..docfields import document_fields
 from ..errors import MeasurementError
 from ..power import POWERED_COLUMN
 from ..run import RunMeta
@@ -45,24 +47,17 @@ ALWAYS_RECORDED = ("time_s", "position_deg", "moving", POWERED_COLUMN, "temp_cha
 _ROWS_SHOWN = 5
 
 
+@document_fields
+@dataclass(frozen=True)
 class CutLine:
-    """The last line of a CSV file, cut while written: fewer fields than the header.
+    """The last line of a CSV file, cut while written: fewer fields than the header."""
 
-    Parameters
-    ----------
-    line : int
-        Its 1-based line number (the header is line 1).
-    fields : int
-        Fields it has.
-    header_fields : int
-        Fields of the header.
-    """
-
-    def __init__(self, line: int, fields: int, header_fields: int) -> None:
-        self.line, self.fields, self.header_fields = line, fields, header_fields
-
-    def __repr__(self) -> str:
-        return f"CutLine(line={self.line}, fields={self.fields}, of {self.header_fields})"
+    line: int
+    """Its 1-based line number (the header is line 1)."""
+    fields: int
+    """Fields it has."""
+    header_fields: int
+    """Fields of the header."""
 
     def text(self) -> str:
         """``'its last line (row L) has F of N fields: cut while written'``."""

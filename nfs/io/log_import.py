@@ -131,6 +131,8 @@ def _resample(tg: np.ndarray, ts: np.ndarray, v: np.ndarray, method: str) -> np.
 
 
 def _rate_text(step: float) -> str:
+    if not step > 0.0:
+        return "one sample"
     return f"{1.0 / step:.3g} Hz" if step <= 1.0 else f"every {step:.3g} s"
 
 
@@ -188,8 +190,9 @@ def import_log(mapping: LogMapping | str | os.PathLike, *, cut: bool = False,
     breaks = np.diff(tg) > mapping.max_gap_samples * step_g      # holes in the gyro's log
     gaps = []
     if breaks.any():
-        gaps.append((gyro, f"has holes at {_span_text(_holes(tg, step_g, mapping.max_gap_samples))}"
-                           f" (steps over {mapping.max_gap_samples:g} of its {step_g:.3g} s)"))
+        holes = _holes(tg, step_g, mapping.max_gap_samples)
+        gaps.append((gyro, f"has holes at {_span_text(holes)} (steps over "
+                           f"{mapping.max_gap_samples:g} of its {step_g:.3g} s)"))
     for d in data:
         if d is gyro:
             continue

@@ -52,8 +52,8 @@ class SourceData:
         return int(self.lines[index])
 
     def step_s(self) -> float:
-        """Its median time step [s] (inf with one sample)."""
-        return float(np.median(np.diff(self.time_s))) if self.time_s.size > 1 else np.inf
+        """Its median time step [s] (0 with one sample: it covers its own time only)."""
+        return float(np.median(np.diff(self.time_s))) if self.time_s.size > 1 else 0.0
 
 
 def _rows(src: SourceMap) -> tuple[list[str], list[list[str]], list[int], CutLine | None]:

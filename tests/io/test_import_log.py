@@ -188,6 +188,18 @@ def test_a_hole_is_a_gap_unless_the_mapping_allows_it(log):
     assert import_log(log).n_samples == 13000  # 12 s is within 20 steps: not a gap
 
 
+def test_a_hole_in_the_gyro_log_is_a_gap(log):
+    # gyro samples at 100.0 ... 100.9 s deleted (lines 1002..1011): a step of 1.1 s, over 3
+    # of its 0.1 s steps
+    _drop_rows(log.with_name("gyro.csv"), 1002, 1011)
+    with pytest.raises(MeasurementError, match=r"gyro.csv: a gap: gyro.csv \(sources.gyro\) has "
+                                               r"holes at 99.9-101 s \(steps over 3 of its "
+                                               r"0.1 s\)"):
+        import_log(log)
+    run = import_log(log, cut=True)          # the longer stretch: 101 ... 1299.9 s
+    assert (run.columns["time_s"][0], run.columns["time_s"][-1]) == (101.0, 1299.9)
+
+
 # ---------------------------------------------------------------------------- unit slips
 
 @pytest.mark.parametrize("old, new, file, column, words", [
