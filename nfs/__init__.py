@@ -45,6 +45,7 @@ _PUBLIC = {
     "Run": "nfs.run", "RunMeta": "nfs.run",
     "read_run": "nfs.io.measurement", "read_runs": "nfs.io.measurement",
     "write_run": "nfs.io.measurement",
+    "import_log": "nfs.io.log_import", "read_mapping": "nfs.io.log_mapping",
     # the chain and its stages
     "simulate_run": "nfs.experiment", "simulate_runs": "nfs.experiment",
     "RunConditions": "nfs.conditions", "SimulationResult": "nfs.experiment",

@@ -472,7 +472,8 @@ def _finish(prep: _Prepared, th, channels: Collection[str] | None = None
     meta = RunMeta(latitude_deg=cond.latitude_deg, start_temperature_c=soaked_c,
                    true_heading_deg=cond.true_heading_deg, sample_rate_hz=fs,
                    positions_deg=sched.cycle_positions_deg, dwell_s=sched.dwell_s,
-                   move_s=sched.move_s, instrument=inst.name,
+                   move_s=sched.move_s, duration_s=cond.duration_s or None,
+                   instrument=inst.name,
                    extra={} if prep.soak is None else
                    {"soak_from_c": prep.soak[0], "soak_h": round(prep.soak[1], 4)})
     run = Run(name=cond.name, columns=columns, meta=meta)

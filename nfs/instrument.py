@@ -25,8 +25,8 @@ from .effects import CoilLayout, EffectInstance, check_geometry, make_effect
 from .effects.thermometer import THERMOMETERS
 from .errors import EffectError, ScenarioError, ThermalError
 from .io.tomlio import (check_keys, dumps_toml, load_toml, number, string, table)
-from .io.unit_files import drawn_unit_entry, drawn_unit_note
-from .ranges import check, check_tree, collected_warnings, deferred_warnings, warn_unusual
+from .io.unit_files import check_values_as_declared, drawn_unit_entry, drawn_unit_note
+from .ranges import check, collected_warnings, deferred_warnings, warn_unusual
 from .sensors import ThermometerModel
 
 __all__ = [
@@ -543,28 +543,10 @@ def _instrument_from_dict(d: dict[str, Any], file: Any) -> Instrument:
                       effects=effects, aux=aux, t_ref_c=number(d, "t_ref_c", "", file, T_REF_C),
                       description=string(d, "description", "", file, ""), coil=coil)
     check_effect_targets(inst, file)
-    fitted = _fit_departures(d, file)
-    check_tree(d, file=file, error=ScenarioError, skip=("fit.*",), quiet=fitted)
-    if fitted:
-        warn_unusual(f"{len(fitted)} fitted values lie beyond their typical range, as the fit "
-                     f"that wrote this file states in its header ({', '.join(fitted)})",
-                     file=file, key="fit.departures", once=("fit.departures", str(file)))
+    check_values_as_declared(d, file)
     _check_winding(inst, file)
     check_heating(network, file, inst.effects)
     return inst
-
-
-def _fit_departures(d: dict[str, Any], file: Any) -> tuple[str, ...]:
-    """The keys a fitted model's ``[fit] departures`` lists (what
-    :func:`nfs.fit.write_fitted_model` writes: values its fit put beyond their typical range,
-    stated in the file's header): they load with one line, not one warning each."""
-    fit = table(d, "fit", "", file, {})
-    check_keys(fit, ("departures",), "fit", file)
-    keys = fit.get("departures", [])
-    if not isinstance(keys, list) or not all(isinstance(k, str) for k in keys):
-        raise ScenarioError(f"must be a list of key paths (strings), got {keys!r}",
-                            file=file, key="fit.departures")
-    return tuple(keys)
 
 
 def preset_names() -> list[str]:

@@ -566,6 +566,9 @@ _TABLE: list[Range] = [
        (MINUTES,), low_open=True),
     _R("measurement.move_s", "s", (0, 3600), _MOVE_S, "a move between positions lasts",
        _MOVE_SRC, (MINUTES,), off=0.0),
+    _R("measurement.duration_s", "s", (0, 30 * 86400), (60, 7 * 86400),
+       "a logged run lasts", f"{_PHYS} 1 and 5: a start-up stage of 30-90 min, a stable "
+       "stage after it", (MINUTES, HOURS), low_open=True),
     # ---------------------------------------------------------------- measurement columns
     _R("measurement.columns.temp_*_c.at_power_on", "K", (0, 100), (0, 20),
        "a soaked unit's thermometers read at power-on, from start_temperature_c,",
@@ -576,7 +579,7 @@ _TABLE: list[Range] = [
        "positions' least spread,",
        f"{_PHYS} 5: w_k = Omega_ie cos L cos A_k + b, Omega_ie = 15.041 deg/h",
        ((3600.0, 0.0, "deg/s"), (180 * 3600 / math.pi, 0.0, "rad/s"),
-        (180 / math.pi, 0.0, "rad/h"), (60.0, 0.0, "deg/min"))),
+        (180 / math.pi, 0.0, "rad/h"), (60.0, 0.0, "deg/min"), (1e-3, 0.0, "mdeg/h"))),
     _R("measurement.columns.temp_*_c", "C", (-273.15, 500), (-273.15, 500),
        "a north finder's thermometer reads", "absolute zero; no working unit reaches 500 C "
        "(solders melt near 220 C)"),

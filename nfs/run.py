@@ -14,7 +14,7 @@ import numpy as np
 
 from .docfields import document_fields
 
-__all__ = ["REQUIRED_COLUMNS", "NO_MISSING_COLUMNS", "RunMeta", "Run"]
+__all__ = ["REQUIRED_COLUMNS", "NO_MISSING_COLUMNS", "RunMeta", "Run", "run_caveats"]
 
 #: Required CSV columns, in the order the writer puts them first.
 REQUIRED_COLUMNS: tuple[str, ...] = (
@@ -46,6 +46,9 @@ class RunMeta:
     """Time at each position [s], if given."""
     move_s: float | None = None
     """Time to move between positions [s], if given."""
+    duration_s: float | None = None
+    """Length of the record the logger was set to make [s], if given: a run whose rows
+    cover less is partial (:mod:`nfs.io.completeness`)."""
     instrument: str | None = None
     """Free text naming the instrument."""
     extra: dict = field(default_factory=dict)
@@ -69,6 +72,9 @@ class Run:
     """Metadata from ``NAME.toml``."""
     path: Path | None = None
     """The ``NAME.csv`` this run was read from, if any."""
+    caveats: tuple[str, ...] = ()
+    """What the reader accepted because it was asked to (a partial run, missing samples),
+    one sentence each; every output made from the run states them (:func:`run_caveats`)."""
 
     def __getitem__(self, column: str) -> np.ndarray:
         return self.columns[column]
@@ -77,3 +83,9 @@ class Run:
     def n_samples(self) -> int:
         """Number of samples."""
         return len(self.columns["time_s"])
+
+
+def run_caveats(runs) -> list[str]:
+    """Every caveat of *runs* (:attr:`Run.caveats`), each prefixed with its run's name, in
+    the order given: the sentences an output made from the runs must state."""
+    return [f"run '{run.name}': {c}" for run in runs for c in getattr(run, "caveats", ())]

@@ -82,9 +82,12 @@ def test_sweep_refuses_before_its_folder_is_made(tmp_path, cli, scenario_text):
     _scenario_file(tmp_path, scenario_text, duration_s=9000.0)
     sweep = tmp_path / "sw.toml"
     sweep.write_text('scenario = "s.toml"\nseeds = { count = 2000 }\n'
-                     "[axes]\nlatitude_deg = [0.0, 30.0, 60.0]\n")
+                     "[axes]\nlatitude_deg = [" + ", ".join(f"{3.0 * k:g}" for k in range(20))
+                     + "]\n")
     code, _, err = cli("sweep", sweep, "-o", tmp_path / "sw", "--jobs", "1")
-    assert code == 2 and "nfs sweep: 12000 runs" in err and "on 1 worker(s)" in err, err
+    # 80,000 runs: about 45 min on the 2-core machine, past the 10-min limit on one twice
+    # as fast (12,000 were 7 min: under the limit, the time alone decides)
+    assert code == 2 and "nfs sweep: 80000 runs" in err and "on 1 worker(s)" in err, err
     assert not (tmp_path / "sw").exists()
 
 

@@ -3,6 +3,7 @@
     nfs table [SCENARIO] [-o DIR] [--json FILE]      heading-RMSE table by start temperature
               [--baseline OLD.json]              ... set beside an earlier table (exit 1: worse)
     nfs simulate SCENARIO -o DIR                     measurement files, one run per T0
+    nfs import MAPPING.toml -o DIR                   a chamber log's files made one run
     nfs northfind DATA... [--json FILE]              north-find measured or simulated runs
     nfs train DATA... --method M -o MODEL            train a drift compensator
     nfs compensate DATA... --model MODEL -o DIR      apply it
@@ -16,8 +17,9 @@
     nfs effects                                      list the registered physical effects
 
 The commands live in :mod:`nfs.cli.compensation`, :mod:`nfs.cli.experiment`,
-:mod:`nfs.cli.measured`, :mod:`nfs.cli.noise` and :mod:`nfs.cli.design`, their arguments in
-:mod:`nfs.cli.parser` (``nfs allan``'s in :mod:`nfs.cli.noise`).
+:mod:`nfs.cli.measured`, :mod:`nfs.cli.noise`, :mod:`nfs.cli.design` and
+:mod:`nfs.cli.importing`, their arguments in :mod:`nfs.cli.parser` (``nfs allan``'s in
+:mod:`nfs.cli.noise`).
 """
 
 from __future__ import annotations

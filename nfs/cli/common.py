@@ -9,10 +9,11 @@ import sys
 import time
 
 from ..errors import NfsError
+from ..run import run_caveats
 
 __all__ = ["EXIT_USAGE", "FEATURES_MODE_HELP", "Progress", "output_folder", "output_file",
            "finish", "recorded_arguments", "say_removed", "gate", "say_ignored",
-           "with_overrides", "circular_mean_deg", "fmt", "start_model"]
+           "with_overrides", "circular_mean_deg", "fmt", "start_model", "read_command_runs"]
 
 
 EXIT_USAGE = 2
@@ -146,3 +147,15 @@ def say_ignored(scenario, command: str, settings=None, compensate: bool = True) 
     from ..studies.job_estimate import ignored_keys
     for line in ignored_keys(scenario, command, settings, compensate):
         print(f"nfs: note: {line}", file=sys.stderr)
+
+
+def read_command_runs(args, *, say: bool = True) -> list:
+    """The runs a command's DATA name, read as its ``--partial`` and ``--allow-nan`` ask
+    (:func:`nfs.read_runs`); what they let through printed a line each on standard output
+    (``say=False``: the command's own result states it, as a fit's warnings do)."""
+    from .. import read_runs
+    runs = read_runs(args.data, partial=args.partial, allow_nan=args.allow_nan)
+    if say:
+        for line in run_caveats(runs):
+            print(f"note: {line}")
+    return runs

@@ -12,7 +12,8 @@ import math
 import sys
 
 from ..errors import NfsError
-from .common import (Progress, finish, gate, output_file, output_folder, say_ignored,
+from .common import (Progress, finish, gate, output_file, output_folder, read_command_runs,
+                     say_ignored,
                      with_overrides)
 
 __all__ = ["cmd_table", "cmd_train", "cmd_compensate"]
@@ -104,14 +105,14 @@ def _baseline(args, chain):
 
 
 def cmd_train(args) -> int:
-    from .. import read_runs, train_compensator
+    from .. import train_compensator
     from ..compensate import get_method, resolve_features
     from ..compensate.modes import check_features_mode
     get_method(args.method)                  # a bad name fails before any work
     resolve_features(args.features, ["aux_*"])
     check_features_mode(args.features_mode, "--features-mode")
     output_file(args.output, "-o", args.overwrite)
-    runs = read_runs(args.data)
+    runs = read_command_runs(args)
     missing = [r.name for r in runs if r.meta.true_heading_deg is None]
     if missing:
         raise NfsError(f"run '{missing[0]}' has no true_heading_deg in its TOML: training "
@@ -134,7 +135,7 @@ def cmd_train(args) -> int:
 
 def cmd_compensate(args) -> int:
     import warnings
-    from .. import load_compensator, read_runs, write_run
+    from .. import load_compensator, write_run
     from ..compensate.model_file import model_file_kind
     from ..compensate.modes import check_features_mode
     if args.trust_pickle and model_file_kind(args.model) not in ("nfs-model", "missing"):
@@ -152,7 +153,7 @@ def cmd_compensate(args) -> int:
                        f"{comp.features_mode} mode, and is applied in the mode it was "
                        "trained in")
     from ..io.provenance import runs_provenance
-    runs = read_runs(args.data)
+    runs = read_command_runs(args)
     folder = output_folder(args, "compensate")
     # Every run is compensated before anything is written: a run that lacks an input
     # channel stops the command with nothing half-written.

@@ -12,14 +12,14 @@ import sys
 from pathlib import Path
 
 from ..errors import NfsError
-from .common import finish, output_folder, start_model
+from .common import finish, output_folder, read_command_runs, start_model
 from .measured import read_finding
 
 __all__ = ["cmd_design"]
 
 
 def cmd_design(args) -> int:
-    from .. import UnitChain, load_instrument, read_runs
+    from .. import UnitChain, load_instrument
     from ..report.design_report import write_design
     from ..io.provenance import output_provenance
     if args.rivals is not None and args.diagnosis is not None:
@@ -32,7 +32,7 @@ def cmd_design(args) -> int:
                        "or --rivals A B ...")
     labels = list(args.rivals) if args.rivals else read_finding(args.diagnosis).rivals()
     inst = load_instrument(args.model)
-    chain = UnitChain(inst, read_runs(args.data), start_state=start_model(args))
+    chain = UnitChain(inst, read_command_runs(args), start_state=start_model(args))
     chain.check_rivals(labels)         # what each rival is, before any work
     space = chain.design_space(soak_h=args.soak_h, start_temperatures_c=args.start_temperatures,
                                max_hours=args.max_hours, option="--max-hours")

@@ -15,8 +15,8 @@ from pathlib import Path
 
 from ..errors import NfsError
 from .common import (Progress, circular_mean_deg, finish, fmt, gate, output_file,
-                     output_folder, recorded_arguments, say_ignored, say_removed,
-                     with_overrides)
+                     output_folder, read_command_runs, recorded_arguments, say_ignored,
+                     say_removed, with_overrides)
 
 __all__ = ["cmd_simulate", "cmd_northfind", "cmd_preset", "cmd_init", "cmd_effects", "cmd_sweep"]
 
@@ -48,13 +48,13 @@ def cmd_simulate(args) -> int:
 
 def cmd_northfind(args) -> int:
     from ..io.atomic import atomic_write_text
-    from .. import north_find, read_runs
+    from .. import north_find
     from ..northfind import heading_rmse
     from ..scoring.intervals import json_number
     if args.heading_hint is not None and not math.isfinite(args.heading_hint):
         raise NfsError(f"--heading-hint: {args.heading_hint} is not a finite angle in degrees")
     output_file(args.json, "--json", args.overwrite)
-    runs = read_runs(args.data)
+    runs = read_command_runs(args)
     rows = []
     out = {"runs": []}
     for run in runs:

@@ -14,7 +14,7 @@ import sys
 from pathlib import Path
 
 from ..errors import NfsError
-from .common import finish, output_file, output_folder, start_model
+from .common import finish, output_file, output_folder, read_command_runs, start_model
 
 __all__ = ["cmd_fit", "cmd_compare", "cmd_diagnose", "read_finding"]
 
@@ -35,12 +35,12 @@ def read_finding(path: str, option: str = "--diagnosis"):
                        f"({exc})") from None
 
 
-def _chain(args, check=None):
+def _chain(args, check=None, say: bool = True):
     """The unit's chain on the command's model and runs; ``check(model, runs)`` runs before
-    any work (a rival's label, an effect's name)."""
-    from .. import UnitChain, load_instrument, read_runs
+    any work (a rival's label, an effect's name); ``say``: print the runs' caveats."""
+    from .. import UnitChain, load_instrument
     inst = load_instrument(args.model)
-    runs = read_runs(args.data)
+    runs = read_command_runs(args, say=say)
     if check is not None:
         check(inst, runs)
     # only nfs fit has --decimate-s; the others take the chain's default
@@ -50,7 +50,7 @@ def _chain(args, check=None):
 
 def cmd_fit(args) -> int:
     output_file(args.output, "-o", args.overwrite)
-    chain = _chain(args)
+    chain = _chain(args, say=False)     # the fit's warnings state the runs' caveats
     if not args.quiet:
         print(f"fitting {chain.model.name} to {len(chain.runs)} run(s)...", file=sys.stderr)
     res = chain.fit(refine=not args.no_refine, free=args.free, stages=tuple(args.stages),

@@ -11,6 +11,7 @@ from .compensation import cmd_compensate, cmd_table, cmd_train
 from .experiment import (cmd_effects, cmd_init, cmd_northfind, cmd_preset, cmd_simulate,
                          cmd_sweep)
 from .design import cmd_design
+from .importing import add_import_parser
 from .measured import cmd_compare, cmd_diagnose, cmd_fit
 from .noise import add_allan_command
 
@@ -19,6 +20,13 @@ __all__ = ["build_parser", "check_options"]
 
 def _runs_argument(p: argparse.ArgumentParser) -> None:
     p.add_argument("data", nargs="+", help="NAME.csv files, NAME.toml files or folders")
+    p.add_argument("--partial", action="store_true",
+                   help="read a run that is not whole (shorter than its duration_s, or its "
+                        "last line cut while written) instead of refusing it; every output "
+                        "says so")
+    p.add_argument("--allow-nan", action="store_true",
+                   help="read missing samples (empty fields, nan) as missing instead of "
+                        "refusing them; every output names their columns and rows")
 
 
 def _trust_effects_option(p: argparse.ArgumentParser) -> None:
@@ -372,6 +380,7 @@ def build_parser() -> argparse.ArgumentParser:
                     help="no progress bar or log lines on standard error")
     _yes_option(sw)
     sw.set_defaults(func=cmd_sweep)
+    add_import_parser(sub)
     return p
 
 

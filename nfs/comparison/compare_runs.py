@@ -58,7 +58,7 @@ from ..errors import MeasurementError, NfsError
 from ..conditions import chamber_assumption, conditions_from_run
 from ..experiment import simulate_run
 from ..instrument import Instrument
-from ..run import Run
+from ..run import Run, run_caveats
 from ..northfind import heading_rmse, north_find
 from ..io.records import RecordError, encode, from_record
 from .channel_residual import CHANNELS, ChannelRun, ChannelSpec, StageBounds, channel_run
@@ -105,7 +105,8 @@ class Comparison:
     """The heading's own verdict over the runs
     (:func:`~nfs.comparison.heading.heading_comparison`)."""
     assumptions: tuple[str, ...] = ()
-    """What the comparison assumed where the runs do not say (a missing chamber record)."""
+    """What the comparison assumed where the runs do not say (a missing chamber record), and
+    what the reader was asked to accept in them (:func:`nfs.run.run_caveats`)."""
     dwell_biases: tuple[DwellBias, ...] = ()
     """Per run: each dwell's mean gyro rate less the Earth-rate projection, measured and as
     the model predicts it, with the noise of a dwell mean (:mod:`nfs.comparison.dwell_traces`)."""
@@ -391,5 +392,5 @@ def compare(inst: Instrument, runs: Sequence[Run], *, seed=0, startup_end_s: flo
         settings=settings, per_run={k: tuple(v) for k, v in per_run.items()},
         summaries=summaries, headings=tuple(headings),
         heading=heading_comparison(headings, HEADING_ALPHA),
-        assumptions=tuple(a for a in (chamber_assumption(runs),) if a),
+        assumptions=tuple(a for a in (chamber_assumption(runs), *run_caveats(runs)) if a),
         dwell_biases=tuple(biases), heading_traces=tuple(traces))

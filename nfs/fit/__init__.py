@@ -8,7 +8,7 @@ The room a change of the fit's thermal structure stays in:
   :mod:`~nfs.fit.prior`, the soak anchor of the thermometer offsets (:mod:`~nfs.fit.soak`),
   the level solve (:mod:`~nfs.fit.sensor_fit`), the gyro noise from the Allan deviation
   (:mod:`~nfs.fit.noise_fit`), the least-squares core (:mod:`~nfs.fit.stage`) and advice for
-  parameters at a bound (:mod:`~nfs.fit.bound_advice`); its residuals
+  parameters at a bound or beyond their typical range (:mod:`~nfs.fit.departures`); its residuals
   (:mod:`~nfs.fit.thermal_residual`, :mod:`~nfs.fit.drift_residual`), its result and file
   (:mod:`~nfs.fit.fit_result`) and its warnings (:mod:`~nfs.fit.fit_warnings`);
 - :mod:`~nfs.fit.start_state`: each run's node temperatures at power-on (an unfinished soak);

@@ -31,7 +31,7 @@ result meets the same prior.  The box of every parameter lies inside its hard ra
     the first minute after power-on minus T0, :mod:`nfs.fit.soak`).  With ``n_starts``
     > 1, when the solution from the preset stays above the noise (reduced chi-square > 1.5),
     the stage starts again from the preset with every capacity and conductance +-30 %
-    (:func:`nfs.fit.bound_advice.perturbed_starts`) and keeps the lowest cost.
+    (:func:`nfs.fit.stage.perturbed_starts`) and keeps the lowest cost.
 **drift**
     Thermal parameters fixed at the thermal fit.  Free: ``gyro.bias_dph``, the gyro effect
     coefficients, the accelerometer biases, accelerometer effect coefficients and the
@@ -54,7 +54,7 @@ solution of each stage, or with a prior the posterior (J^T J / s^2 + P^T P)^-1 (
 inverse; a direction the data rows do not constrain gives an infinite standard error and its
 parameters are reported as not identifiable).  These are conditional on the other stage's
 parameters and on the model being right.  A parameter that ends on its bound is reported
-with what it says about the model's structure (:func:`nfs.fit.bound_advice.bound_advice`).
+with what it says about the model's structure (:func:`nfs.fit.departures.bound_advice`).
 The result is a :class:`~nfs.fit.fit_result.FitResult`.
 """
 
@@ -73,7 +73,6 @@ from threadpoolctl import threadpool_limits
 from ..errors import NfsError
 from ..instrument import Instrument
 from ..run import Run
-from .bound_advice import bound_advice, perturbed_starts
 from .drift_residual import (DriftRun, drift_channels, drift_context, model_drift_dph,
                              prepare_drift, window_means)
 from .fit_result import FitResult
@@ -81,11 +80,11 @@ from .fit_warnings import fit_warnings
 from .free_set import FIT_STAGES, THERMAL_KINDS, default_free, stage_of
 from .noise_fit import GyroNoiseEstimate, gyro_noise_from_residual, noise_record
 from .params import expand_paths, fit_bounds, get_param, param_paths, set_params
-from .departures import departures
+from .departures import bound_advice, departures
 from .prior import Prior, build_prior
 from .sensor_fit import LEVEL_PATHS, LevelData, level_from_means
 from .soak import anchor_offsets, soak_offsets
-from .stage import StageReport, solve_stage
+from .stage import StageReport, perturbed_starts, solve_stage
 from .start_state import StartModel
 from .thermal_residual import (DEFAULT_START, ThermalRun, prepare_thermal, simulate_knots,
                                start_states, thermal_residual, thermal_residual_parts,
@@ -400,7 +399,7 @@ def fit_model(inst: Instrument, runs: Sequence[Run], free: Iterable[str] | None 
     n_starts : int
         Most starts of the thermal stage: the preset, then up to two perturbations of it
         (every capacity and conductance +-30 %,
-        :func:`nfs.fit.bound_advice.perturbed_starts`), tried only while the best
+        :func:`nfs.fit.stage.perturbed_starts`), tried only while the best
         solution stays above the noise (reduced chi-square > 1.5); the lowest cost is
         kept.  1 (default): the preset only.
     start_state : StartModel or None

@@ -122,7 +122,10 @@ def prepare_drift(run: Run, decimate_s: float, acc_channels: bool,
     if acc_channels:
         channels["acc_x_g"] = np.asarray(run["acc_x_g"], dtype=float)
         channels["acc_y_g"] = np.asarray(run["acc_y_g"], dtype=float)
-    trusted = np.asarray(run["moving"], dtype=float) == 0.0
+    # at rest, with every channel logged (a missing gyro sample stays out of its window
+    # even where the denoised drift bridges it)
+    trusted = (np.asarray(run["moving"], dtype=float) == 0.0) & np.isfinite(
+        np.asarray(run["gyro_dph"], dtype=float))
     for v in channels.values():
         trusted &= np.isfinite(v)
     if not trusted.any():

@@ -7,7 +7,7 @@ import math
 from typing import Mapping, Sequence
 
 from ..conditions import chamber_assumption
-from ..run import Run
+from ..run import Run, run_caveats
 from .soak import SoakAnchor
 from .stage import StageReport
 
@@ -54,7 +54,8 @@ def fit_warnings(runs: Sequence[Run], paths: Sequence[str], params: Mapping[str,
     """Everything a user should know of a fit, in words, in this order: a stage that did
     not converge, a parameter at a bound (with its ``advice``) or moved far from its start
     (:func:`far_from_start`; ``shifts``: in prior widths), the soak anchor's warnings, a
-    chamber assumed, a parameter not identifiable (``unident``: with the reason), a single
+    chamber assumed, what the reader accepted in a run (:func:`nfs.run.run_caveats`), a
+    parameter not identifiable (``unident``: with the reason), a single
     run.  ``kinds``: the kind of every parameter path (:data:`nfs.parameters.PARAM_KINDS`).
     A parameter in ``departed`` (beyond its typical range: :mod:`nfs.fit.departures` says what
     it points to) gets no "moved" warning besides."""
@@ -77,6 +78,7 @@ def fit_warnings(runs: Sequence[Run], paths: Sequence[str], params: Mapping[str,
         warnings.extend(soak.warnings)
     if chamber_assumption(runs):
         warnings.append(chamber_assumption(runs))
+    warnings.extend(run_caveats(runs))
     for p, why in unident.items():
         warnings.append(f"{p} is not identifiable: {why}")
     if len(runs) == 1:

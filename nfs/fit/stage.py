@@ -23,7 +23,8 @@ from scipy.optimize import least_squares
 from ..docfields import document_fields
 from .prior import Prior
 
-__all__ = ["StageReport", "solve_stage", "forward_jacobian", "CHI2_SETTLED"]
+__all__ = ["StageReport", "solve_stage", "forward_jacobian", "CHI2_SETTLED", "perturbed_starts",
+           "START_FACTOR"]
 
 #: A stage whose data rows have a reduced chi-square at most this fits to its noise: no other
 #: start is tried, and the data rows keep their stated noise level beside the prior.
@@ -270,3 +271,28 @@ def _errors(jac: np.ndarray, r: np.ndarray, paths: Sequence[str],
             corr[i, :] = 0.0
             corr[:, i] = 0.0
     return dict(zip(paths, stderr)), unident, corr
+
+
+#: Relative perturbation of capacities and conductances in the extra starts.
+START_FACTOR = 0.3
+
+
+def perturbed_starts(paths: Sequence[str], x0: np.ndarray, lb: np.ndarray, ub: np.ndarray,
+                     factor: float = START_FACTOR) -> list[np.ndarray]:
+    """Extra starts: every capacity x(1 + f) with every conductance x(1 - f), and the reverse.
+
+    The first slows every time constant C/G of the network by (1 + f)/(1 - f) (x1.9 at
+    f = 0.3), the second speeds it up as much; powers, lags and offsets keep their start.
+    Clipped into the box.  Empty when no capacity or conductance is free.
+    """
+    cap = np.array([p.endswith(".capacity_j_per_k") for p in paths])
+    cond = np.array([p.endswith(".conductance_w_per_k") for p in paths])
+    if not (cap.any() or cond.any()):
+        return []
+    out = []
+    for sign in (+1.0, -1.0):
+        x = np.array(x0, dtype=float)
+        x[cap] *= 1.0 + sign * factor
+        x[cond] *= 1.0 - sign * factor
+        out.append(np.clip(x, lb, ub))
+    return out

@@ -8,18 +8,39 @@ text, so a written run reads back bitwise.
 from __future__ import annotations
 
 import csv
-import math
 import io
+import math
+import re
+from collections.abc import Callable, Mapping
 from pathlib import Path
-from collections.abc import Mapping
+from typing import NamedTuple
 
 import numpy as np
 
 from ..errors import MeasurementError
 from ..run import REQUIRED_COLUMNS
+from .completeness import CutLine
 from .measurement_checks import check_columns, check_header
 
-__all__ = ["read_columns", "format_csv"]
+__all__ = ["IMPORT_HINT", "CsvTable", "read_columns", "format_csv"]
+
+#: What a file in another layout is told: the format's layout and the way in.
+IMPORT_HINT = ("nfs-measurement/1 is comma-separated with '.' as decimal point: bring a "
+               "chamber log in with nfs import (docs/measurement-format.md, 'Chamber logs: "
+               "nfs import')")
+
+_DECIMAL_COMMA = re.compile(r"\s*[+-]?\d+,\d+\s*")
+
+
+class CsvTable(NamedTuple):
+    """The checked columns of a ``NAME.csv`` and where each sample was."""
+
+    columns: dict[str, np.ndarray]
+    """Column name -> samples, in file order."""
+    line_of: Callable[[int], int]
+    """Sample index -> its 1-based line in the file (the header is line 1)."""
+    cut: CutLine | None
+    """The last line when it was cut while written (left out of the columns), else None."""
 
 # ---------------------------------------------------------------------------------------------
 # NAME.csv: reading
@@ -103,8 +124,16 @@ def _parse_values(values: tuple[str, ...]) -> tuple[np.ndarray, int | None]:
     return out, None
 
 
-def _parse_csv_careful(text: str, file: Path) -> tuple[list[str], list[np.ndarray], list[int]]:
-    """Names, columns and the line of every sample; raises on the first fault."""
+def _field_count_error(fields: int, n: int, file: Path, line: int) -> MeasurementError:
+    hint = (f"; a decimal comma ('1,5' for 1.5)? {IMPORT_HINT}" if fields > n else "")
+    return MeasurementError(f"row has {fields} field{'s' if fields != 1 else ''}, the header "
+                            f"has {n}{hint}", file=file, row=line)
+
+
+def _parse_csv_careful(text: str, file: Path
+                       ) -> tuple[list[str], list[np.ndarray], list[int], CutLine | None]:
+    """Names, columns, the line of every sample and a cut last line (fewer fields than the
+    header, nothing after it; left out); raises on the first fault."""
     reader = csv.reader(io.StringIO(text, newline=""))
     try:
         header = None
@@ -121,21 +150,26 @@ def _parse_csv_careful(text: str, file: Path) -> tuple[list[str], list[np.ndarra
         t = names.index("time_s")
         rows: list[list[str]] = []
         lines: list[int] = []
+        short: tuple[int, int] | None = None     # (line, fields) of a row with too few
         for row in reader:
+            if _is_blank(row):
+                continue
+            if short is not None:                # a short row with rows after it: not cut
+                raise _field_count_error(short[1], n, file, short[0])
             if len(row) != n:
-                if _is_blank(row):
-                    continue
-                raise MeasurementError(
-                    f"row has {len(row)} field{'s' if len(row) != 1 else ''}, the header "
-                    f"has {n}", file=file, row=reader.line_num)
-            if not row[t].strip() and _is_blank(row):
+                if len(row) > n:
+                    raise _field_count_error(len(row), n, file, reader.line_num)
+                short = (reader.line_num, len(row))
                 continue
             rows.append(row)
             lines.append(reader.line_num)
     except csv.Error as exc:
         raise MeasurementError(f"CSV syntax error: {exc}", file=file,
                                row=reader.line_num) from None
+    cut = None if short is None else CutLine(short[0], short[1], n)
     if not rows:
+        if cut is not None:
+            raise _field_count_error(cut.fields, n, file, cut.line)
         raise MeasurementError("no data rows after the header", file=file, row=header_line)
     columns = []
     faults = []
@@ -147,13 +181,26 @@ def _parse_csv_careful(text: str, file: Path) -> tuple[list[str], list[np.ndarra
     if faults:
         bad, name, value = min(faults, key=lambda fault: fault[0])  # first line, then column
         shown = value if len(value) <= 40 else value[:37] + "..."
-        raise MeasurementError(f"cannot read {shown!r} as a number", file=file, column=name,
-                               row=lines[bad])
-    return names, columns, lines
+        hint = f"; a decimal comma? {IMPORT_HINT}" if _DECIMAL_COMMA.fullmatch(value) else ""
+        raise MeasurementError(f"cannot read {shown!r} as a number{hint}", file=file,
+                               column=name, row=lines[bad])
+    return names, columns, lines, cut
 
 
-def read_columns(path: Path) -> dict[str, np.ndarray]:
-    """The checked columns of ``NAME.csv``, in file order."""
+def _check_layout(text: str, file: Path) -> None:
+    """A header separated by ';' or tabs instead of ',' is another layout: say so."""
+    header = next((line for line in text.splitlines() if line.strip()), "")
+    if "," in header:
+        return
+    for mark, name in ((";", "';'"), ("\t", "tabs")):
+        if mark in header:
+            raise MeasurementError(f"the header is separated by {name}, not ','; "
+                                   f"{IMPORT_HINT}", file=file, row=1)
+
+
+def read_columns(path: Path) -> CsvTable:
+    """The checked columns of ``NAME.csv`` in file order, the line of each sample and a cut
+    last line (:class:`CsvTable`)."""
     try:
         raw = path.read_bytes()
     except OSError as exc:
@@ -166,17 +213,23 @@ def read_columns(path: Path) -> dict[str, np.ndarray]:
                                file=path, row=line) from None
     if not text.strip():
         raise MeasurementError("empty file: no header row", file=path)
+    _check_layout(text, path)
     try:
         names, data = _parse_csv_fast(text)
         check_header(names, path, 1)
         columns = dict(zip(names, data))
-        line_of = None
+        line_of, cut = _line_after_header, None
     except (_UseCarefulPath, MeasurementError):
-        names, arrays, lines = _parse_csv_careful(text, path)
+        names, arrays, lines, cut = _parse_csv_careful(text, path)
         columns = dict(zip(names, arrays))
         line_of = lines.__getitem__
     check_columns(columns, file=path, line_of=line_of)
-    return columns
+    return CsvTable(columns, line_of, cut)
+
+
+def _line_after_header(index: int) -> int:
+    """Line of sample ``index`` in a file without blank lines: the header is line 1."""
+    return index + 2
 
 
 

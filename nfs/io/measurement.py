@@ -9,12 +9,20 @@ Reading
     apply, the column, the 1-based line (the header is line 1) or the TOML key.
 
 Missing values
-    An empty field or ``nan`` is a missing sample (NaN). It is allowed in every column except
-    ``time_s``, ``position_deg`` and ``moving``: without those a sample cannot be placed in
-    the schedule, so their absence is an error. A missing gyro, accelerometer or temperature
-    sample (a logger drop-out inside a dwell) is read as NaN and left to the consumers, which
-    must skip or interpolate it. Rows whose fields are all empty (a spreadsheet's trailing
-    ``,,,,``) are skipped like blank lines. Infinite values are errors in every column.
+    An empty field or ``nan`` is a missing sample (NaN). It is never allowed in ``time_s``,
+    ``position_deg`` and ``moving``: without those a sample cannot be placed in the
+    schedule. A missing gyro, accelerometer or temperature sample (a logger drop-out) is
+    refused, naming the columns and their first rows, unless it is read with ``allow_nan``:
+    then it is NaN, which the consumers skip (a dwell mean, a fit window leaves it out), and
+    the run's caveats say where (:mod:`nfs.io.completeness`). The unit's channels while it is
+    switched off (``powered`` = 0) are empty by definition, not missing. Rows whose fields
+    are all empty (a spreadsheet's trailing ``,,,,``) are skipped like blank lines. Infinite
+    values are errors in every column.
+
+Whole runs
+    A run shorter than its sidecar's ``duration_s``, or whose last line was cut while being
+    written (fewer fields than the header), is refused with the rows found and expected,
+    unless it is read with ``partial`` (:mod:`nfs.io.completeness`).
 
 Values
     Every column is numeric: a value is what Python's ``float`` reads (after stripping
@@ -52,11 +60,12 @@ from ..errors import MeasurementError
 from ..ranges import check_tree, deferred_warnings
 from ..run import Run, RunMeta
 from .atomic import atomic_write_files
+from .completeness import check_missing, check_whole
 from .csv_columns import format_csv, read_columns
 from .measurement_checks import check_columns, check_header, check_sample_rate, check_units
 from .tomlio import toml_key, toml_value
 
-__all__ = ["FORMAT", "read_run", "read_runs", "find_runs", "write_run"]
+__all__ = ["FORMAT", "read_run", "read_runs", "find_runs", "write_run", "meta_from_dict"]
 
 #: The format tag written to and required in ``NAME.toml``.
 FORMAT = "nfs-measurement/1"
@@ -149,12 +158,37 @@ def _number(doc: Mapping, key: str, file: Path, *, required: bool = False,
     return value
 
 
-def _meta_from_toml(doc: Mapping, file: Path, warn: bool = True) -> RunMeta:
-    """Check the parsed ``NAME.toml`` and turn it into a :class:`RunMeta`; every number
-    against its range (:mod:`nfs.ranges`, ``measurement.*``; ``warn``: unusual values warn)."""
-    meta = _meta_fields(doc, file)
+def meta_from_dict(doc: Mapping, *, file: str | os.PathLike | None = None, shown: str = "",
+                   warn: bool = True) -> RunMeta:
+    """The keys of a sidecar as parsed from TOML, checked as the reader checks
+    ``NAME.toml``, as a :class:`RunMeta`.
+
+    Parameters
+    ----------
+    doc : mapping
+        ``format`` (exactly :data:`FORMAT`), ``latitude_deg``, ``start_temperature_c`` and
+        the optional keys of docs/measurement-format.md; any other key goes to ``extra``.
+    file : path, optional
+        The file named in an error.
+    shown : str
+        The table the keys sit in, when not at the file's top (``"run"``: an error names
+        ``run.latitude_deg``).
+    warn : bool
+        Warn about unusual values (:mod:`nfs.ranges`, ``measurement.*``).
+
+    Raises
+    ------
+    MeasurementError
+        A missing or mistyped key, a value outside its range.
+    """
+    try:
+        meta = _meta_fields(doc, file)
+    except MeasurementError as exc:
+        if not shown or exc.key is None:
+            raise
+        raise MeasurementError(exc.message, file=exc.file, key=f"{shown}.{exc.key}") from None
     check_tree(dict(doc), file=file, error=MeasurementError, canonical="measurement",
-               quiet=not warn)
+               shown=shown, quiet=not warn)
     return meta
 
 
@@ -190,6 +224,7 @@ def _meta_fields(doc: Mapping, file: Path) -> RunMeta:
         positions_deg=positions,
         dwell_s=_number(doc, "dwell_s", file, low=0.0, low_open=True),
         move_s=_number(doc, "move_s", file, low=0.0),
+        duration_s=_number(doc, "duration_s", file, low=0.0, low_open=True),
         instrument=instrument,
         extra={k: v for k, v in doc.items() if k not in _META_KEYS},
     )
@@ -197,7 +232,8 @@ def _meta_fields(doc: Mapping, file: Path) -> RunMeta:
 
 #: Keys of NAME.toml that RunMeta holds in its own fields, in the order they are written.
 _META_KEYS = ("format", "latitude_deg", "start_temperature_c", "true_heading_deg",
-              "sample_rate_hz", "positions_deg", "dwell_s", "move_s", "instrument")
+              "sample_rate_hz", "positions_deg", "dwell_s", "move_s", "duration_s",
+              "instrument")
 
 
 def _read_meta(path: Path) -> RunMeta:
@@ -210,7 +246,7 @@ def _read_meta(path: Path) -> RunMeta:
         raise MeasurementError(f"not UTF-8 text: {exc.reason}", file=path) from None
     except OSError as exc:
         raise MeasurementError(f"cannot read: {exc.strerror}", file=path) from None
-    return _meta_from_toml(doc, path)
+    return meta_from_dict(doc, file=path)
 
 
 # The TOML value writer is nfs.io.tomlio's (tomllib only reads TOML); errors get the file here.
@@ -234,6 +270,7 @@ def _format_meta(meta: RunMeta, file: Path) -> str:
         "positions_deg": meta.positions_deg,
         "dwell_s": meta.dwell_s,
         "move_s": meta.move_s,
+        "duration_s": meta.duration_s,
         "instrument": meta.instrument,
     }
     lines = []
@@ -260,25 +297,34 @@ def _format_meta(meta: RunMeta, file: Path) -> str:
 # Public reading
 
 
-def read_run(path: str | os.PathLike) -> Run:
+def read_run(path: str | os.PathLike, *, partial: bool = False,
+             allow_nan: bool = False) -> Run:
     """Read one run from ``NAME.csv`` and ``NAME.toml``.
 
     Parameters
     ----------
     path : str or path-like
         ``NAME.csv``, ``NAME.toml`` or the stem ``NAME``.
+    partial : bool
+        Read a run that is not whole (shorter than its sidecar's ``duration_s``, or its last
+        line cut while written: that line is left out) instead of refusing it.
+    allow_nan : bool
+        Read missing samples (empty fields, ``nan``) as NaN instead of refusing them.
 
     Returns
     -------
     Run
-        Columns in file order as float64 arrays (missing samples NaN), the metadata, and
-        ``path`` set to ``NAME.csv``.
+        Columns in file order as float64 arrays (missing samples NaN), the metadata,
+        ``path`` set to ``NAME.csv``, and in ``caveats`` what ``partial`` and ``allow_nan``
+        let through, one sentence each.
 
     Raises
     ------
     MeasurementError
         A missing file, a TOML syntax error or a wrong key, or a CSV fault (see the module
-        docstring); the message names the file and the key, column or line.
+        docstring); a partial run (the rows found and expected) or missing samples (the
+        columns and their first rows) unless asked to read them; the message names the
+        file and the key, column or line.
     """
     csv_path, toml_path = _run_files(path)
     if not csv_path.is_file():
@@ -291,10 +337,16 @@ def read_run(path: str | os.PathLike) -> Run:
                                f"({FORMAT} needs NAME.csv and NAME.toml)", file=csv_path)
     with deferred_warnings():
         meta = _read_meta(toml_path)
-        columns = read_columns(csv_path)
+        table = read_columns(csv_path)
+        columns = table.columns
         check_sample_rate(meta, columns["time_s"], toml_path, csv_path)
         check_units(meta, columns, file=csv_path, toml_file=toml_path)
-    return Run(name=csv_path.stem, columns=columns, meta=meta, path=csv_path)
+        caveats = (check_whole(meta, columns["time_s"], file=csv_path, toml_name=toml_path.name,
+                               cut=table.cut, partial=partial),
+                   check_missing(columns, file=csv_path, line_of=table.line_of,
+                                 allow_nan=allow_nan))
+    return Run(name=csv_path.stem, columns=columns, meta=meta, path=csv_path,
+               caveats=tuple(c for c in caveats if c))
 
 
 def _natural_key(name: str) -> tuple:
@@ -303,12 +355,15 @@ def _natural_key(name: str) -> tuple:
                  for part in re.split(r"(\d+)", name) if part)
 
 
-def read_runs(paths: str | os.PathLike | Iterable[str | os.PathLike]) -> list[Run]:
+def read_runs(paths: str | os.PathLike | Iterable[str | os.PathLike], *,
+              partial: bool = False, allow_nan: bool = False) -> list[Run]:
     """Read every run that *paths* name (files, stems or folders; see :func:`find_runs`),
     ordered by start temperature, then by name (digit groups as numbers), so that tables,
-    reports and figures list -32 C before -5 C before +17 C whatever the file names."""
+    reports and figures list -32 C before -5 C before +17 C whatever the file names;
+    ``partial`` and ``allow_nan`` as in :func:`read_run`."""
     with deferred_warnings():
-        runs = [read_run(csv_path) for csv_path in find_runs(paths)]
+        runs = [read_run(csv_path, partial=partial, allow_nan=allow_nan)
+                for csv_path in find_runs(paths)]
     return sorted(runs, key=lambda r: (r.meta.start_temperature_c, _natural_key(r.name)))
 
 
@@ -386,7 +441,7 @@ def write_run(run: Run, target: str | os.PathLike) -> Path:
     columns = _columns_for_writing(run, csv_path)
     toml_text = _format_meta(run.meta, toml_path)
     try:
-        meta = _meta_from_toml(tomllib.loads(toml_text), toml_path, warn=False)
+        meta = meta_from_dict(tomllib.loads(toml_text), file=toml_path, warn=False)
     except tomllib.TOMLDecodeError as exc:  # a bug of _format_meta, not of the run
         raise AssertionError(f"nfs wrote invalid TOML for {toml_path}: {exc}") from exc
     check_sample_rate(meta, columns["time_s"], toml_path, csv_path)

@@ -23,7 +23,7 @@ from ..ranges import G_N_M_PER_S2, KELVIN_OFFSET, find, warn_unusual
 from ..run import NO_MISSING_COLUMNS, REQUIRED_COLUMNS, RunMeta
 
 __all__ = ["MAX_ABS_ACC_G", "MAX_TEMPERATURE_C", "SAMPLE_RATE_RTOL", "check_columns",
-           "check_units", "check_sample_rate", "check_header"]
+           "check_values", "check_units", "check_sample_rate", "check_header"]
 
 #: Largest physically possible ``|specific force|`` of an ``acc_*_g`` column [g] (the spec;
 #: :mod:`nfs.ranges`, ``measurement.columns.acc_*_g``).
@@ -52,11 +52,11 @@ def check_columns(columns: Mapping[str, np.ndarray], *, file: str | os.PathLike 
                   line_of: Callable[[int], int] | None = None) -> None:
     """Check sample columns against the format; raise on the first fault.
 
-    Checks, in this order: every value finite or NaN; no NaN in :data:`NO_MISSING_COLUMNS`
-    and not every sample NaN in any required column;
-    ``time_s`` strictly increasing; ``moving`` 0 or 1; every ``temp_*_c`` >= -273.15;
-    every ``|acc_*_g|`` <= 2. Also that the required columns are there; equal lengths and
-    float dtype are the caller's concern (the reader and :func:`write_run` ensure them).
+    Checks, in this order: the required columns are there; every value finite or NaN; no
+    NaN in :data:`NO_MISSING_COLUMNS`; ``time_s`` strictly increasing; ``moving`` 0 or 1;
+    every ``temp_*_c`` >= -273.15; every ``|acc_*_g|`` <= 2 (:func:`check_values`); not
+    every sample NaN in any required column. Equal lengths and float dtype are the
+    caller's concern (the reader and :func:`write_run` ensure them).
 
     Parameters
     ----------
@@ -72,6 +72,25 @@ def check_columns(columns: Mapping[str, np.ndarray], *, file: str | os.PathLike 
     MeasurementError
         Naming the file, the column and the line of the first offending sample.
     """
+    missing = [name for name in REQUIRED_COLUMNS if name not in columns]
+    if missing:
+        raise MeasurementError(f"required column{'s' if len(missing) > 1 else ''} missing: "
+                               f"{', '.join(missing)}", file=file,
+                               column=missing[0] if len(missing) == 1 else None)
+    check_values(columns, file=file, line_of=line_of)
+    for name in REQUIRED_COLUMNS:
+        if len(columns[name]) and np.isnan(columns[name]).all():
+            raise MeasurementError("every sample is missing (a required column needs "
+                                   "values)", file=file, column=name)
+
+
+def check_values(columns: Mapping[str, np.ndarray], *, file: str | os.PathLike | None = None,
+                 line_of: Callable[[int], int] | None = None) -> None:
+    """The checks of :func:`check_columns` that each column's values answer for themselves,
+    on whichever of the format's columns are there (a chamber log's source file holds a
+    few): finite or NaN; no NaN in :data:`NO_MISSING_COLUMNS`; ``time_s`` strictly
+    increasing; ``moving`` 0 or 1; ``temp_*_c`` >= -273.15 and below the highest a north
+    finder reads; ``|acc_*_g|`` <= 2. Parameters and errors as :func:`check_columns`."""
     if line_of is None:
         def line_of(i: int) -> int:
             return i + 2
@@ -79,34 +98,26 @@ def check_columns(columns: Mapping[str, np.ndarray], *, file: str | os.PathLike 
     def fail(message: str, name: str, index: int) -> MeasurementError:
         return MeasurementError(message, file=file, column=name, row=line_of(index))
 
-    missing = [name for name in REQUIRED_COLUMNS if name not in columns]
-    if missing:
-        raise MeasurementError(f"required column{'s' if len(missing) > 1 else ''} missing: "
-                               f"{', '.join(missing)}", file=file,
-                               column=missing[0] if len(missing) == 1 else None)
-
     for name, values in columns.items():
         i = _first(np.isinf(values))
         if i is not None:
             raise fail(f"value {float(values[i])!r} is not finite", name, i)
     for name in NO_MISSING_COLUMNS:
-        i = _first(np.isnan(columns[name]))
+        i = _first(np.isnan(columns[name])) if name in columns else None
         if i is not None:
             raise fail(f"missing value ({', '.join(NO_MISSING_COLUMNS)} "
                        "must be given in every row)", name, i)
-    for name in REQUIRED_COLUMNS:
-        if len(columns[name]) and np.isnan(columns[name]).all():
-            raise MeasurementError("every sample is missing (a required column needs "
-                                   "values)", file=file, column=name)
-    time = columns["time_s"]
-    i = _first(~(np.diff(time) > 0.0))
-    if i is not None:
-        raise fail(f"time does not increase: {float(time[i + 1])!r} after {float(time[i])!r}",
-                   "time_s", i + 1)
-    moving = columns["moving"]
-    i = _first((moving != 0.0) & (moving != 1.0))
-    if i is not None:
-        raise fail(f"must be 0 or 1, not {float(moving[i])!r}", "moving", i)
+    if "time_s" in columns:
+        time = columns["time_s"]
+        i = _first(~(np.diff(time) > 0.0))
+        if i is not None:
+            raise fail(f"time does not increase: {float(time[i + 1])!r} after "
+                       f"{float(time[i])!r}", "time_s", i + 1)
+    if "moving" in columns:
+        moving = columns["moving"]
+        i = _first((moving != 0.0) & (moving != 1.0))
+        if i is not None:
+            raise fail(f"must be 0 or 1, not {float(moving[i])!r}", "moving", i)
     for name, values in columns.items():
         if _TEMPERATURE_COLUMN.fullmatch(name):
             i = _first(values < ABSOLUTE_ZERO_C)

@@ -52,7 +52,9 @@ def sha256_of_text(text: str) -> str:
 
 
 def runs_provenance(runs: Iterable) -> list[dict]:
-    """Name, file and SHA-256 of each run's CSV file (as read), in the order given."""
+    """Name, file and SHA-256 of each run's CSV file (as read), in the order given, and what
+    the reader was asked to accept in it (``caveats``: a partial run, missing samples;
+    :attr:`nfs.run.Run.caveats`) when anything."""
     out = []
     for run in runs:
         entry = {"name": run.name}
@@ -63,6 +65,8 @@ def runs_provenance(runs: Iterable) -> list[dict]:
                 entry["sha256"] = sha256_of_file(path)
             except OSError:
                 pass
+        if getattr(run, "caveats", ()):
+            entry["caveats"] = list(run.caveats)
         out.append(entry)
     return out
 

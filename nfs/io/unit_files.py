@@ -18,12 +18,14 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-from ..ranges import find, leaves
+from ..errors import ScenarioError
+from ..ranges import check_tree, find, leaves, warn_unusual
 from .outdir import MANIFEST_NAME, read_manifest
 from .provenance import sha256_of_file
+from .tomlio import check_keys, table
 
 __all__ = ["UNIT_SIDECAR_KEY", "unit_file_name", "unit_file_text", "unit_entry",
-           "drawn_unit_entry", "drawn_unit_note"]
+           "drawn_unit_entry", "drawn_unit_note", "fitted_departures", "check_values_as_declared"]
 
 #: Key of a run's sidecar (``NAME.toml``) that names the unit file the run was made by.
 UNIT_SIDECAR_KEY = "unit_file"
@@ -94,3 +96,28 @@ def drawn_unit_note(tree: dict, entry: dict, n_unusual: int) -> str:
     return (f"{n_unusual} value(s) outside their typical ranges ({shown}): unit "
             f"{entry.get('unit')} of scenario '{entry.get('scenario')}' as its variability "
             f"drew it ({MANIFEST_NAME} beside it), a draw's tail, not a slip")
+
+
+def fitted_departures(tree: dict, file=None) -> tuple[str, ...]:
+    """The keys a fitted model's ``[fit] departures`` lists (what
+    :func:`nfs.fit.write_fitted_model` writes: values its fit put beyond their typical range,
+    stated with what each points to in the file's header)."""
+    fit = table(tree, "fit", "", file, {})
+    check_keys(fit, ("departures",), "fit", file)
+    keys = fit.get("departures", [])
+    if not isinstance(keys, list) or not all(isinstance(k, str) for k in keys):
+        raise ScenarioError(f"must be a list of key paths (strings), got {keys!r}",
+                            file=file, key="fit.departures")
+    return tuple(keys)
+
+
+def check_values_as_declared(tree: dict, file=None) -> None:
+    """Check every value of an instrument file against its range
+    (:func:`nfs.ranges.check_tree`), the values a fitted model declares beyond their typical
+    range (:func:`fitted_departures`) warned in one line instead of one each."""
+    fitted = fitted_departures(tree, file)
+    check_tree(tree, file=file, error=ScenarioError, skip=("fit.*",), quiet=fitted)
+    if fitted:
+        warn_unusual(f"{len(fitted)} fitted values lie beyond their typical range, as the fit "
+                     f"that wrote this file states in its header ({', '.join(fitted)})",
+                     file=file, key="fit.departures", once=("fit.departures", str(file)))

@@ -27,7 +27,7 @@ from matplotlib.figure import Figure
 
 from ..io.atomic import atomic_write_files
 from ..scoring.intervals import json_number
-from ..run import Run
+from ..run import Run, run_caveats
 from ..rivals.decide import LAMBDA_NAME, Z_NAME, decision_rates
 from ..rivals.predict import CHANNELS
 from ..design.search import Design
@@ -187,10 +187,14 @@ def _fmt(x: float) -> str:
     return "-" if x is None or not math.isfinite(x) else f"{x:.2f}"
 
 
-def to_markdown(design: Design) -> str:
-    """``report.md`` (module docstring)."""
+def to_markdown(design: Design, caveats: list[str] | tuple[str, ...] = ()) -> str:
+    """``report.md`` (module docstring); ``caveats``: what the reader was asked to accept in
+    the runs taken (:func:`nfs.run.run_caveats`), listed under the verdict."""
     e = design.experiment
-    out = ["# Designed run", "", design.verdict, "", "## The run", "",
+    out = ["# Designed run", "", design.verdict, ""]
+    if caveats:
+        out += ["The runs taken, as read:", ""] + [f"- {c}" for c in caveats] + [""]
+    out += ["## The run", "",
            f"- {e.describe()}", f"- chamber hours: {e.hours:.2f} ({e.soak_h:g} h soak + "
            f"{e.duration_s / 3600.0:.2f} h run)", "- chamber program from power-on: `"
            + json.dumps(e.program()) + "`", "", "![rivals' predictions](design.png)", "",
@@ -242,7 +246,7 @@ def write_design(design: Design, folder: str | os.PathLike, runs: list[Run],
     if provenance is not None:
         data["provenance"] = provenance
     files = {folder / "scenario.toml": scenario_toml(design, runs, model_path, folder),
-             folder / "report.md": to_markdown(design),
+             folder / "report.md": to_markdown(design, run_caveats(runs)),
              folder / "design.png": _png(plot_design(design)),
              folder / "design.json": json.dumps(data, indent=1, default=json_number) + "\n"}
     atomic_write_files(files)

@@ -1,4 +1,4 @@
-"""What a parameter at a bound says (nfs.fit.bound_advice), and the extra starts.
+"""What a parameter at a bound says (nfs.fit.departures.bound_advice), and the extra starts.
 
 Oracles: the message of each kind of parameter names the physical fix its side of the box
 points at (a power at 0: a missing heat path; a lag at 300 s: a larger mass); the extra starts
@@ -8,7 +8,8 @@ into the box.
 
 import numpy as np
 
-from nfs.fit.bound_advice import bound_advice, perturbed_starts
+from nfs.fit.departures import bound_advice
+from nfs.fit.stage import perturbed_starts
 
 
 def test_messages_by_kind():
