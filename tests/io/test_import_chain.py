@@ -43,13 +43,17 @@ def _same_answers(got, want):
     assert fit_g.params.keys() == fit_w.params.keys()
     for p, value in fit_w.params.items():
         shift = abs(fit_g.params[p] - value)
-        assert shift <= 0.2 * fit_w.stderr[p] or shift <= 1e-3 * abs(value), \
+        # the thermometers are resampled from their own clocks: a fraction of an error bar
+        assert shift <= 0.5 * fit_w.stderr[p] or shift <= 1e-3 * abs(value), \
             (p, value, fit_g.params[p], fit_w.stderr[p])
     assert {k: s.consistent for k, s in cmp_g.summaries.items()} == \
         {k: s.consistent for k, s in cmp_w.summaries.items()}
     assert (dia_g.answer.kind, dia_g.answer.labels) == (dia_w.answer.kind, dia_w.answer.labels)
-    assert [(s.effect, s.target) for s in dia_g.diagnosis.ranking[:3]] == \
-        [(s.effect, s.target) for s in dia_w.diagnosis.ranking[:3]]
+    # the candidates that stand (the order of those that do not is noise)
+    assert [(s.effect, s.target) for s in dia_g.diagnosis.ranking if s.significant] == \
+        [(s.effect, s.target) for s in dia_w.diagnosis.ranking if s.significant]
+    assert (dia_g.diagnosis.ranking[0].effect, dia_g.diagnosis.ranking[0].target) == \
+        (dia_w.diagnosis.ranking[0].effect, dia_w.diagnosis.ranking[0].target)
 
 
 @pytest.mark.integration
