@@ -30,8 +30,8 @@ def add_allan_command(sub) -> argparse.ArgumentParser:
     al.add_argument("data", nargs="+", help="NAME.csv files, NAME.toml files or folders")
     al.add_argument("--model", default=None,
                     help="instrument preset name or TOML file whose stated N, B, K to show "
-                         "(default: the built-in preset the runs' sidecars name, else "
-                         "default)")
+                         "(default: the unit file beside the runs their sidecars name, "
+                         "else the built-in preset they name, else default)")
     al.add_argument("-o", "--output", default="allan", metavar="DIR",
                     help="output folder (default: allan)")
     al.add_argument("--settle-s", type=float, default=0.0,

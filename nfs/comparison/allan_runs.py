@@ -50,6 +50,7 @@ import numpy as np
 from ..docfields import document_fields
 from ..errors import InputError
 from ..instrument import Instrument, load_instrument, preset_names
+from ..io.unit_files import UNIT_SIDECAR_KEY
 from ..io.records import from_record, record, to_record
 from ..noise.allan import AllanResult
 from ..noise.pooled import (MIN_RECORD_SAMPLES, NoiseFitIntervals, PooledAllan,
@@ -240,8 +241,10 @@ def stated_instrument(runs: Sequence[Run], model: Instrument | str | None = None
     runs : sequence of Run
         The runs (their sidecars' ``instrument``).
     model : Instrument or str, optional
-        The model (an instrument, a preset name or a TOML file); default: the built-in
-        preset the runs' sidecars name, else the default instrument.
+        The model (an instrument, a preset name or a TOML file); default: the unit file
+        beside the runs that every run's sidecar names (``unit_file``: the unit a simulation
+        drew, :mod:`nfs.io.unit_files`), else the built-in preset the runs' sidecars name,
+        else the default instrument.
 
     Returns
     -------
@@ -258,6 +261,13 @@ def stated_instrument(runs: Sequence[Run], model: Instrument | str | None = None
     if model is not None:
         inst = load_instrument(model)
         return inst, f"the model {model} ('{inst.name}')"
+    units = {(r.path.parent / str(r.meta.extra[UNIT_SIDECAR_KEY])) if r.path is not None
+             else None for r in runs if r.meta.extra.get(UNIT_SIDECAR_KEY)}
+    if len(units) == 1 and len(runs) and all(r.meta.extra.get(UNIT_SIDECAR_KEY) for r in runs):
+        unit = next(iter(units))
+        if unit is not None and unit.is_file():
+            return load_instrument(unit), (f"the unit that made the runs, {unit.name} beside "
+                                           "them (as its simulation drew it)")
     named = sorted({r.meta.instrument for r in runs if r.meta.instrument is not None})
     presets = [n for n in named if n in preset_names()]
     if len(presets) > 1:

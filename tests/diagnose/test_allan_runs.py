@@ -153,6 +153,22 @@ def test_stated_values_come_from_the_model_the_sidecar_or_the_default(runs):
         stated_instrument([runs[0], _with_meta(runs[0], instrument="lumped")])
 
 
+def test_stated_values_come_from_the_drawn_unit_beside_the_runs(tmp_path, runs):
+    # Oracle: a unit file every sidecar names, beside the runs, is the instrument stated
+    # (what nfs simulate writes: the unit as its variability drew it), loaded as written.
+    lumped = dataclasses.replace(load_instrument("lumped"), name="lumped_unit_00")
+    (tmp_path / "unit_00.toml").write_text(lumped.to_toml())
+    beside = [dataclasses.replace(_with_meta(r, extra={"unit_file": "unit_00.toml"}),
+                                  path=tmp_path / "r.csv") for r in runs]
+    inst, src = stated_instrument(beside)
+    assert inst.to_toml() == lumped.to_toml() and "unit_00.toml beside them" in src
+    # a run that names none, or a file that is not there: the sidecar's preset as before
+    inst, src = stated_instrument(beside[:1] + runs[1:] if len(runs) > 1 else runs)
+    assert "unit_00.toml" not in src
+    (tmp_path / "unit_00.toml").unlink()
+    assert "unit_00.toml" not in stated_instrument(beside)[1]
+
+
 def test_cli_writes_the_table_json_and_figure(tmp_path, cli, runs):
     # Oracle: exit 0, the table on stdout, allan.json readable by AllanReport.from_dict,
     # allan.png, and the folder's manifest.
