@@ -403,6 +403,15 @@ _TABLE: list[Range] = [
        "a polarisation ripple's temperature period is", "Kintner (1981)", low_open=True),
     _R("effects.polarization_ripple.phi", "rad", (-100, 100), (-2 * math.pi, 2 * math.pi),
        "a phase is", "one turn"),
+    # heat released inside a fibre coil: the winding is passive (absorbed light, microwatts);
+    # what can be there is a heater wound in or bonded on, or heat reaching a layer through
+    # the spool's hub or the outer face's mount, a fraction of a watt of the electronics' few
+    _R("effects.heat_source:coil*.power", "W", _POWER_HARD, (0, 0.5),
+       "heat inside a fibre coil (a heater, or a hub or outer-face path; the winding itself "
+       "is passive) is", f"{_PHYS} 2: a coil dissipates 0-0.5 W", (_m("W"),), off=0.0),
+    _R("effects.heat_source:spool.power", "W", _POWER_HARD, (0, 1),
+       "heat reaching a coil's spool (through its hub from the base) is",
+       f"{_PHYS} 2: the spool is passive", (_m("W"),), off=0.0),
     _R("effects.heat_source.power", "W", _POWER_HARD, (0, 20), "an extra heat source gives",
        f"{_PHYS} 2", (_m("W"),), off=0.0),
     _R("effects.motor_heat.power", "W", (0, 100), (0, 10),
@@ -620,7 +629,8 @@ def find(key: str) -> Range | None:
     """The range of the canonical key path ``key`` (module docstring), or None.
 
     A link ``thermal.links.<a>-<b>.<x>`` is looked up in both orders; an effect label
-    ``name:target`` as ``name``.
+    ``name:target`` as itself (a row for the effect at some targets only: heat inside a
+    coil), then as ``name``.
     """
     candidates = [key]
     m = re.fullmatch(r"thermal\.links\.([^.]+)-([^.]+)\.(.+)", key)
@@ -628,7 +638,8 @@ def find(key: str) -> Range | None:
         candidates.append(f"thermal.links.{m.group(2)}-{m.group(1)}.{m.group(3)}")
     m = re.fullmatch(r"effects\.([^.:]+):[^.]*\.(.+)", key)
     if m:
-        candidates = [f"effects.{m.group(1)}.{m.group(2)}"]
+        # the effect at its target first (heat inside a coil), then the effect anywhere
+        candidates = [key, f"effects.{m.group(1)}.{m.group(2)}"]
     for r in RANGES:
         if any(fnmatch.fnmatchcase(c, r.key) for c in candidates):
             return r

@@ -94,6 +94,12 @@ def points_to(path: str, side: str) -> str:
         return "an accelerometer beyond its datasheet: check its mounting and axes"
     if path.startswith("gyro."):
         return "a gyro beyond its class: check the data's units and the gyro's calibration"
+    if path.startswith("effects.heat_source:") and leaf == "power" and side == "above":
+        node = path[len("effects.heat_source:"):].rsplit(".", 1)[0]
+        if _is_coil_node(node):
+            return ("more heat than a passive winding can release: a heater in the coil, "
+                    f"or heat reaching {node} through a hub or outer-face path the model "
+                    "lacks (a link, not a source)")
     if path.startswith("effects."):
         label = path[len("effects."):].rsplit(".", 1)[0]
         if side == "below":
@@ -106,7 +112,7 @@ def points_to(path: str, side: str) -> str:
 def departure_line(path: str, value: float, stderr: float = math.nan) -> str | None:
     """One line for a fitted ``value`` of ``path`` beyond its typical range, or None when
     it lies inside (or the table has no row, or the value switches the term off)."""
-    row = ranges.find(canonical_key(path))
+    row = ranges.find(path)
     if row is None or not row.unusual(value):
         return None
     lo, hi = row.typical
@@ -187,6 +193,12 @@ def bound_advice(path: str, value: float, bounds: tuple[float, float]) -> str:
     if leaf.startswith("tilt_"):
         return ("the tilt leaves the +-1 deg box: the table is not levelled, or the "
                 "accelerometer axes are not those of the model (sign, misalignment)")
+    if path.startswith("effects.heat_source:") and leaf == "power" and side == "above":
+        node = path[len("effects.heat_source:"):].rsplit(".", 1)[0]
+        if _is_coil_node(node):
+            return ("more heat than a passive winding can release: a heater in the coil, "
+                    f"or heat reaching {node} through a hub or outer-face path the model "
+                    "lacks (a link, not a source)")
     if path.startswith("effects."):
         label = path[len("effects."):].rsplit(".", 1)[0]
         if leaf in ("c_h", "c_c"):

@@ -50,6 +50,19 @@ def test_lines_name_the_side_the_range_and_the_structure():
     assert "heater" in points_to("thermal.nodes.coil_inner.power_w", "above")
 
 
+def test_heat_inside_a_coil_is_held_to_what_can_be_there():
+    # the table of ranges: a passive winding releases 0-0.5 W (a heater or a hub path), the
+    # spool's hub up to 1 W, a heat source elsewhere up to 20 W
+    assert ranges.find("effects.heat_source:coil_3.power").typical == (0, 0.5)
+    assert ranges.find("effects.heat_source:coil_outer.power").typical == (0, 0.5)
+    assert ranges.find("effects.heat_source:spool.power").typical == (0, 1)
+    assert ranges.find("effects.heat_source:board.power").typical == (0, 20)
+    line = departure_line("effects.heat_source:coil_3.power", 2.0, 0.3)
+    assert "above the typical 0-0.5 W" in line and "heater" in line and "hub" in line
+    assert departure_line("effects.heat_source:board.power", 2.0, 0.3) is None
+    assert departure_line("effects.heat_source:coil_3.power", 0.3, 0.1) is None
+
+
 @pytest.mark.parametrize("path, value", [
     ("thermal.nodes.housing.capacity_j_per_k", 3500.0),
     ("thermal.nodes.housing.capacity_j_per_k", 0.5),
