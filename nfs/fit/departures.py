@@ -61,12 +61,12 @@ def points_to(path: str, side: str) -> str:
                     f"mass (the housing) or a node between {node} and its heat is missing")
         if leaf == "power_w":
             if side == "below":
-                return (f"heat leaves {node} by a path the model lacks (a link to the housing "
-                        "or the chamber), or its thermometer sits elsewhere")
+                return (f"heat leaves {node} by a heat path the model lacks (a link to the "
+                        "housing or the chamber), or its thermometer sits elsewhere")
             if coil:
                 return ("heat inside a passive coil: a heater, or heat reaching a coil face "
                         "through a hub or outer-face path the model lacks")
-            return f"a heat source near {node} the model lacks (a heater, a neighbour)"
+            return f"a heat source is missing near {node} (a heater, a neighbour)"
     if path.startswith("thermal.links."):
         link = ".".join(parts[2:-1])
         if side == "below":
@@ -94,6 +94,9 @@ def points_to(path: str, side: str) -> str:
         return "an accelerometer beyond its datasheet: check its mounting and axes"
     if path.startswith("gyro."):
         return "a gyro beyond its class: check the data's units and the gyro's calibration"
+    if path.startswith("effects.tec_power") and leaf in ("c_h", "c_c"):
+        return ("the source's extra power does not follow the modelled TEC law (another set "
+                "point, or another law)")
     if path.startswith("effects.heat_source:") and leaf == "power" and side == "above":
         node = path[len("effects.heat_source:"):].rsplit(".", 1)[0]
         if _is_coil_node(node):
@@ -144,69 +147,14 @@ def departures(params: Mapping[str, float],
 def _side(value: float, bounds: tuple[float, float]) -> str:
     lo, hi = bounds
     if not math.isfinite(hi) or abs(value - lo) <= abs(hi - value):
-        return "low"
-    return "high"
+        return "below"
+    return "above"
 
 
 def bound_advice(path: str, value: float, bounds: tuple[float, float]) -> str:
-    """One sentence: what the parameter ``path`` at ``value`` on ``bounds`` suggests to try."""
+    """One sentence: what the parameter ``path`` at ``value`` on its box ``bounds`` suggests
+    to try (the side of the box it presses on, and :func:`points_to` of that side)."""
     side = _side(value, bounds)
-    parts = path.split(".")
-    leaf = parts[-1]
-    if path.startswith("thermal.nodes."):
-        node = ".".join(parts[2:-1])
-        if leaf == "power_w":
-            if side == "low":
-                return (f"the {node} power wants to be < 0: the model lacks a heat path (e.g. a "
-                        f"link from {node} to the coil or the housing), or the thermometer that "
-                        f"sees {node} sits elsewhere (check its node weights)")
-            return (f"the {node} power wants more than 10x the preset: a heat source is missing "
-                    f"near {node}, or {node}'s link to the chamber is too strong")
-        if side == "low":
-            return (f"the {node} capacity wants to vanish: the thermometer sees a faster "
-                    f"response than {node} can give; it may sit on another node (electronics), "
-                    f"its lag may be too long, or {node} lacks a direct link to its heat source")
-        return (f"the {node} capacity wants more than its box allows (10x the preset, or a decade "
-                f"above what such a node holds): the thermometer sees a "
-                f"larger mass (weights toward the housing), or a node is missing between "
-                f"{node} and the heat")
-    if path.startswith("thermal.links."):
-        link = ".".join(parts[2:-1])
-        if side == "low":
-            return (f"the link {link} wants to vanish: the heat takes another path between "
-                    "these nodes (add the node or link it passes through)")
-        return (f"the link {link} wants to be stronger than its box allows (10x the preset, or a "
-                "decade above what such a link conducts): the two ends behave as one node "
-                "(merge them), or a second path between them is missing")
-    if path.startswith("thermometers."):
-        name = parts[1]
-        if leaf == "lag_s":
-            if side == "low":
-                return (f"the {name} thermometer wants no lag: it leads its node; it sits on "
-                        "a faster node (e.g. the electronics) or nearer the heat")
-            return (f"the {name} thermometer lags far more than a sensor's 10-60 s: it sees a "
-                    "larger mass than its node (weights toward another node, or a missing "
-                    "node between)")
-        if leaf == "offset_c":
-            return (f"the {name} offset exceeds the box: the runs were not soaked at T0, a "
-                    "header's T0 is wrong, or the thermometer sits on another node")
-    if leaf.startswith("tilt_"):
-        return ("the tilt leaves the +-1 deg box: the table is not levelled, or the "
-                "accelerometer axes are not those of the model (sign, misalignment)")
-    if path.startswith("effects.heat_source:") and leaf == "power" and side == "above":
-        node = path[len("effects.heat_source:"):].rsplit(".", 1)[0]
-        if _is_coil_node(node):
-            return ("more heat than a passive winding can release: a heater in the coil, "
-                    f"or heat reaching {node} through a hub or outer-face path the model "
-                    "lacks (a link, not a source)")
-    if path.startswith("effects."):
-        label = path[len("effects."):].rsplit(".", 1)[0]
-        if leaf in ("c_h", "c_c"):
-            return (f"the {label} slope {leaf} wants to be "
-                    + ("negative" if side == "low" else "10x the preset")
-                    + ": the source's extra power does not follow the modelled TEC law "
-                      "(another set point, or another law)")
-        return (f"{path} wants to leave its box: {label} is mimicking an effect the model "
-                "lacks (nfs diagnose ranks the candidates)")
-    return (f"{path} wants to leave its box: the data push it further; the model lacks an "
-            "effect or has the wrong structure")
+    lo, hi = bounds
+    which = f"its floor {lo:g}" if side == "below" else f"its ceiling {hi:g}"
+    return f"{path} presses on {which}: {points_to(path, side)}"

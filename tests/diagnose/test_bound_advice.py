@@ -16,8 +16,10 @@ def test_messages_by_kind():
     assert "heat path" in bound_advice("thermal.nodes.board.power_w", 0.0, (0.0, 70.0))
     assert "heat source is missing" in bound_advice("thermal.nodes.board.power_w", 70.0,
                                                     (0.0, 70.0))
-    assert "capacity wants to vanish" in bound_advice(
-        "thermal.nodes.coil_outer.capacity_j_per_k", 9.5, (9.5, 950.0))
+    low = bound_advice("thermal.nodes.coil_outer.capacity_j_per_k", 9.5, (9.5, 950.0))
+    assert "presses on its floor 9.5" in low and "layers" in low
+    assert "presses on its ceiling 950" in bound_advice(
+        "thermal.nodes.coil_outer.capacity_j_per_k", 950.0, (9.5, 950.0))
     assert "larger mass" in bound_advice("thermometers.acc_x.lag_s", 300.0, (0.0, 300.0))
     assert "not soaked" in bound_advice("thermometers.fog.offset_c", 2.0, (-2.0, 2.0))
     assert "levelled" in bound_advice("turntable.tilt_east_deg", -1.0, (-1.0, 1.0))
