@@ -177,7 +177,8 @@ def main(argv=None) -> None:
             delayed(work_set)(c, s, args.rounds, args.take_ties, args.decide)
             for c, s in plan):
         rows.append(r)
-        hit = f" (round {r['hit_round']})" if r["hit_round"] else ""
+        hit = (f" (round {r['hit_round']})" if r["hit_round"] else
+               f" ({r['absorbed']})" if r.get("absorbed") else "")
         print(f"{r['case']:26s} {r['seed']:4d}  {r['outcome']:11s}{hit} "
               + " | ".join(r["rounds"])
               + f"  [{r['world']}; {len(r['departures'])} out; {r['t_first_s']:.0f} s; "
@@ -196,8 +197,11 @@ def main(argv=None) -> None:
         else:
             worst_case = min(worst_case, n["hit"] / len(sub))
             rounds = Counter(r["hit_round"] for r in sub if r["hit_round"])
-            print(f"{case:26s} hits {n['hit']}/{len(sub)} (by round "
-                  + ", ".join(f"{k}: {v}" for k, v in sorted(rounds.items())) + f"), honest "
+            absorbed = sum(1 for r in sub if r["outcome"] == "hit" and not r["hit_round"])
+            by = ", ".join([f"round {k}: {v}" for k, v in sorted(rounds.items())]
+                           + ([f"taken up by a free parameter: {absorbed}"] if absorbed else []))
+            print(f"{case:26s} hits {n['hit']}/{len(sub)}" + (f" ({by})" if by else "")
+                  + f", honest "
                   f"ties {n['tie']}/{len(sub)}, misses {n['miss']}/{len(sub)}, extra adds "
                   f"{sum(len(r['extra']) for r in sub)}")
     hits = [r for r in rows if r["case"] not in NULL_CASES]
