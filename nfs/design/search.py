@@ -231,8 +231,9 @@ def _neighbours(e: Experiment, space: Space, t_range: tuple[float, float],
         out.append(replace(e, event_s=ev))
     if e.event == "power_off":
         for f in (0.5, 1.5):
-            if e.cycles == 1 or e.power_off_s * f < e.every_s:
-                out.append(replace(e, power_off_s=e.power_off_s * f))
+            if e.cycles == 1 or max(e.off_times_s()) * f < e.every_s:
+                second = None if e.power_off_2_s is None else e.power_off_2_s * f
+                out.append(replace(e, power_off_s=e.power_off_s * f, power_off_2_s=second))
     for f in (0.5, 2.0):              # the turntable's dwell (the schedule's own first)
         # in whole steps of the prediction's clock, so that it stays coarse
         dwell = PREDICT_STEP_S * round((base_dwell_s if e.dwell_s is None else e.dwell_s)

@@ -6,7 +6,7 @@ the turntable's schedule, with at most one *event* at ``event_s`` after power-on
 
 - ``power_off_s = S``: a power cycle, the unit off for S seconds while the chamber holds,
   then on again (a warm restart, :mod:`nfs.power`), ``cycles`` times, a cycle starting
-  every ``every_s``;
+  every ``every_s``; with ``power_off_2_s = S2``, two cycles whose second is off for S2;
 - ``ramp_to_c = X`` at ``rate_c_per_min``: the chamber ramps to X and holds there;
 
 and recording for ``duration_s`` from power-on (the off time included).  Its cost is the
@@ -59,6 +59,11 @@ class Experiment:
     """Number of power cycles."""
     every_s: float = 1200.0
     """Time from one power cycle's switch-off to the next's [s]."""
+    power_off_2_s: float | None = None
+    """Off time of the second of two power cycles [s] (None: every cycle ``power_off_s``).
+    Two off times in one run tell stored heat from a reset: a turn-on transient restarts
+    whole after any off time, heat stored in the coil restarts by 1 - exp(-t_off / tau)
+    (tau its radial time constant, 10-120 s), so the ratio of the two restarts differs."""
     ramp_to_c: float | None = None
     """Temperature a ramp ends at [degC]."""
     rate_c_per_min: float = 1.0
@@ -91,12 +96,17 @@ class Experiment:
             raise NfsError(f"experiment: dwell_s must be > 0, got {self.dwell_s:g}")
         if self.event == "power_off" and (isinstance(self.cycles, bool) or self.cycles < 1):
             raise NfsError(f"experiment: cycles must be >= 1, got {self.cycles!r}")
+        if self.power_off_2_s is not None and not (
+                self.event == "power_off" and self.cycles == 2 and self.power_off_2_s > 0
+                and self.every_s > self.power_off_2_s):
+            raise NfsError("experiment: power_off_2_s is the second of two power cycles: "
+                           "event power_off, cycles = 2, 0 < power_off_2_s < every_s")
 
     @property
     def event_end_s(self) -> float:
         """When the event ends, from power-on [s] (0 without one)."""
         if self.event == "power_off":
-            return self.event_s + (self.cycles - 1) * self.every_s + self.power_off_s
+            return self.event_s + (self.cycles - 1) * self.every_s + self.off_times_s()[-1]
         if self.event == "ramp":
             return (self.event_s + abs(float(self.ramp_to_c) - self.start_temperature_c)
                     / self.rate_c_per_min * 60.0)
@@ -113,10 +123,11 @@ class Experiment:
             return [{"hold_s": float(self.duration_s)}]
         steps: list[dict[str, float]] = [{"hold_s": float(self.event_s)}]
         if self.event == "power_off":
-            for k in range(self.cycles):   # written out: a top-level repeat would make
+            offs = self.off_times_s()
+            for k, off in enumerate(offs):  # written out: a top-level repeat would make
                 if k:                          # the program's "cycles" (nfs.chamber)
-                    steps.append({"hold_s": float(self.every_s - self.power_off_s)})
-                steps.append({"power_off_s": float(self.power_off_s)})
+                    steps.append({"hold_s": float(self.every_s - offs[k - 1])})
+                steps.append({"power_off_s": float(off)})
             used = self.event_end_s
         else:
             steps.append({"ramp_to_c": float(self.ramp_to_c),
@@ -127,6 +138,13 @@ class Experiment:
         if rest > 0:
             steps.append({"hold_s": float(rest)})
         return steps
+
+    def off_times_s(self) -> tuple[float, ...]:
+        """The off time of each power cycle, in order [s]."""
+        offs = [float(self.power_off_s)] * self.cycles
+        if self.power_off_2_s is not None:
+            offs[1] = float(self.power_off_2_s)
+        return tuple(offs)
 
     def off_spans_s(self) -> tuple[tuple[float, float], ...]:
         """(switched off, switched on again) of every power cycle, from power-on [s], read
@@ -140,8 +158,11 @@ class Experiment:
                 f"{self.duration_s / 3600.0:.3g} h"
                 + ("" if self.dwell_s is None else f" with dwells of {self.dwell_s:g} s"))
         if self.event == "power_off":
-            off = (f"{self.power_off_s / 60.0:.3g} min" if self.power_off_s >= 60.0
-                   else f"{self.power_off_s:.0f} s")
+            off = _off_words(self.power_off_s)
+            if self.power_off_2_s is not None:
+                return (head + f"; at {self.event_s / 60.0:.0f} min switch the unit off for "
+                        f"{off}, then on again; {self.every_s / 60.0:.0f} min later off for "
+                        f"{_off_words(self.power_off_2_s)}, then on again (chamber holding)")
             if self.cycles > 1:
                 return (head + f"; from {self.event_s / 60.0:.0f} min, {self.cycles} power "
                         f"cycles {self.every_s / 60.0:.0f} min apart: the unit off for {off}, "
@@ -183,6 +204,8 @@ class Experiment:
         if self.event == "power_off":
             out.update(power_off_s=self.power_off_s, cycles=self.cycles,
                        every_s=self.every_s)
+            if self.power_off_2_s is not None:
+                out.update(power_off_2_s=self.power_off_2_s)
         if self.event == "ramp":
             out.update(ramp_to_c=self.ramp_to_c, rate_c_per_min=self.rate_c_per_min)
         if self.dwell_s is not None:
@@ -196,8 +219,12 @@ class Space:
 
     start_temperatures_c: tuple[float, ...]
     """T0 values."""
-    power_off_s: tuple[float, ...] = (60.0, 300.0, 1800.0)
-    """Off times of the power cycles tried [s]."""
+    power_off_s: tuple[float, ...] = (10.0, 30.0, 60.0, 120.0, 300.0, 1800.0)
+    """Off times of the power cycles tried [s]: around the wound coil's radial time
+    constants (10-120 s: after a short off time stored heat restarts in part, a reset
+    restarts whole), and long enough for the unit to cool (5 and 30 min)."""
+    off_pairs_s: tuple[tuple[float, float], ...] = ((20.0, 120.0),)
+    """Two power cycles of different off times in one run [s] (the first, the second)."""
     cycles: tuple[int, ...] = (1, 4)
     """Numbers of power cycles tried (a cycle every :attr:`every_s`)."""
     every_s: float = 1200.0
@@ -248,6 +275,11 @@ class Space:
                     out.append(Experiment(t0, longest, "power_off", self.event_s, off,
                                           cycles=n, every_s=self.every_s,
                                           soak_h=self.soak_h))
+            for first, second in self.off_pairs_s:
+                if max(first, second) < self.every_s:
+                    out.append(Experiment(t0, longest, "power_off", self.event_s, first,
+                                          cycles=2, every_s=self.every_s,
+                                          power_off_2_s=second, soak_h=self.soak_h))
             for dk in self.ramps_k:
                 to = float(np.clip(t0 + dk, lo, hi))
                 if to != t0:
@@ -259,11 +291,16 @@ class Space:
         return [e for e in out if e.event_end_s < longest and self.durations_s(e).size]
 
 
+def _off_words(off_s: float) -> str:
+    """An off time in words (minutes from one minute up)."""
+    return f"{off_s / 60.0:.3g} min" if off_s >= 60.0 else f"{off_s:.0f} s"
+
+
 def default_space(runs: Sequence[Run], *, soak_h: float = SOAK_H) -> Space:
     """The default grid for ``runs``: T0 at the coldest, the middle and the hottest start
-    temperature the runs took (the rivals are fitted there), one or four power cycles of
-    1, 5 or 30 min off (20 min apart) and chamber ramps of +-20 K at 1 K/min, one hour after power-on, runs of up to
-    4 h in steps of 10 min."""
+    temperature the runs took (the rivals are fitted there); one hour after power-on one or
+    four power cycles of 10 s to 30 min off (20 min apart), two cycles of 20 s and 2 min
+    off, or a chamber ramp of +-20 K at 1 K/min; runs of up to 4 h in steps of 10 min."""
     t0s = sorted({float(r.meta.start_temperature_c) for r in runs})
     if not t0s:
         raise NfsError("a design needs the runs already taken (none given)")

@@ -193,20 +193,23 @@ def test_durations_other_step():
 
 
 def test_default_grid_count():
-    """Per T0: the hold, power cycles of 60, 300, 1800 s times 1 or 4 cycles (1800 s x 4
-    skipped: the off time is not shorter than every_s = 1200 s), ramps of -20 and +20 K."""
+    """Per T0: the hold, power cycles of 10, 30, 60, 120, 300, 1800 s times 1 or 4 cycles
+    (1800 s x 4 skipped: the off time is not shorter than every_s = 1200 s), two cycles of
+    20 s and 2 min off, ramps of -20 and +20 K."""
     sp = Space(start_temperatures_c=(-20.0, 20.0, 60.0))
     ex = sp.experiments()
     n_power = sum(1 for off in sp.power_off_s for n in sp.cycles
                   if not (n > 1 and off >= sp.every_s))
-    assert n_power == 5
-    assert len(ex) == 3 * (1 + n_power + len(sp.ramps_k)) == 24
+    assert n_power == 11 and sp.off_pairs_s == ((20.0, 120.0),)
+    assert len(ex) == 3 * (1 + n_power + 1 + len(sp.ramps_k)) == 45
     assert all(e.duration_s == sp.max_duration_s for e in ex)
     assert all(e.event_end_s < sp.max_duration_s for e in ex)
     assert sorted({e.start_temperature_c for e in ex}) == [-20.0, 20.0, 60.0]
     kinds = [e.event for e in ex]
-    assert kinds.count("none") == 3 and kinds.count("power_off") == 15
+    assert kinds.count("none") == 3 and kinds.count("power_off") == 36
     assert kinds.count("ramp") == 6
+    pairs = [e for e in ex if e.power_off_2_s is not None]
+    assert len(pairs) == 3 and all(e.off_times_s() == (20.0, 120.0) for e in pairs)
     assert all(e.soak_h == sp.soak_h for e in ex)
     for e in ex:
         _prog(e)                                        # every one is a valid program
@@ -227,10 +230,11 @@ def test_grid_clips_ramps_to_the_chamber_range():
 def test_grid_drops_power_cycles_ending_after_the_longest_run():
     sp = Space(start_temperatures_c=(20.0,), max_duration_s=6000.0, ramps_k=())
     ex = sp.experiments()
-    # 60 s x 1 ends at 3660, 300 s x 1 at 3900, 1800 s x 1 at 5400: kept;
-    # 60 s x 4 at 7260, 300 s x 4 at 7500: dropped
+    # one cycle of S s ends at 3600 + S (at most 5400: kept); 4 cycles end at
+    # 3600 + 3 x 1200 + S > 7200 and two (20 s, 120 s) at 3600 + 1200 + 120 = 4920: kept
     offs = sorted((e.power_off_s, e.cycles) for e in ex if e.event == "power_off")
-    assert offs == [(60.0, 1), (300.0, 1), (1800.0, 1)]
+    assert offs == [(10.0, 1), (20.0, 2), (30.0, 1), (60.0, 1), (120.0, 1), (300.0, 1),
+                    (1800.0, 1)]
     assert all(e.event_end_s < 6000.0 for e in ex)
 
 
@@ -275,7 +279,7 @@ def test_default_space_picks_coldest_middle_hottest():
     assert sp.min_duration_s == pytest.approx(2.0 * CYCLE_S)
     assert sp.soak_h == SOAK_H
     assert default_space(runs, soak_h=1.5).soak_h == 1.5
-    assert len(sp.experiments()) == 24
+    assert len(sp.experiments()) == 45
 
 
 def test_default_space_with_one_or_two_temperatures():
@@ -294,3 +298,20 @@ def test_base_conditions_from_the_first_run():
     assert c.start_temperature_c == 12.0 and c.latitude_deg == 30.0
     assert c.true_heading_deg == 40.0
     assert base_conditions([_run(12.0, fs=4.0)]).sample_rate_hz == 4.0
+
+
+def test_two_power_cycles_of_different_off_times():
+    # Oracle: the program and the off spans written out by hand
+    e = Experiment(0.0, 7200.0, "power_off", 900.0, 20.0, cycles=2, every_s=1200.0,
+                   power_off_2_s=120.0)
+    assert e.off_times_s() == (20.0, 120.0)
+    assert e.program() == [{"hold_s": 900.0}, {"power_off_s": 20.0}, {"hold_s": 1180.0},
+                           {"power_off_s": 120.0}, {"hold_s": 7200.0 - 2220.0}]
+    assert e.off_spans_s() == ((900.0, 920.0), (2100.0, 2220.0))
+    assert e.event_end_s == 2220.0
+    assert "off for 20 s, then on again; 20 min later off for 2 min" in e.describe()
+    for bad in ({"cycles": 1}, {"cycles": 3}, {"power_off_2_s": 1500.0},
+                {"power_off_2_s": 0.0}):
+        kw = {"cycles": 2, "every_s": 1200.0, "power_off_2_s": 120.0, **bad}
+        with pytest.raises(NfsError, match="power_off_2_s"):
+            Experiment(0.0, 7200.0, "power_off", 900.0, 20.0, **kw)
