@@ -27,7 +27,7 @@ import numpy as np
 
 from ..errors import NfsError
 from ..conditions import RunConditions
-from ..ranges import TEMPERATURE_RANGE_C
+from ..ranges import TEMPERATURE_RANGE_C, find
 from ..io.records import RecordError, encode, from_record
 from ..run import Run
 from ..rivals.noise_level import scaled
@@ -210,6 +210,11 @@ def _better(a: Trial, b: Trial | None) -> bool:
 MIN_DWELL_S, MAX_DWELL_S = 30.0, 600.0
 
 
+#: The shortest power cycle a refinement proposes [s]: the table of ranges' typical shortest
+#: (a unit whose supply drops for less is a glitch, not a warm restart).
+SHORTEST_OFF_S = find("chamber.program.power_off_s").typical[0]
+
+
 def _neighbours(e: Experiment, space: Space, t_range: tuple[float, float],
                 base_dwell_s: float) -> list[Experiment]:
     """Half a grid step each way along every continuous knob of ``e`` (module docstring),
@@ -231,6 +236,8 @@ def _neighbours(e: Experiment, space: Space, t_range: tuple[float, float],
         out.append(replace(e, event_s=ev))
     if e.event == "power_off":
         for f in (0.5, 1.5):
+            if min(e.off_times_s()) * f < SHORTEST_OFF_S:
+                continue
             if e.cycles == 1 or max(e.off_times_s()) * f < e.every_s:
                 second = None if e.power_off_2_s is None else e.power_off_2_s * f
                 out.append(replace(e, power_off_s=e.power_off_s * f, power_off_2_s=second))
