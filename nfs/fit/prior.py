@@ -26,9 +26,10 @@ running to a bound.  The row of parameter p with typical range [lo, hi]:
 
 Exceptions, each with its reason: a thermometer offset is centred on the soak anchor
 (:func:`nfs.fit.soak.anchor_offsets`); the coil's radii and height come from its drawing
-(5 % of the file's value, :data:`PRIOR_WIDTHS`); a parameter with no row in the table of
-ranges (an effect a user registered without one) falls back on :data:`PRIOR_WIDTHS` and
-:data:`EFFECT_PRIOR_WIDTHS`, centred on the start value.  A caller overrides any of them with
+(5 % of the file's value, :data:`PRIOR_WIDTHS`); an effect parameter with no row in the
+table of ranges (an effect a user registered without one) falls back on
+:data:`EFFECT_PRIOR_WIDTHS`, centred on the start value; any other path without a row gets
+no prior.  A caller overrides any of them with
 ``prior={pattern: width}`` (a number: an absolute width in the parameter's unit around the
 start value; a string ``"30%"``: relative to the start value) and scales them all with
 ``prior_scale``; ``prior_scale=inf`` or ``prior=None`` switches the prior off.
@@ -72,42 +73,12 @@ class PriorWidth:
         return self.width * abs(value) if value != 0.0 else self.zero_width
 
 
-#: Prior widths by parameter path pattern (first match wins), centred on the start value:
-#: the coil's drawing (radii and height), and the fallback of a parameter the table of ranges
-#: has no row for.  Positive physical quantities get relative widths: docs/physics.md gives
-#: each node's capacity, each conductance and each power as a range spanning a factor 2-3
-#: (est.), so 50 % of the preset is one sigma of that range.
+#: Priors centred on the file's value, by parameter path pattern: what a unit's drawing gives
+#: (a measured length, not a spread over units).  Every other built-in parameter has a row in
+#: the table of ranges (:func:`range_prior`).
 PRIOR_WIDTHS: dict[str, PriorWidth] = {
-    "thermal.nodes.*.capacity_j_per_k": PriorWidth(
-        0.5, True, 100.0, "docs/physics.md ranges span x2-2.5 (e.g. coil outer 40-100 J/K)"),
-    "thermal.nodes.*.power_w": PriorWidth(
-        0.5, True, 1.0, "docs/physics.md ranges span x2-2.5 (board 3-8 W, QFA 0.3-0.6 W)"),
-    "thermal.links.*.conductance_w_per_k": PriorWidth(
-        0.5, True, 0.1, "docs/physics.md ranges span x4-6 (components to housing 0.3-2 W/K); "
-                        "50 % keeps the preset's network shape"),
-    "coil.heat_capacity_j_per_m3_k": PriorWidth(
-        0.2, True, 3e5, "a potted winding's volumetric heat capacity: silica 1.6e6, acrylate "
-                        "and epoxy 1.7-2.2e6 J/(m^3 K)"),
-    "coil.conductivity_w_per_m_k": PriorWidth(
-        0.5, True, 0.1, "a potted winding conducts 0.2-0.5 W/(m K) across its layers: x2.5"),
-    "coil.*_contacts.*": PriorWidth(
-        0.5, True, 0.1, "a face's contacts, as the network's links"),
-    "coil.*": PriorWidth(0.05, True, 1e-3, "the coil's drawing: radii and height known"),
-    "thermometers.*.lag_s": PriorWidth(
-        0.5, True, 30.0, "docs/physics.md: tau 10-60 s"),
-    "thermometers.*.offset_c": PriorWidth(
-        1.0, False, 1.0, "wide: a thermometer's offset is anchored by the soak (every node at "
-                         "T0 at power-on), not by the preset"),
-    "thermometers.*": PriorWidth(1.0, True, 0.01, "noise figures: a factor 2 either way"),
-    "gyro.bias_dph": PriorWidth(1.0, False, 1.0, "wide: the constant bias is free to be "
-                                                 "anything the runs say [deg/h]"),
-    "gyro.scale_factor": PriorWidth(1e-3, False, 1e-3, "1000 ppm: far above a FOG's "
-                                                       "scale-factor error"),
-    "gyro.*": PriorWidth(1.0, True, 1e-3, "noise coefficients: a factor 2 either way"),
-    "accelerometers.bias_*": PriorWidth(0.01, False, 0.01, "wide: 10 mg, above a QFA's "
-                                                           "bias of a few mg [g]"),
-    "accelerometers.*": PriorWidth(1.0, True, 1.0, "noise figures: a factor 2 either way"),
-    "turntable.tilt_*": PriorWidth(1.0, False, 1.0, "wide: 1 deg, the whole fit box"),
+    "coil.*_radius_m": PriorWidth(0.05, True, 1e-3, "the coil's drawing: radii known"),
+    "coil.height_m": PriorWidth(0.05, True, 1e-3, "the coil's drawing: height known"),
 }
 
 #: Prior widths of effect parameters by the parameter's unit, for an effect parameter the
@@ -256,9 +227,8 @@ def _fallback_width(inst, path: str) -> PriorWidth:
     return _NO_PRIOR
 
 
-#: Parameters a unit's drawing gives (a measured length, not a spread over units): their prior
-#: stays on the file's value (:data:`PRIOR_WIDTHS`), not on the table of ranges.
-FROM_DRAWING = ("coil.*_radius_m", "coil.height_m")
+#: Parameters a unit's drawing gives: their prior stays on the file's value.
+FROM_DRAWING = tuple(PRIOR_WIDTHS)
 
 
 def range_prior(path: str, start: float) -> tuple[float, float, bool, str] | None:

@@ -257,3 +257,19 @@ def test_bad_input(default):
     run = simulate_run(default, cond).run
     with pytest.raises(NfsError, match="two start temperatures"):
         thermal_adequacy(default, [run, run])
+
+
+def test_a_channels_limit_allows_for_the_sampling_of_its_knots():
+    # Oracle: the closed form factor sqrt(chi2_{n,0.99} / n): 1.95x on 30 knots, within 1 % of
+    # the bare factor's 1.5x only past thousands; a ratio between the bare factor and the limit
+    # is adequate, one beyond the limit is not.
+    from scipy.stats import chi2
+    from nfs.fit.adequacy import ADEQUACY_QUANTILE, ChannelFit
+    few = ChannelFit("fog", "stable", 0.02, 1.64 * 0.021, 0.021, 30, 1.5)
+    assert few.limit == pytest.approx(1.5 * (chi2.ppf(ADEQUACY_QUANTILE, 30) / 30) ** 0.5)
+    assert few.limit == pytest.approx(1.95, abs=0.01)
+    assert few.ratio > 1.5 and few.adequate
+    assert not ChannelFit("fog", "stable", 0.02, 2.0 * 0.021, 0.021, 30, 1.5).adequate
+    many = ChannelFit("fog", "stable", 0.02, 1.6 * 0.021, 0.021, 3000, 1.5)
+    assert 1.5 < many.limit < 1.56 and not many.adequate
+    assert ChannelFit("fog", "stable", 0.0, 9.0, 0.021, 0, 1.5).adequate
