@@ -126,8 +126,7 @@ def work_set(case: str, seed: int, rounds: int, take_ties: bool, decide: bool) -
                     end = a
                     break
                 if hidden is not None and _names(take, hidden):
-                    row["hit_round"] = k
-                    chain.apply(take)
+                    row["hit_round"] = k        # named: applying it would add nothing here
                     break
                 row["extra"].append(take)
                 applied = chain.apply(take)
