@@ -88,4 +88,4 @@ class Run:
 def run_caveats(runs) -> list[str]:
     """Every caveat of *runs* (:attr:`Run.caveats`), each prefixed with its run's name, in
     the order given: the sentences an output made from the runs must state."""
-    return [f"run '{run.name}': {c}" for run in runs for c in getattr(run, "caveats", ())]
+    return [f"run '{run.name}': {c}" for run in runs for c in run.caveats]

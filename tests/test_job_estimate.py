@@ -14,6 +14,7 @@ import pytest
 
 import nfs
 from nfs.studies import job_estimate as je
+from nfs.sweep import estimate as sweep_estimate
 from nfs.studies.runs_folder import simulate_to_folder
 
 
@@ -78,16 +79,20 @@ def test_table_refuses_the_memory_of_its_runs(tmp_path, cli, scenario_text):
     assert not (tmp_path / "t").exists()
 
 
-def test_sweep_refuses_before_its_folder_is_made(tmp_path, cli, scenario_text):
+def test_sweep_refuses_before_its_folder_is_made(tmp_path, cli, scenario_text, monkeypatch):
     _scenario_file(tmp_path, scenario_text, duration_s=9000.0)
     sweep = tmp_path / "sw.toml"
     sweep.write_text('scenario = "s.toml"\nseeds = { count = 2000 }\n'
-                     "[axes]\nlatitude_deg = [" + ", ".join(f"{3.0 * k:g}" for k in range(20))
-                     + "]\n")
+                     "[axes]\nlatitude_deg = [0.0, 30.0, 60.0]\n")
+    # the machine's speed held fixed (10 us a sample simulated and north-found), so that the
+    # time alone decides on any machine: 12,000 runs of 9000 samples, 18 min on 1 worker,
+    # past the 10-min limit (measured here: 3.8 us a sample, 7 min, under it)
+    fixed = je.Calibration(samples=18000, simulate_s=8.0e-6, northfind_s=2.0e-6,
+                           csv_bytes=138.0, sidecar_bytes=600.0, held_bytes=0.0)
+    monkeypatch.setattr(sweep_estimate, "calibrate", lambda *a, **k: fixed)
     code, _, err = cli("sweep", sweep, "-o", tmp_path / "sw", "--jobs", "1")
-    # 80,000 runs: about 45 min on the 2-core machine, past the 10-min limit on one twice
-    # as fast (12,000 were 7 min: under the limit, the time alone decides)
-    assert code == 2 and "nfs sweep: 80000 runs" in err and "on 1 worker(s)" in err, err
+    assert code == 2 and "nfs sweep: 12000 runs" in err and "on 1 worker(s)" in err, err
+    assert "about 18 min" in err, err
     assert not (tmp_path / "sw").exists()
 
 

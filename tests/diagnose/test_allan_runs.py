@@ -162,9 +162,11 @@ def test_stated_values_come_from_the_drawn_unit_beside_the_runs(tmp_path, runs):
                                   path=tmp_path / "r.csv") for r in runs]
     inst, src = stated_instrument(beside)
     assert inst.to_toml() == lumped.to_toml() and "unit_00.toml beside them" in src
-    # a run that names none, or a file that is not there: the sidecar's preset as before
-    inst, src = stated_instrument(beside[:1] + runs[1:] if len(runs) > 1 else runs)
-    assert "unit_00.toml" not in src
+    # a run that names none beside one that does, or a file that is not there: the
+    # sidecar's preset as before
+    mixed = [beside[0], dataclasses.replace(runs[0], path=tmp_path / "s.csv")]
+    inst, src = stated_instrument(mixed)
+    assert "unit_00.toml" not in src and "default" in src
     (tmp_path / "unit_00.toml").unlink()
     assert "unit_00.toml" not in stated_instrument(beside)[1]
 
