@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import functools
 import tomllib
-from contextlib import nullcontext
 from dataclasses import dataclass, replace
 from importlib import resources
 from pathlib import Path
@@ -25,8 +24,8 @@ from .effects import CoilLayout, EffectInstance, check_geometry, make_effect
 from .effects.thermometer import THERMOMETERS
 from .errors import EffectError, ScenarioError, ThermalError
 from .io.tomlio import (check_keys, dumps_toml, load_toml, number, string, table)
-from .io.unit_files import check_values_as_declared, drawn_unit_entry, drawn_unit_note
-from .ranges import check, collected_warnings, deferred_warnings, warn_unusual
+from .io.unit_files import check_values_as_declared, drawn_unit_entry
+from .ranges import check, deferred_warnings, warn_unusual
 from .sensors import ThermometerModel
 
 __all__ = [
@@ -507,14 +506,18 @@ def check_heating(network: Network, file: Any, effects=()) -> None:
           key=f"thermal.nodes.{names[on[worst]]}", error=ScenarioError)
 
 
-def instrument_from_dict(d: dict[str, Any], file: Any = None) -> Instrument:
+def instrument_from_dict(d: dict[str, Any], file: Any = None, *,
+                         drawn: dict | None = None) -> Instrument:
     """Build an :class:`Instrument` from its TOML form, checking every key and every value
-    against its range (:mod:`nfs.ranges`: impossible values refused, unusual ones warned)."""
+    against its range (:mod:`nfs.ranges`: impossible values refused, unusual ones warned;
+    ``drawn``: the manifest's record of a drawn unit's file, whose unusual values are said
+    in one line, :func:`nfs.io.unit_files.check_values_as_declared`)."""
     with deferred_warnings():
-        return _instrument_from_dict(d, file)
+        return _instrument_from_dict(d, file, drawn)
 
 
-def _instrument_from_dict(d: dict[str, Any], file: Any) -> Instrument:
+def _instrument_from_dict(d: dict[str, Any], file: Any, drawn: dict | None = None
+                          ) -> Instrument:
     check_keys(d, _TOP_KEYS, "", file, required=("thermal", "gyro", "accelerometers",
                                                   "thermometers"))
     thermal_tbl = table(d, "thermal", "", file)
@@ -543,7 +546,7 @@ def _instrument_from_dict(d: dict[str, Any], file: Any) -> Instrument:
                       effects=effects, aux=aux, t_ref_c=number(d, "t_ref_c", "", file, T_REF_C),
                       description=string(d, "description", "", file, ""), coil=coil)
     check_effect_targets(inst, file)
-    check_values_as_declared(d, file)
+    check_values_as_declared(d, file, drawn)
     _check_winding(inst, file)
     check_heating(network, file, inst.effects)
     return inst
@@ -575,11 +578,7 @@ def load_instrument(name_or_path: str | Path, base: Path | None = None) -> Instr
         if base is not None and not path.is_absolute():
             path = base / path
     with deferred_warnings():
-        tree, entry = load_toml(path), drawn_unit_entry(path)
-        with collected_warnings() if entry is not None else nullcontext([]) as notes:
-            inst = instrument_from_dict(tree, file=path)
-        if notes:
-            warn_unusual(drawn_unit_note(tree, entry, len(notes)), file=path, once=str(path))
+        inst = instrument_from_dict(load_toml(path), file=path, drawn=drawn_unit_entry(path))
         return _own_name(inst, path)
 
 

@@ -53,7 +53,6 @@ from .errors import InputError
 
 __all__ = ["Range", "RANGES", "RangeWarning", "find", "check", "check_tree", "leaves",
            "warn", "warn_unusual", "one_line_warnings", "deferred_warnings",
-           "collected_warnings",
            "MAX_SAMPLES_PER_RUN", "TEMPERATURE_RANGE_C", "G_N_M_PER_S2", "KELVIN_OFFSET"]
 
 #: 0 degC in kelvin (the offset of a temperature written in K).
@@ -680,22 +679,6 @@ def deferred_warnings():
 
 
 @contextmanager
-def collected_warnings() -> Iterator[list[str]]:
-    """Collect the :class:`RangeWarning` messages of a block into the list it yields,
-    without showing them: the caller says them in its own words (one summary line of a
-    drawn unit's file, :func:`nfs.instrument.load_instrument`) with :func:`warn`, which an
-    enclosing :func:`deferred_warnings` holds as usual.  An error inside drops them."""
-    held: dict = {}
-    token = _PENDING.set(held)
-    out: list[str] = []
-    try:
-        yield out
-    finally:
-        _PENDING.reset(token)
-    out.extend(held.values())
-
-
-@contextmanager
 def one_line_warnings():
     """Show each :class:`RangeWarning` as one line ``nfs: warning: ...`` on stderr (the
     command line's form, beside its ``nfs: error: ...``); other warnings as Python shows
@@ -740,25 +723,28 @@ def _emit(message: str) -> None:
 
 
 def check(canonical: str, value: Any, *, file=None, key: str | None = None,
-          error: type[InputError] = InputError, quiet: bool = False, **where) -> None:
+          error: type[InputError] = InputError, quiet: bool = False, **where) -> bool:
     """Check one number against its range: raise ``error`` (naming ``file`` and ``key``, the
     key path as the user wrote it, default ``canonical``) when it is impossible or not
     finite, warn when it is unusual (unless ``quiet``: the caller warns in its own words).
     Values that are not numbers are left to the loaders' type checks; a key without a range
-    is only checked to be finite.  ``where``: ``column``, ``row`` of the error."""
+    is only checked to be finite.  ``where``: ``column``, ``row`` of the error.  Returns
+    whether the value is unusual."""
     if isinstance(value, bool) or not isinstance(value, (int, float)):
-        return
+        return False
     shown = canonical if key is None else key
     if not math.isfinite(value):
         raise error(f"must be a finite number, got {value!r}", file=file, key=shown, **where)
     r = find(canonical)
     if r is None:
-        return
+        return False
     if r.impossible(value):
         raise error(r.refusal(value), file=file, key=shown, **where)
-    if r.unusual(value) and not quiet:
+    unusual = r.unusual(value)
+    if unusual and not quiet:
         warn_unusual(r.warning(value), file=file, key=shown,
                      once=(canonical, repr(value)), **where)
+    return unusual
 
 
 def warn_unusual(message: str, *, file=None, key: str | None = None, once: Any = None,
@@ -817,15 +803,19 @@ def leaves(tree: Any, shown: str = "", canonical: str = "") -> Iterator[tuple[st
 
 def check_tree(tree: Any, *, file=None, error: type[InputError] = InputError,
                shown: str = "", canonical: str = "", skip: tuple[str, ...] = (),
-               quiet: tuple[str, ...] | bool = ()) -> None:
-    """:func:`check` every number of a parsed TOML tree.
+               quiet: tuple[str, ...] | bool = ()) -> list[str]:
+    """:func:`check` every number of a parsed TOML tree; the keys (as written) of the
+    unusual values ``quiet`` silenced, for the caller's own one line.
 
     ``shown``, ``canonical``: the paths of ``tree`` (``canonical="sweep"`` for a sweep file);
     ``skip``: canonical key patterns left to the caller; ``quiet``: patterns (or True for
     all) whose unusual values do not warn (values a caller checks in its own words, as a
     sweep its axes)."""
+    quieted = []
     for s, c, value in leaves(tree, shown, canonical):
         if any(fnmatch.fnmatchcase(c, p) for p in skip):
             continue
         q = quiet if isinstance(quiet, bool) else any(fnmatch.fnmatchcase(c, p) for p in quiet)
-        check(c, value, file=file, key=s, error=error, quiet=q)
+        if check(c, value, file=file, key=s, error=error, quiet=q) and q:
+            quieted.append(s)
+    return quieted

@@ -19,7 +19,7 @@ import os
 from pathlib import Path
 
 from ..errors import ScenarioError
-from ..ranges import check_tree, find, leaves, warn_unusual
+from ..ranges import check_tree, warn_unusual
 from .outdir import MANIFEST_NAME, read_manifest
 from .provenance import sha256_of_file
 from .tomlio import check_keys, table
@@ -85,15 +85,12 @@ def drawn_unit_entry(path: str | os.PathLike) -> dict | None:
     return entry if same else None
 
 
-def drawn_unit_note(tree: dict, entry: dict, n_unusual: int) -> str:
-    """The one line that stands for the ``n_unusual`` range warnings of a drawn unit's file
-    (its parsed TOML ``tree``, its manifest record ``entry``): how many values, which keys,
-    and why that is no slip."""
-    keys = [shown for shown, canonical, v in leaves(tree)
-            if isinstance(v, (int, float)) and not isinstance(v, bool)
-            and (r := find(canonical)) is not None and r.unusual(v)]
+def drawn_unit_note(keys: list[str], entry: dict) -> str:
+    """The one line that stands for the range warnings of a drawn unit's file: its unusual
+    values' ``keys`` (as :func:`nfs.ranges.check_tree` returns them) and its manifest record
+    ``entry``: how many values, which keys, and why that is no slip."""
     shown = ", ".join(keys[:4]) + (", ..." if len(keys) > 4 else "")
-    return (f"{n_unusual} value(s) outside their typical ranges ({shown}): unit "
+    return (f"{len(keys)} value(s) outside their typical ranges ({shown}): unit "
             f"{entry.get('unit')} of scenario '{entry.get('scenario')}' as its variability "
             f"drew it ({MANIFEST_NAME} beside it), a draw's tail, not a slip")
 
@@ -111,13 +108,18 @@ def fitted_departures(tree: dict, file=None) -> tuple[str, ...]:
     return tuple(keys)
 
 
-def check_values_as_declared(tree: dict, file=None) -> None:
+def check_values_as_declared(tree: dict, file=None, drawn: dict | None = None) -> None:
     """Check every value of an instrument file against its range
-    (:func:`nfs.ranges.check_tree`), the values a fitted model declares beyond their typical
-    range (:func:`fitted_departures`) warned in one line instead of one each."""
+    (:func:`nfs.ranges.check_tree`), the values its writer declared unusual said in one line
+    instead of one warning each: those a fitted model lists (:func:`fitted_departures`), or
+    every one of a drawn unit's file (``drawn``: its manifest record,
+    :func:`drawn_unit_entry`)."""
     fitted = fitted_departures(tree, file)
-    check_tree(tree, file=file, error=ScenarioError, skip=("fit.*",), quiet=fitted)
-    if fitted:
+    quieted = check_tree(tree, file=file, error=ScenarioError, skip=("fit.*",),
+                         quiet=True if drawn is not None else fitted)
+    if drawn is not None and quieted:
+        warn_unusual(drawn_unit_note(quieted, drawn), file=file, once=("drawn", str(file)))
+    elif fitted:
         warn_unusual(f"{len(fitted)} fitted values lie beyond their typical range, as the fit "
                      f"that wrote this file states in its header ({', '.join(fitted)})",
                      file=file, key="fit.departures", once=("fit.departures", str(file)))
