@@ -82,6 +82,13 @@ def _rows(src: SourceMap) -> tuple[list[str], list[list[str]], list[int], CutLin
             if len(row) < len(header):
                 short = (reader.line_num, len(row))
                 continue
+            if len(row) > len(header):
+                # more fields than names: a decimal comma read as the separator would shift
+                # every column after it
+                raise MeasurementError(
+                    f"row has {len(row)} fields, the header has {len(header)}; a decimal comma "
+                    f"with separator '{src.separator}'? (set {src.key}.decimal and "
+                    f"{src.key}.separator)", file=src.file, row=reader.line_num)
             rows.append(row)
             lines.append(reader.line_num)
     except csv.Error as exc:

@@ -283,6 +283,8 @@ BAD_SOURCES = [
     ("moving not a flag", "gyro.csv", 9, lambda s: ";".join(
         s.split(";")[:3] + ["2"] + s.split(";")[4:]),
      "gyro.csv, column 'Moving', row 9: must be 0 or 1"),
+    ("a field too many", "thermometers.csv", 5, lambda s: s + ",1",
+     "thermometers.csv, row 5: row has 5 fields, the header has 4; a decimal comma"),
 ]
 
 
