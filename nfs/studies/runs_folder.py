@@ -16,7 +16,6 @@ recorded.  Runs are seeded, so a resumed folder holds the same bytes as one writ
 from __future__ import annotations
 
 import dataclasses
-import warnings
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
@@ -29,7 +28,6 @@ from ..io.measurement import write_run
 from ..io.outdir import OutputFolder
 from ..io.provenance import scenario_provenance, sha256_of_text
 from ..io.unit_files import UNIT_SIDECAR_KEY, unit_entry, unit_file_name, unit_file_text
-from ..ranges import RangeWarning
 from ..scenario import Scenario
 
 __all__ = ["SimulatedFolder", "scenario_job", "check_runs_folder", "simulate_to_folder",
@@ -90,16 +88,12 @@ def unit_file_instrument(inst: Instrument, unit: int) -> Instrument:
 
 
 def _write_unit(scenario: Scenario, unit: int, inst: Instrument, folder: Path) -> Path:
-    """Write unit ``unit``'s file and check that it reads back to the same instrument."""
+    """Write unit ``unit``'s file (that it reads back to the same instrument, bit for bit,
+    is the tests' to check: tests/io/test_runs_folder.py)."""
     named = unit_file_instrument(inst, unit)
     text = unit_file_text(named.to_toml(), unit=unit, scenario=scenario.name,
                           drawn=scenario.variability.describe())
     path = folder / unit_file_name(unit)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", RangeWarning)   # a draw's tails: said on loading
-        back = Instrument.from_toml_text(text, path)
-    if back != named:                       # a bug of to_toml, not of the user's input
-        raise AssertionError(f"{path}: the unit's TOML does not read back to its values")
     atomic_write_text(path, text)
     return path
 
