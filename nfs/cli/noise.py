@@ -54,11 +54,10 @@ def cmd_allan(args) -> int:
     from ..report.allan_figure import write_allan
     folder = output_folder(args, "allan")
     runs = read_runs(args.data)
-    inst, source = stated_instrument(runs, args.model)     # a bad --model: before any work
+    stated = stated_instrument(runs, args.model)          # a bad --model: before any work
     if not args.quiet:
         print(f"Allan deviation of the dwells of {len(runs)} run(s)...", file=sys.stderr)
-    report = allan_of_runs(runs, model=inst, stated_source=source, settle_s=args.settle_s,
-                           seed=args.seed)
+    report = allan_of_runs(runs, stated=stated, settle_s=args.settle_s, seed=args.seed)
     prov = output_provenance(runs=runs, seeds={"bootstrap": args.seed})
     paths = write_allan(report, args.output, provenance=prov)
     finish(folder, args, {"runs": prov["runs"], "stated": report.stated_source,

@@ -307,8 +307,8 @@ def _stretches(values: np.ndarray) -> list[tuple[int, int]]:
     return list(zip(edges[::2], edges[1::2]))
 
 
-def allan_of_runs(runs: Sequence[Run], *, model: Instrument | str | None = None,
-                  stated_source: str | None = None, settle_s: float = 0.0, startup_s: float = STARTUP_S, level: float = 0.95,
+def allan_of_runs(runs: Sequence[Run], *, stated: tuple[Instrument, str] | None = None,
+                  settle_s: float = 0.0, startup_s: float = STARTUP_S, level: float = 0.95,
                   n_boot: int = 400, seed: int = 0) -> AllanReport:
     """The overlapping Allan deviation of every dwell's gyro at rest, N, B and K fitted with
     their intervals, and the values the instrument states (module docstring).
@@ -318,11 +318,10 @@ def allan_of_runs(runs: Sequence[Run], *, model: Instrument | str | None = None,
     runs : sequence of Run
         The runs (``time_s``, ``position_deg``, ``moving``, ``gyro_dph`` [deg/h]), at one
         sample rate.
-    model : Instrument or str, optional
-        Whose stated N, B, K to set beside the fit (:func:`stated_instrument`).
-    stated_source : str, optional
-        Where ``model`` comes from, in words, when it is an instrument
-        :func:`stated_instrument` already resolved (default: its own words).
+    stated : (Instrument, str), optional
+        The instrument whose stated N, B, K to set beside the fit and where it comes from,
+        in words, as :func:`stated_instrument` gives them (default:
+        ``stated_instrument(runs)``; a model file: ``stated_instrument(runs, "m.toml")``).
     settle_s : float
         Seconds dropped at the start of every dwell [s], as the north finder's ``settle_s``
         (default 0, the north finder's).
@@ -344,7 +343,7 @@ def allan_of_runs(runs: Sequence[Run], *, model: Instrument | str | None = None,
     ------
     InputError
         No runs, a missing column, runs at different sample rates, no dwell of 8 samples, or
-        the runs name different instruments and no model is given.
+        the runs name different instruments and ``stated`` is not given.
     """
     runs = list(runs)
     if not runs:
@@ -354,8 +353,7 @@ def allan_of_runs(runs: Sequence[Run], *, model: Instrument | str | None = None,
             if col not in r.columns:
                 raise InputError(f"run '{r.name}' has no column '{col}', which the Allan "
                                  "deviation of its dwells needs", file=r.path, column=col)
-    inst, source = stated_instrument(runs, model)
-    source = source if stated_source is None else stated_source
+    inst, source = stated_instrument(runs) if stated is None else stated
     fs = _sample_rate_hz(runs)
     records, owner, start, theta, limit = [], [], [], [], []
     left_out = 0
