@@ -25,7 +25,7 @@ from .free_set import default_free
 from .params import (ParameterError, default_bounds, expand_paths, get_param, list_params,
                      set_params)
 from .refine import Refinement, fit_unit, refine_structure
-from .structure import structural_alternatives
+from .alternatives import structural_alternatives
 
 __all__ = ["FitResult", "default_free", "fit_model", "write_fitted_model", "ParameterError",
            "default_bounds", "expand_paths", "get_param", "list_params", "set_params",

@@ -46,7 +46,8 @@ from ..run import Run
 from .alternative_score import (BEATS_ALPHA, CV_DROP, AlternativeScore, better_run_by_run,
                                 score_alternative)
 from .start_state import StartModel
-from .structure import StructuralAlternative, structural_alternatives
+from .alternatives import structural_alternatives
+from .structure import StructuralAlternative
 from .thermal_residual import DEFAULT_START
 from .thermometer_cv import (ADEQUACY_STAGES, STAGE_WORDS, ChordModel, ThermometerProblem,
                              chord_refit, sum_of_squares)

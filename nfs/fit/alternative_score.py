@@ -159,7 +159,8 @@ def score_alternative(prob: ThermometerProblem, model: ChordModel, alt: Structur
         u = res.x
     r_a = prob.resid(build(u))
     Ja = residual_jacobian(prob, build, u, r_a, tr.steps(u))
-    Z = [np.hstack([jm, ja]) for jm, ja in zip(model.J, Ja)]
+    keep = model.kept(alt.instrument).astype(float)   # columns of numbers the alternative has
+    Z = [np.hstack([jm * keep, ja]) for jm, ja in zip(model.J, Ja)]
     lo_m, hi_m = model.box()
     lo = np.concatenate([lo_m, tr.ulo - u])
     hi = np.concatenate([hi_m, tr.uhi - u])

@@ -20,7 +20,11 @@ candidate follows it.  So :func:`fit_unit` refines the structure before the drif
    fit; a change whose full check does not lower the held-out residual by
    :data:`~nfs.fit.alternative_score.CV_DROP` is dropped and the chain stops there);
 4. repeated on the new structure until every thermometer's held-out residual is within the
-   factor, no alternative pays, or :data:`MAX_STEPS` changes were made.
+   factor, no alternative pays, or :data:`MAX_STEPS` changes were made;
+5. a lumped coil is then tried wound in layers (:mod:`nfs.fit.wound_alternative`), by
+   :func:`fit_unit` whatever the thermometers' misfit, since the thermometers see the coil's
+   faces and the gyro its whole radial field: kept where the held-out thermometers are no
+   worse and the drift agrees (:func:`_drift_refuses`).
 
 The two stages of :func:`nfs.fit.calibration.fit_model` then run on the structure it ended
 with (the new numbers free beside the default set), so the drift is fitted and, later,
@@ -40,10 +44,13 @@ from ..io.records import record
 from ..run import Run
 from .adequacy import ThermalAdequacy, thermal_adequacy
 from .alternative_score import BEATS_ALPHA, CV_DROP, better_run_by_run
+from .alternatives import structural_alternatives
 from .calibration import check_fit_keywords, fit_model, one_blas_thread
 from .fit_result import FitResult
 from .free_set import default_free
 from .params import expand_paths
+from .params import get_param
+from .wound_alternative import WOUND_KIND, can_wind, wound_coil
 from .start_state import StartModel
 from .thermal_residual import DEFAULT_START
 from .thermometer_cv import STAGE_WORDS
@@ -64,6 +71,9 @@ class StructureStep:
 
     name: str
     """The alternative adopted (e.g. ``link coil_inner-electronics``)."""
+    kind: str
+    """Its kind (:attr:`nfs.fit.structure.StructuralAlternative.kind`: ``split``,
+    ``link``, ``wound`` ...)."""
     description: str
     """What it changes, in one sentence."""
     params: dict[str, float]
@@ -102,7 +112,7 @@ class Refinement:
         return "\n".join(lines + [f"structure: {self.stopped}"])
 
     def to_dict(self) -> dict[str, Any]:
-        return {"steps": [{"name": s.name, "description": s.description,
+        return {"steps": [{"name": s.name, "kind": s.kind, "description": s.description,
                            "params": dict(s.params), "cv_rms_before_k": s.cv_rms_before_k,
                            "cv_rms_after_k": s.cv_rms_after_k, "worst_before": s.worst_before,
                            "worst_after": s.worst_after} for s in self.steps],
@@ -111,14 +121,26 @@ class Refinement:
 
 def refine_structure(inst: Instrument, runs: Sequence[Run], *, factor: float = REFINE_FACTOR,
                      max_steps: int = MAX_STEPS, decimate_s: float = 10.0,
-                     start_state: StartModel | None = DEFAULT_START) -> Refinement:
+                     start_state: StartModel | None = DEFAULT_START,
+                     exclude_kinds: Sequence[str] = ()) -> Refinement:
     """Adopt, in a chain, the generic structural alternatives that pay (module docstring).
 
     ``inst`` should be thermally fitted to ``runs`` already (each check polishes it).
+    ``exclude_kinds``: kinds of alternative not to try (``wound``: a coil the drift has
+    refused wound).
     """
     model = inst
     steps: list[StructureStep] = []
-    ad = thermal_adequacy(model, runs, decimate_s=decimate_s, start_state=start_state)
+    excluded = tuple(exclude_kinds)
+
+    def alternatives(m: Instrument):
+        return [a for a in structural_alternatives(m) if a.kind not in excluded]
+
+    def check(m: Instrument) -> ThermalAdequacy:
+        return thermal_adequacy(m, runs, decimate_s=decimate_s, start_state=start_state,
+                                alternatives=alternatives)
+
+    ad = check(model)
     while True:
         worst = ad.worst.ratio
         if worst <= factor:
@@ -137,8 +159,7 @@ def refine_structure(inst: Instrument, runs: Sequence[Run], *, factor: float = R
                        f"{'none' if best is None else best.name}); {ad.worst.thermometer} "
                        f"{STAGE_WORDS[ad.worst.stage]} stays {worst:.1f}x its floor")
             break
-        new = thermal_adequacy(best.instrument, runs, decimate_s=decimate_s,
-                               start_state=start_state)
+        new = check(best.instrument)
         if not new.cv_rms_k < (1.0 - CV_DROP) * ad.cv_rms_k:
             # the screening linearised the held-out fit; checked in full, the change does
             # not pay (a stiff pair of links, say): keep the structure as it was
@@ -146,7 +167,7 @@ def refine_structure(inst: Instrument, runs: Sequence[Run], *, factor: float = R
                        f"(held-out {ad.cv_rms_k * 1e3:.1f} -> {new.cv_rms_k * 1e3:.1f} mK); "
                        f"{ad.worst.thermometer} {STAGE_WORDS[ad.worst.stage]} stays {worst:.1f}x its floor")
             break
-        steps.append(StructureStep(name=best.name, description=best.description,
+        steps.append(StructureStep(name=best.name, kind=best.kind, description=best.description,
                                    params=dict(best.params), cv_rms_before_k=ad.cv_rms_k,
                                    cv_rms_after_k=new.cv_rms_k, worst_before=worst,
                                    worst_after=new.worst.ratio))
@@ -176,17 +197,90 @@ def fit_unit(inst: Instrument, runs: Sequence[Run], *, refine: bool = True,
             or len({r.meta.start_temperature_c for r in runs}) < 2):
         return result
     start_state = fit_kwargs.get("start_state", DEFAULT_START)
-    ref = one_blas_thread(refine_structure)(   # as the fit (nfs.fit.calibration)
-        result.instrument, runs, factor=factor, max_steps=max_steps,
-        decimate_s=fit_kwargs.get("decimate_s", 10.0), start_state=start_state)
-    if not ref.steps:
+    refine = one_blas_thread(refine_structure)   # as the fit (nfs.fit.calibration)
+    decimate_s = fit_kwargs.get("decimate_s", 10.0)
+    ref = refine(result.instrument, runs, factor=factor, max_steps=max_steps,
+                 start_state=start_state, decimate_s=decimate_s,
+                 exclude_kinds=(WOUND_KIND,))
+    base_free = fit_kwargs.pop("free", None)
+    again = _refit(ref, runs, base_free, stages, fit_kwargs)
+    if "drift" in stages and can_wind((again or result).instrument):
+        wound, ref = one_blas_thread(_try_wound)(
+            again or result, ref, runs, base_free, stages, fit_kwargs,
+            start_state=start_state, decimate_s=decimate_s)
+        again = wound or again
+    if again is None:
         warn = () if ref.adequacy.worst.adequate else (f"thermal {ref.stopped}",)
         return replace(result, structure=ref, warnings=result.warnings + warn)
+    return replace(again, initial=inst, structure=ref)
+
+
+def _try_wound(fitted: FitResult, ref: Refinement, runs: Sequence[Run], base_free, stages,
+               fit_kwargs, *, start_state, decimate_s) -> tuple[FitResult | None, Refinement]:
+    """The lumped coil of ``fitted`` wound in layers (:func:`wound_coil`), kept where the
+    held-out thermometers and the drift say so (module docstring, step 5): its numbers fitted
+    on the thermometers, kept when their held-out RMS is not above the lumped coil's by
+    :data:`~nfs.fit.alternative_score.CV_DROP`; then both stages fitted, kept when the drift
+    agrees (:func:`_drift_refuses`).  Returns (the wound fit or None, the refinement with the
+    step added or the reason it was not)."""
+    alt = wound_coil(fitted.instrument)
+    ad = thermal_adequacy(fitted.instrument, runs, alternatives=[alt], decimate_s=decimate_s,
+                          start_state=start_state)
+    scored = next(a for a in ad.alternatives if a.name == alt.name)
+    if scored.cv_rms_after_k > (1.0 + CV_DROP) * ad.cv_rms_k:
+        return None, replace(ref, stopped=(
+            f"{ref.stopped}; the coil wound in layers misses the held-out thermometers "
+            f"({ad.cv_rms_k * 1e3:.1f} -> {scored.cv_rms_after_k * 1e3:.1f} mK): kept lumped"))
+    free = (default_free(scored.instrument, stages) if base_free is None
+            else expand_paths(scored.instrument, [p for p in base_free
+                                                  if not p.startswith("thermal.nodes.coil_")]))
+    free = list(dict.fromkeys(free + [p for p in scored.params if p not in free]))
+    wound = fit_model(scored.instrument, runs, free=free, **fit_kwargs)
+    refused = _drift_refuses(fitted, wound)
+    if refused:
+        return None, replace(ref, stopped=f"{ref.stopped}; {refused}")
+    after = thermal_adequacy(wound.instrument, runs, alternatives=[], decimate_s=decimate_s,
+                             start_state=start_state)
+    step = StructureStep(name=alt.name, kind=WOUND_KIND, description=alt.description,
+                         params={p: get_param(wound.instrument, p) for p in scored.params},
+                         cv_rms_before_k=ad.cv_rms_k, cv_rms_after_k=after.cv_rms_k,
+                         worst_before=ad.worst.ratio, worst_after=after.worst.ratio)
+    return wound, replace(ref, instrument=wound.instrument, steps=ref.steps + (step,),
+                          adequacy=after, stopped=(
+                              f"{ref.stopped}; the coil wound in layers: the drift agrees "
+                              f"(drift cost {fitted.stages['drift'].stated_cost:.1f} -> "
+                              f"{wound.stages['drift'].stated_cost:.1f})"))
+
+
+def _refit(ref: Refinement, runs: Sequence[Run], base_free, stages, fit_kwargs
+           ) -> FitResult | None:
+    """Both stages fitted again on the structure ``ref`` ended with, its new numbers free
+    beside the default set (or ``base_free``); None when it made no change."""
+    if not ref.steps:
+        return None
     new_paths = [p for s in ref.steps for p in s.params
                  if not (p.startswith("thermometers.") and ".nodes." in p)]
-    base_free = fit_kwargs.pop("free", None)
     free = (default_free(ref.instrument, stages) if base_free is None
             else expand_paths(ref.instrument, list(base_free)))
     free = list(dict.fromkeys(free + [p for p in new_paths if p not in free]))
-    again = fit_model(ref.instrument, runs, free=free, **fit_kwargs)
-    return replace(again, initial=inst, structure=ref)
+    return fit_model(ref.instrument, runs, free=free, **fit_kwargs)
+
+
+def _drift_refuses(lumped: FitResult, wound: FitResult) -> str:
+    """Why the drift refuses a wound coil the thermometers adopted, in words; empty when it
+    agrees.
+
+    The thermometers see the coil's faces; the gyro reads its whole radial field through the
+    Shupe integral.  The wound fit is kept when its drift stage explains the gyro's dwells
+    better than the lumped fit's by Akaike's criterion: cost_w + k_w < cost_l + k_l, the
+    stages' costs 0.5 chi^2 in the channels' stated noise with their prior rows
+    (:attr:`nfs.fit.stage.StageReport.stated_cost`) and k their free numbers (Akaike 1974,
+    IEEE Trans. Autom. Control 19(6) 716: AIC = 2k + chi^2)."""
+    a, b = lumped.stages["drift"], wound.stages["drift"]
+    aic_l = a.stated_cost + len(a.free)
+    aic_w = b.stated_cost + len(b.free)
+    if aic_w < aic_l:
+        return ""
+    return (f"the coil wound in layers fits the held-out thermometers as well but not the drift "
+            f"(drift cost {b.stated_cost:.1f} with {len(b.free)} numbers against "
+            f"{a.stated_cost:.1f} with {len(a.free)} lumped): kept lumped")

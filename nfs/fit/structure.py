@@ -9,7 +9,7 @@ candidate still lowers the thermometer residual, with an unphysical value (a neg
 source).  This module supplies the yardstick: *generic* structural alternatives of the
 same network, each with one to three free numbers, and a verdict on the model's structure.
 
-Alternatives (:func:`structural_alternatives`; each is a new
+Alternatives (the list :func:`nfs.fit.alternatives.structural_alternatives` makes; each is a new
 :class:`~nfs.instrument.Instrument` and its free parameter paths):
 
 - ``split``: node X becomes X (half the capacity, every link, its power, the thermometer
@@ -45,8 +45,7 @@ from .params import set_params
 
 __all__ = ["StructuralAlternative", "split_node", "insert_node", "free_link",
            "thermometer_weight", "tec_set_point", "effect_alternative",
-           "structural_alternatives",
-           "set_thermometer_fraction", "physical_lower", "positive_parameter"]
+           "set_thermometer_fraction", "physical_lower", "positive_parameter", "new_node_name", "housing_node", "neighbours"]
 
 _WEIGHT = ".nodes."
 _PHYSICAL_LOWER = {("heat_source", "power"): 0.0, ("motor_heat", "power"): 0.0,
@@ -126,7 +125,7 @@ class StructuralAlternative:
         return set_params(out, plain) if plain else out
 
 
-def _housing(inst: Instrument) -> str | None:
+def housing_node(inst: Instrument) -> str | None:
     """The node with the largest conductance to the chamber (the housing/base)."""
     best, g_best = None, 0.0
     for link in inst.network.links:
@@ -136,7 +135,7 @@ def _housing(inst: Instrument) -> str | None:
     return best
 
 
-def _neighbours(net: Network, node: str) -> list[str]:
+def neighbours(net: Network, node: str) -> list[str]:
     out = []
     for link in net.links:
         if node in (link.a, link.b):
@@ -146,7 +145,8 @@ def _neighbours(net: Network, node: str) -> list[str]:
     return list(dict.fromkeys(out))
 
 
-def _new_name(net: Network, base: str) -> str:
+def new_node_name(net: Network, base: str) -> str:
+    """``base``, or ``base2``, ``base3`` ... the first that names no node of ``net``."""
     name, i = base, 2
     while name in net.node_names:
         name, i = f"{base}{i}", i + 1
@@ -169,7 +169,7 @@ def split_node(inst: Instrument, node: str) -> StructuralAlternative:
     own_nodes, own_links = inst.own_parts
     j = [n.name for n in own_nodes].index(node)
     old = own_nodes[j]
-    twin = _new_name(net, f"{node}_2")
+    twin = new_node_name(net, f"{node}_2")
     half = 0.5 * old.capacity_j_per_k
     g_all = sum(l.conductance_w_per_k for l in net.links if node in (l.a, l.b))
     g0 = 0.25 * g_all if g_all > 0 else 0.1
@@ -195,12 +195,12 @@ def insert_node(inst: Instrument, node: str, to: str | None = None) -> Structura
     """
     net = inst.network
     own_nodes, own_links = inst.own_parts      # a wound coil's own links are not cut
-    to = to or _housing(inst)
+    to = to or housing_node(inst)
     links = [l for l in own_links if {l.a, l.b} == {node, to}]
     if not links:
         raise NfsError(f"insert_node: no link {node}-{to} in instrument '{inst.name}'")
     g0 = sum(l.conductance_w_per_k for l in links)
-    mid = _new_name(net, f"{node}_mid")
+    mid = new_node_name(net, f"{node}_mid")
     c0 = net.nodes[net.index(node)].capacity_j_per_k / 3.0
     kept = tuple(l for l in own_links if l not in links)
     new = inst.with_own_parts(own_nodes + (Node(mid, c0),),
@@ -322,58 +322,3 @@ def effect_alternative(inst: Instrument, effect: str, target: str | None = None
         instrument=inst.with_effects(list(inst.effects) + [e]),
         free=tuple(f"effects.{e.label}.{n}" for n in free), start=(0.0,) * len(free),
         bounds=tuple(bounds))
-
-
-def structural_alternatives(inst: Instrument) -> list[StructuralAlternative]:
-    """The small default list of generic alternatives of ``inst``'s thermal structure.
-
-    Core nodes: the coil nodes, the source (electronics), every other powered node that
-    carries no accelerometer (the board) and the housing (largest conductance to the
-    chamber).  Splits: each coil node, the housing and the powered non-source nodes.
-    Inserts: between each node of the FOG thermometer and the housing.  Links: every pair of
-    core nodes not yet linked.  Thermometer: the FOG thermometer's share of each neighbour
-    of its nodes, and of its first node; each accelerometer thermometer's share of each
-    neighbour of its nodes (the mount it sits on).  The TEC law's set point, when the model
-    has one.  For the default instrument: 4 splits, 2 inserts, 4 links, 5 thermometer
-    shares and the TEC set point.
-    """
-    net = inst.network
-    g = inst.gyro
-    housing = _housing(inst)
-    acc = set(inst.accelerometers.nodes.values())
-    coil = [n for n in (g.coil_outer, g.coil_inner) if n]
-    # a wound coil's layers are resolved already and their links are its own numbers
-    # (nfs.coil): they are linked to, not split or cut
-    layers = set(inst.coil.layer_names) if inst.coil is not None else set()
-    powered = [n.name for n in net.nodes
-               if n.power_w > 0 and n.name not in acc and n.name != g.source]
-    shell = [housing] if housing else []
-    core = list(dict.fromkeys(coil + [g.source] + powered + shell))
-    out = [split_node(inst, n) for n in dict.fromkeys(coil + shell + powered)
-           if n not in layers]
-    fog_nodes = list(inst.thermometers["fog"].nodes)
-    if housing:
-        out += [insert_node(inst, n, housing) for n in fog_nodes
-                if n != housing and n not in layers
-                and any({l.a, l.b} == {n, housing} for l in inst.own_parts[1])]
-    linked = {frozenset((l.a, l.b)) for l in net.links}
-    for i, a in enumerate(core):
-        for b in core[i + 1:]:
-            if frozenset((a, b)) not in linked and not {a, b} <= layers:
-                out.append(free_link(inst, a, b))
-    # a thermometer sits on a face of a wound coil, never inside the winding
-    inside = set(inst.coil.layer_names[1:-1]) if inst.coil is not None else set()
-    near = [m for n in fog_nodes for m in _neighbours(net, n)
-            if m not in fog_nodes and m not in inside]
-    out += [thermometer_weight(inst, "fog", m) for m in dict.fromkeys(near)]
-    if len(fog_nodes) > 1:
-        out.append(thermometer_weight(inst, "fog", fog_nodes[0]))
-    for name, model in inst.thermometers.items():   # an accelerometer's on its mount
-        if name == "fog":
-            continue
-        own = list(model.nodes)
-        out += [thermometer_weight(inst, name, m) for m in dict.fromkeys(
-            m for n in own for m in _neighbours(net, n) if m not in own and m not in inside)]
-    if any(e.name == "tec_power" for e in inst.effects):
-        out.append(tec_set_point(inst))
-    return out

@@ -44,7 +44,7 @@ from ..effects.thermometer import THERMOMETERS
 from ..instrument import Instrument
 from ..run import Run
 from .free_set import default_free
-from .params import fit_bounds, get_param, set_params
+from .params import fit_bounds, get_param, list_params, set_params
 from .start_state import StartModel
 from .thermal_residual import DEFAULT_START, prepare_thermal, thermal_residual_parts
 
@@ -217,12 +217,22 @@ class ChordModel:
         """Bounds of a step of the model parameters from x."""
         return self.bounds[:, 0] - self.x, self.bounds[:, 1] - self.x
 
+    def kept(self, inst: Instrument) -> np.ndarray:
+        """Which of the model's parameters ``inst`` still has (bool per path): an alternative
+        that rebuilds a part (a lumped coil wound, :mod:`nfs.fit.wound_alternative`)
+        replaces that part's numbers by its own."""
+        names = set(list_params(inst))
+        return np.array([p in names for p in self.paths], dtype=bool)
+
     def moved(self, inst: Instrument, step: np.ndarray) -> Instrument:
-        """``inst`` with the model parameters moved by ``step`` (within their bounds)."""
+        """``inst`` with the model parameters it has (:meth:`kept`) moved by ``step``
+        (within their bounds)."""
         if not self.paths:
             return inst
+        keep = self.kept(inst)
         return set_params(inst, {p: float(np.clip(get_param(inst, p) + d, lo, hi))
-                                 for p, d, (lo, hi) in zip(self.paths, step, self.bounds)})
+                                 for p, d, (lo, hi), k in zip(self.paths, step, self.bounds,
+                                                              keep) if k})
 
     def project(self, r: np.ndarray) -> np.ndarray:
         """(I - Q Q^T) r: the part of r the model's own parameters cannot absorb."""

@@ -22,9 +22,9 @@ import numpy as np
 import pytest
 
 from nfs.fit.adequacy import ADEQUACY_FACTOR, beats_structure, thermal_adequacy
+from nfs.fit.alternatives import structural_alternatives
 from nfs.fit.structure import (effect_alternative, free_link, insert_node, physical_lower,
-                                    set_thermometer_fraction, split_node,
-                                    structural_alternatives, thermometer_weight)
+                               set_thermometer_fraction, split_node, thermometer_weight)
 from nfs.fit.calibration import fit_model
 from nfs.fit.free_set import default_free
 from nfs.scoring.run_stats import one_sided
@@ -74,7 +74,8 @@ def test_alternatives_of_the_default(default):
     """Oracle: the default network (docs/physics.md section 2) - 4 splits (coil_outer,
     coil_inner, housing, board), 2 inserts (the FOG thermometer's nodes to the housing),
     the 4 unlinked pairs of electronics, board, coil nodes and housing, 3 FOG thermometer
-    shares, each QFA thermometer's share of its mount (the housing) and the TEC set point;
+    shares, each QFA thermometer's share of its mount (the housing), the TEC set point and
+    the coil wound in 8 layers;
     each split halves the capacity, and a split or an insert at its start keeps the steady
     state of every original node (steady_state, docs/physics.md section 2)."""
     alts = structural_alternatives(default)
@@ -85,7 +86,8 @@ def test_alternatives_of_the_default(default):
             "link coil_outer-board", "link coil_inner-board",
             "fog thermometer share of housing", "fog thermometer share of coil_inner",
             "fog thermometer share of electronics", "acc_x thermometer share of housing",
-            "acc_y thermometer share of housing", "tec set point"} == names
+            "acc_y thermometer share of housing", "tec set point",
+            "the coil in 8 layers"} == names
     tec = next(a for a in alts if a.kind == "tec")
     assert tec.free == ("effects.tec_power.T_set",) and tec.start == (25.0,)
     assert tec.build([22.0]).effect("tec_power").params["T_set"] == 22.0

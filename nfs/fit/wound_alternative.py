@@ -1,0 +1,198 @@
+"""The coil in N_th layers: a lumped two-node coil replaced by its wound form, as an alternative.
+
+A lumped coil (``coil_outer``: the outer layers; ``coil_inner``: the inner layers with the
+spool; one radial link between them) is the two-layer case of the wound coil
+(:mod:`nfs.coil`, docs/physics.md "the wound coil").  On a unit whose start-up moves the
+coil's radial field faster than two nodes can follow, the lumped network misses the
+thermometers by a time constant and its Shupe terms (the rate of a two-node gradient) read
+the wrong field.  :func:`wound_coil` builds the same instrument with its coil wound:
+
+- the winding becomes N_th graded layers ``coil_1`` (spool) .. ``coil_N`` (outer face)
+  between the radii of a navigation coil (the default preset's drawing), its height such
+  that the winding holds C_w = C_outer [J/K] at rho c = 1.7e6 J/(m^3 K);
+- ``coil_inner`` becomes the hub ``spool`` (its capacity, its power and its links but the
+  radial one), bonded to the winding's inner face (start 3 W/K: 0.2 mm of epoxy);
+- ``coil_outer``'s links but the radial one become the outer face's contacts (same
+  conductances), and the radial link G_r [W/K] sets the winding's conductivity,
+  k = G_r ln(r_o / r_i) / (2 pi h), so the face-to-face conductance starts where the model
+  had it;
+- thermometer weights on ``coil_outer`` move to the outer layer ``coil_N``, on
+  ``coil_inner`` to the hub; an effect targeted at ``coil_outer`` moves to ``coil_N``, at
+  ``coil_inner`` to the hub (a thermal effect) or to ``coil_1`` (a gyro effect);
+- the lumped Shupe terms (``shupe_gradient``, ``shupe_rate``, ``shupe_stress``) become the
+  Shupe integral over the winding, ``shupe_winding``: a 1 km quadrupole at the coil's mean
+  diameter in (r_o - r_i) / 0.17 mm optical layers, silica's dn/dT and expansion fixed by
+  physics, the potting's stress term k_m and the halves' asymmetry L_asym free in the drift
+  stage.
+
+Its free numbers are the winding's height (its capacity, rho c of the potted fibre being a
+material constant), its conductivity (its radial conductance, so its time constant), the
+hub's capacity (the number the lumped inner node had), the hub's bond and each outer
+contact, each in the box a fit gives it (:func:`nfs.fit.params.fit_bounds`: inside its hard
+range in the table of ranges, :mod:`nfs.ranges`).  It is scored on
+held-out thermometers as every structural alternative is (:mod:`nfs.fit.adequacy`);
+:func:`nfs.fit.refine.fit_unit` keeps it only where the drift agrees
+(:data:`DRIFT_KEEP`).
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+from dataclasses import replace
+
+from thermal import Link, Node
+
+from ..coil import WoundCoil
+from ..effects import get_effect, make_effect
+from ..errors import NfsError
+from ..instrument import Instrument, load_instrument
+from .params import fit_bounds, get_param
+from .structure import StructuralAlternative, new_node_name
+
+__all__ = ["WOUND_KIND", "LUMPED_SHUPE", "DEFAULT_THERMAL_LAYERS", "HUB_BOND_W_PER_K",
+           "can_wind", "wound_coil", "wound_name"]
+
+#: The kind of the alternative (:attr:`StructuralAlternative.kind`).
+WOUND_KIND = "wound"
+#: The lumped Shupe terms :func:`wound_coil` replaces by ``shupe_winding``.
+LUMPED_SHUPE = ("shupe_gradient", "shupe_rate", "shupe_stress")
+#: Thermal layers of the wound coil: the default preset's, where one coil's Shupe bias over
+#: each dwell changes by under 2 % from 8 to 16 layers (:class:`nfs.coil.WoundCoil`).
+DEFAULT_THERMAL_LAYERS = 8
+#: Start of the hub's bond to the winding's inner face [W/K]: 0.2 mm of epoxy
+#: (0.2 W/(m K)) over the spool's 23 cm^2 is 2.3 W/K; the default preset takes 3.
+HUB_BOND_W_PER_K = 3.0
+#: The winding's volumetric heat capacity [J/(m^3 K)]: fibre, acrylate and epoxy.
+_RHO_C = 1.7e6
+#: The fibre's length [m] and its pitch in the winding [m] (the default preset's coil: 1 km of
+#: 165 um coated fibre at 0.17 mm): a lumped model says neither, so the Shupe integral starts
+#: from a navigation coil's, (r_o - r_i) / p optical layers.
+_FIBRE_M, _PITCH_M = 1000.0, 0.17e-3
+
+
+def wound_name(layers: int = DEFAULT_THERMAL_LAYERS) -> str:
+    """The alternative's name, ``the coil in N layers``."""
+    return f"the coil in {layers} layers"
+
+
+@functools.lru_cache(maxsize=1)
+def _drawing() -> tuple[float, float, float]:
+    """(r_i, r_o) [m] of the default preset's winding."""
+    coil = load_instrument("default").coil
+    return coil.inner_radius_m, coil.outer_radius_m
+
+
+def can_wind(inst: Instrument) -> bool:
+    """Whether ``inst``'s coil is lumped in two linked nodes (what :func:`wound_coil` winds)."""
+    g = inst.gyro
+    return (inst.coil is None and g.coil_outer != g.coil_inner
+            and any({l.a, l.b} == {g.coil_outer, g.coil_inner} for l in inst.own_parts[1]))
+
+
+def wound_coil(inst: Instrument, layers: int = DEFAULT_THERMAL_LAYERS
+               ) -> StructuralAlternative:
+    """``inst``'s lumped coil wound into ``layers`` thermal layers (module docstring).
+
+    Raises
+    ------
+    NfsError
+        ``inst``'s coil is wound already, or its two coil nodes are not linked.
+    """
+    if inst.coil is not None:
+        raise NfsError("wound_coil: the coil is wound already ([coil])")
+    outer, inner = inst.gyro.coil_outer, inst.gyro.coil_inner
+    own_nodes, own_links = inst.own_parts
+    by_name = {n.name: n for n in own_nodes}
+    radial = [l for l in own_links if {l.a, l.b} == {outer, inner}]
+    if not radial or outer == inner:
+        raise NfsError(f"wound_coil: the coil nodes '{outer}' and '{inner}' are not linked "
+                       "(no radial conductance to start the winding from)")
+    g_r = sum(l.conductance_w_per_k for l in radial)
+    c_w = by_name[outer].capacity_j_per_k
+    r_i, r_o = _drawing()
+    area = math.pi * (r_o ** 2 - r_i ** 2)
+    h = min(max(c_w / (_RHO_C * area), 0.005), 0.05)   # inside the table's typical height
+    k = g_r * math.log(r_o / r_i) / (2.0 * math.pi * h)
+
+    hub = new_node_name(inst.network, "spool")
+    outer_contacts: dict[str, float] = {}
+    links = []
+    for l in own_links:
+        if l in radial:
+            continue
+        if outer in (l.a, l.b):
+            other = l.b if l.a == outer else l.a
+            other = hub if other == inner else other
+            outer_contacts[other] = outer_contacts.get(other, 0.0) + l.conductance_w_per_k
+        elif inner in (l.a, l.b):
+            a, b = (hub if x == inner else x for x in (l.a, l.b))
+            links.append(Link(a, b, l.conductance_w_per_k))
+        else:
+            links.append(l)
+    if not outer_contacts:
+        raise NfsError(f"wound_coil: '{outer}' has no link but the radial one (its outer face "
+                       "would be adiabatic)")
+    coil = WoundCoil(inner_radius_m=r_i, outer_radius_m=r_o, height_m=h,
+                     conductivity_w_per_m_k=k, heat_capacity_j_per_m3_k=_RHO_C,
+                     inner_contacts=((hub, HUB_BOND_W_PER_K),),
+                     outer_contacts=tuple(outer_contacts.items()), layers=layers)
+    first, last = coil.layer_names[0], coil.layer_names[-1]
+    nodes = []
+    for n in own_nodes:
+        if n.name == outer:
+            continue
+        if n.name == inner:
+            n = Node(hub, n.capacity_j_per_k, n.power_w + by_name[outer].power_w)
+        nodes.append(n)
+
+    thermal_map = {outer: last, inner: hub}
+    thermos = {}
+    for name, th in inst.thermometers.items():
+        w: dict[str, float] = {}
+        for node, wt in th.nodes.items():
+            node = thermal_map.get(node, node)
+            w[node] = w.get(node, 0.0) + wt
+        thermos[name] = replace(th, nodes=w)
+    effects = _wound_effects(inst, coil, {outer: last, inner: first}, thermal_map)
+    gyro = replace(inst.gyro, coil_outer=last, coil_inner=first)
+    base = replace(inst, coil=coil, gyro=gyro, thermometers=thermos)
+    new = base.with_own_parts(nodes, links).with_effects(effects)
+
+    free = (["coil.height_m", "coil.conductivity_w_per_m_k", f"thermal.nodes.{hub}.capacity_j_per_k",
+             f"coil.inner_contacts.{hub}"]
+            + [f"coil.outer_contacts.{n}" for n in outer_contacts])
+    start = [get_param(new, p) for p in free]
+    bounds = [fit_bounds(new, p) for p in free]
+    return StructuralAlternative(
+        name=wound_name(layers), kind=WOUND_KIND,
+        description=(f"winds the coil: {outer} and {inner} become {layers} graded layers "
+                     f"of a winding ({c_w:.4g} J/K, {g_r:.3g} W/K face to face) on a hub "
+                     f"'{hub}', its Shupe terms the integral over the winding; capacity, "
+                     "radial conductance and face contacts to fit"),
+        instrument=new, free=tuple(free), start=tuple(start), bounds=tuple(bounds))
+
+
+def _wound_effects(inst: Instrument, coil: WoundCoil, gyro_map: dict[str, str],
+                   thermal_map: dict[str, str]) -> list:
+    """The effects of ``inst`` on the wound coil: targets moved, the lumped Shupe terms
+    replaced by one ``shupe_winding`` where the model had any."""
+    out, shupe = [], False
+    for e in inst.effects:
+        if e.name in LUMPED_SHUPE:
+            shupe = True
+            continue
+        spec = get_effect(e.name)
+        mapping = thermal_map if spec.kind == "thermal" else gyro_map
+        params = dict(e.params)
+        for key, value in params.items():
+            if isinstance(value, str) and value in mapping:
+                params[key] = mapping[value]
+        out.append(make_effect(e.name, params) if params != dict(e.params) else e)
+    radial = coil.outer_radius_m - coil.inner_radius_m
+    if shupe and not any(e.name == "shupe_winding" for e in out):
+        out.append(make_effect("shupe_winding", {
+            "L": _FIBRE_M, "D": coil.mean_diameter_m, "pattern": "quadrupole",
+            "N_opt": 4 * max(1, round(radial / (4 * _PITCH_M))), "k_m": 0.0, "L_asym": 0.0}))
+    return out
+
