@@ -113,6 +113,9 @@ def score_candidate(c: Candidate, ch: ResidualChannel,
     tests = [clustered_fit(g).test(idx, sign) for g in designs]
     j = int(np.argmin([t[1] for t in tests]))
     wald_p = min(1.0, len(designs) * tests[j][1])
+    # the other side of a one-sided coefficient: what the runs ask for that physics refuses
+    other = (min(1.0, len(designs) * min(clustered_fit(g).test(idx, -sign)[1] for g in designs))
+             if sign else None)
     cv_before = group_cv_rms([ch.base], ch.groups)[0]
     cv_after = group_cv_rms(designs, ch.groups)[0]
     shapes, cols = refined if refined is not None else grid[0]
@@ -154,7 +157,7 @@ def score_candidate(c: Candidate, ch: ResidualChannel,
                            coefficient=coef, interval=interval, wald_p=wald_p, holm_p=wald_p,
                            dof=float(tests[j][2]), n_grid=len(designs),
                            inclusion_frequency=hits / len(ch.boot) if ch.boot else math.nan,
-                           channel=c.channel)
+                           channel=c.channel, sign_rejected_p=other)
     return ScoredCandidate(c, score, dict(shapes), beta, cols)
 
 

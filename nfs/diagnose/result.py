@@ -135,6 +135,12 @@ class CandidateScore:
     physical: bool = True
     """False when a coefficient lies below its physical bound (a negative heat power or
     lag, :func:`nfs.fit.structure.physical_lower`): never ranked above a physical one."""
+    sign_rejected_p: float | None = None
+    """For a coefficient physics keeps on one side (a heat power,
+    :data:`nfs.diagnose.candidate_score.ONE_SIDED`): the p-value of the same clustered test
+    toward the other side, Bonferroni over the shape grid.  Small: the runs ask for what
+    the effect cannot give (heat taken away: a sink, which no heat source is), and the
+    diagnosis says so; None for a two-sided coefficient."""
 
     @property
     def cv_drop(self) -> float:
@@ -259,6 +265,20 @@ class Diagnosis:
         ts = self.thermal_structure
         if ts is not None and not ts.adequate:
             out.append("thermal structure: " + ts.message)
+        out += self._sinks()
+        return out
+
+    def _sinks(self) -> list[str]:
+        """One-sided candidates whose other side the runs ask for, Bonferroni over the
+        ranking (:attr:`CandidateScore.sign_rejected_p`), in words."""
+        n = max(len(self.ranking), 1)
+        out = []
+        for s in self.ranking:
+            if s.sign_rejected_p is not None and s.sign_rejected_p < self.alpha / n:
+                lab = label_of(s.effect, s.target)
+                out.append(f"the runs ask for {lab} with {_coef(s)} (p {s.sign_rejected_p:.2g} "
+                           "for that sign): heat taken away, which no heat source gives; a "
+                           "heat path or a structure the model lacks")
         return out
 
     @property

@@ -201,11 +201,13 @@ def unseen_heat_rival(inst: Instrument, runs: Sequence[Run], label: str, **fit_k
     1. the drift stage with P and the model's drift coefficients free (the network replayed
        at each step), from P = :data:`UNSEEN_HEAT_START_W`;
     2. both stages with P held: the thermometers refit the network around the heat (the
-       power the model's fit had put elsewhere moves).  C stays the model's: the drift fixes
-       the heat's rate P / C far better than its time constant (on the package's own
-       instrument with 0.5 W at coil_inner, three 1 h runs gave P 0.25 +- 0.08 W and C
-       91 +- 19 J/K for 190 J/K with both free, P 0.45 +- 0.09 W with C held), and a
-       thermal refit with the heat in pushes C to its bound.
+       power the model's fit had put elsewhere moves), the node's capacity C, so the heat's
+       time constant, free among the network's numbers inside its prior from the table of
+       ranges (:mod:`nfs.fit.prior`: the typical range one sigma of a log-normal), which
+       keeps it from the bound a refit without a prior pushed it to.  Measured on the
+       default instrument, three 1 h runs of its nominal world: 0.5 W at the spool gives
+       P 0.60 +- 0.05 W, C 73 +- 28 J/K for 110 (P the same with C held); 1 W at the board
+       P 1.5 +- 0.8 W, C 378 +- 11 J/K for 380 (C held: P 0.3 +- 3.7 W).
 
     The two fits have the same numbers; the one with the lower cost of its drift stage
     (:func:`_drift_cost`) is the rival: it refits the thermal stage, so a decision against a
@@ -222,7 +224,7 @@ def unseen_heat_rival(inst: Instrument, runs: Sequence[Run], label: str, **fit_k
     e = make_effect(name, {"node": node, "power": UNSEEN_HEAT_START_W})
     current = inst.with_effects(list(inst.effects) + [e])
     power = f"effects.{e.label}.power"
-    held = (power, f"thermal.nodes.{node}.capacity_j_per_k")
+    held = (power,)
 
     first = fit_model(current, runs, free=model_drift_paths(current) + [power],
                       stages=("drift",), **fit_kw)
