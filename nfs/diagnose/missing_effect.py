@@ -126,7 +126,7 @@ from .result import Diagnosis
 from .smoother import smooth_runs
 from ..fit.start_state import StartModel
 from ..scoring.run_stats import RunGrams, group_cv_rms, run_grams
-from ..fit.alternatives import structural_alternatives
+from ..fit.adequacy import structural_alternatives
 from ..fit.structure import effect_alternative
 from ..fit.thermal_residual import DEFAULT_START, start_states
 from .unexplained import unexplained

@@ -10,10 +10,11 @@ The room a change of the fit's thermal structure stays in:
   (:mod:`~nfs.fit.noise_fit`), the least-squares core (:mod:`~nfs.fit.stage`) and advice for
   parameters at a bound or beyond their typical range (:mod:`~nfs.fit.departures`); its residuals
   (:mod:`~nfs.fit.thermal_residual`, :mod:`~nfs.fit.drift_residual`), its result and file
-  (:mod:`~nfs.fit.fit_result`) and its warnings (:mod:`~nfs.fit.fit_warnings`);
+  (:mod:`~nfs.fit.fit_result`) and its warnings (:mod:`~nfs.fit.departures`);
 - :mod:`~nfs.fit.start_state`: each run's node temperatures at power-on (an unfinished soak);
-- :mod:`~nfs.fit.structure` and :mod:`~nfs.fit.adequacy`: alternatives of the thermal
-  structure and the verdict on the model's, scored on the held-out thermometer residual
+- :mod:`~nfs.fit.structure` and :mod:`~nfs.fit.wound_alternative` (a lumped coil wound in
+  layers), and :mod:`~nfs.fit.adequacy`: alternatives of the thermal structure and the
+  verdict on the model's, scored on the held-out thermometer residual
   (:mod:`~nfs.fit.thermometer_cv`, :mod:`~nfs.fit.alternative_score`);
   :mod:`~nfs.fit.refine`: the alternatives that pay adopted in a chain (:func:`fit_unit`).
 """
@@ -25,7 +26,7 @@ from .free_set import default_free
 from .params import (ParameterError, default_bounds, expand_paths, get_param, list_params,
                      set_params)
 from .refine import Refinement, fit_unit, refine_structure
-from .alternatives import structural_alternatives
+from .adequacy import structural_alternatives
 
 __all__ = ["FitResult", "default_free", "fit_model", "write_fitted_model", "ParameterError",
            "default_bounds", "expand_paths", "get_param", "list_params", "set_params",

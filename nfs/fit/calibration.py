@@ -76,7 +76,7 @@ from ..run import Run
 from .drift_residual import (DriftRun, drift_channels, drift_context, model_drift_dph,
                              prepare_drift, window_means)
 from .fit_result import FitResult
-from .fit_warnings import fit_warnings
+from .departures import fit_warnings
 from .free_set import FIT_STAGES, THERMAL_KINDS, default_free, stage_of
 from .noise_fit import GyroNoiseEstimate, gyro_noise_from_residual, noise_record
 from .params import expand_paths, fit_bounds, get_param, param_paths, set_params

@@ -8,7 +8,7 @@ on node temperatures the thermometers contradict, and the misfit blamed on whate
 candidate follows it.  So :func:`fit_unit` refines the structure before the drift stage:
 
 1. the generic alternatives of the current network (one more node, a free link, a
-   thermometer that sits elsewhere: :func:`nfs.fit.structure.structural_alternatives`)
+   thermometer that sits elsewhere: :func:`nfs.fit.adequacy.structural_alternatives`)
    are scored on the leave-one-start-temperature-out thermometer residual
    (:func:`nfs.fit.adequacy.thermal_adequacy`);
 2. the best one is adopted when it pays: its held-out RMS lower than the current
@@ -44,7 +44,7 @@ from ..io.records import record
 from ..run import Run
 from .adequacy import ThermalAdequacy, thermal_adequacy
 from .alternative_score import BEATS_ALPHA, CV_DROP, better_run_by_run
-from .alternatives import structural_alternatives
+from .adequacy import structural_alternatives
 from .calibration import check_fit_keywords, fit_model, one_blas_thread
 from .fit_result import FitResult
 from .free_set import default_free

@@ -9,7 +9,7 @@ candidate still lowers the thermometer residual, with an unphysical value (a neg
 source).  This module supplies the yardstick: *generic* structural alternatives of the
 same network, each with one to three free numbers, and a verdict on the model's structure.
 
-Alternatives (the list :func:`nfs.fit.alternatives.structural_alternatives` makes; each is a new
+Alternatives (the list :func:`nfs.fit.adequacy.structural_alternatives` makes; each is a new
 :class:`~nfs.instrument.Instrument` and its free parameter paths):
 
 - ``split``: node X becomes X (half the capacity, every link, its power, the thermometer

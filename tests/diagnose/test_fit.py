@@ -224,7 +224,7 @@ def test_a_run_without_a_chamber_record_says_what_is_assumed(scenario, runs):
 def test_far_from_start():
     """The rule of a parameter pushed far: 3x its start or a third of it, a change of sign
     (for a parameter with a scale), or 3 prior widths away (for any)."""
-    from nfs.fit.fit_warnings import far_from_start
+    from nfs.fit.departures import far_from_start
     assert far_from_start(0.008, 0.061, 0.28) == "from 0.008 to 0.061 (7.6 times; +0.3 prior widths)"
     assert far_from_start(380.0, 1636.0, 6.1).startswith("from 380 to 1636 (4.3 times")
     assert far_from_start(1.0, 2.9, 1.0) == ""

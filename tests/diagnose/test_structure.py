@@ -22,7 +22,7 @@ import numpy as np
 import pytest
 
 from nfs.fit.adequacy import ADEQUACY_FACTOR, beats_structure, thermal_adequacy
-from nfs.fit.alternatives import structural_alternatives
+from nfs.fit.adequacy import structural_alternatives
 from nfs.fit.structure import (effect_alternative, free_link, insert_node, physical_lower,
                                set_thermometer_fraction, split_node, thermometer_weight)
 from nfs.fit.calibration import fit_model

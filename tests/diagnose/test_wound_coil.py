@@ -22,7 +22,7 @@ from nfs.config.scenario import load_scenario
 from nfs.diagnose import diagnose
 from nfs.fit.adequacy import thermal_adequacy
 from nfs.diagnose.candidates import candidates
-from nfs.fit.alternatives import structural_alternatives
+from nfs.fit.adequacy import structural_alternatives
 from nfs.effects import make_effect
 from nfs.experiment import simulate_run
 from nfs.instrument import load_instrument

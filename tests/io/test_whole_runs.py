@@ -19,7 +19,7 @@ import pytest
 
 import nfs
 from nfs.errors import MeasurementError
-from nfs.fit.fit_warnings import fit_warnings
+from nfs.fit.departures import fit_warnings
 from nfs.io import read_run, read_runs, write_run
 from nfs.io.provenance import runs_provenance
 from nfs.northfind.synthetic import synthetic_run
