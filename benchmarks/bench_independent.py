@@ -59,8 +59,12 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests" / "independ
 from generator import (HIDDEN_EFFECTS, Unit, draw_unit,  # noqa: E402
                        generate_family_set, generate_set)
 
-#: Effects of the default instrument that the generator's unit also has (in its own form).
-MODEL_EFFECTS = ("tec_power", "bias_temperature", "shupe_gradient", "shupe_rate")
+#: Effects of the default instrument that the generator's unit also has (in its own form):
+#: the TEC law, the bias's temperature law and the Shupe integral over the winding (the
+#: generator's layer Shupe term and its mean-rate term, which ``shupe_winding``'s k_m and
+#: L_asym take up); the lumped forms for a model whose coil is lumped (``nfs preset lumped``).
+MODEL_EFFECTS = ("tec_power", "bias_temperature", "shupe_winding", "shupe_gradient",
+                 "shupe_rate")
 #: Hidden effect -> the target a correct answer names (None: any target).
 TARGETS = {"thermometer_lag": "fog", "acc_bias_temperature": "x", "aux_linear": "aux_osc_v"}
 #: Cases with nothing of the library hidden: an answer that adds an effect is a false alarm.
@@ -73,9 +77,10 @@ GOAL_HITS, GOAL_FALSE_ALARMS = 0.90, 0.05
 RATE_ALTERNATIVE = "a rate term on every node"
 
 
-def independent_model():
-    """The default instrument with only :data:`MODEL_EFFECTS`."""
-    inst = load_instrument("default")
+def independent_model(preset: str = "default"):
+    """The preset instrument (the default: its coil wound; ``lumped``: two coil nodes) with
+    only :data:`MODEL_EFFECTS`."""
+    inst = load_instrument(preset)
     return inst.with_effects([e for e in inst.effects if e.name in MODEL_EFFECTS])
 
 
