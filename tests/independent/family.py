@@ -6,7 +6,9 @@ physical ranges of the physics reference (``README.md`` next to this file: every
 why):
 
 Thermal structure
-    the coil's layers (2-12) and geometry, its face contacts; the lumped capacities, powers
+    the coil's thermal layers (16-24, graded toward both faces) and geometry, its spool hub
+    and face contacts; its winding (pattern, optical layers, fibre length: the Shupe bias
+    is the integral over it, ``winding.py``); the lumped capacities, powers
     and links scattered log-normally; optional extra paths (electronics-plate, board-plate,
     the board radiating onto the coil's outer face, the housing split into a shell and a
     base); where each thermometer sits (Dirichlet weights over candidate nodes), its lag,
