@@ -1,8 +1,9 @@
 """Tests of the independent generator's winding (tests/independent/winding.py).
 
 Oracles: the closed forms of the Shupe integral over a winding (Frigo 1983; docs/physics.md
-section 3.1 states the same identities), the convergence of one physical coil's Shupe bias
-with its thermal layers, and the quadrupole's blindness to heat arriving at its hub.
+section 3.1 states the same identities), the gyro's samples as interval means of the rate,
+the convergence of one physical coil's Shupe bias with its thermal layers (a quadrupole on two
+seeds, a dipole, an octupole), and the quadrupole's blindness to heat arriving at its hub.
 """
 
 from __future__ import annotations
@@ -55,24 +56,57 @@ def _dwell_rms(x):
     return float(np.sqrt(np.mean(x[:3520].reshape(-1, 160).mean(axis=1) ** 2)))
 
 
-@pytest.mark.parametrize("seed", [1, 3])
-def test_one_coil_same_shupe_bias_with_16_and_32_thermal_layers(seed):
-    """Oracle: convergence: the same physical coil (a drawn unit's, its winding a quadrupole
-    of 48 layers) cut into 8, 16 and 32 cosine-graded thermal layers; the RMS of the Shupe
-    bias's 160 s means over the first hour of a power-on at -32 C (ideal soak, noise off).
-    Measured: 16 against 32 layers 0.3-0.8 %, 8 against 16 layers 2.5-3.6 % (with straight
-    lines in place of the spline: 35-37 % and 11-12 %)."""
+#: (pattern, seed, bound on 8 against 16 layers or None, bound on 16 against 32): measured
+#: with the interval means (:func:`generator.interval_mean_rate`), seeds 1, 3, 5, 7, starts
+#: at -32 and +54 C: quadrupole -0.25 to +0.01 % and +0.7 to +1.0 %; dipole +0.9 to +1.7 %
+#: and +0.24 to +0.47 %; octupole -22 % and +2.4 to +2.5 % (its residual is a third
+#: difference of the radial profile, a tenth of the quadrupole's or less: 8 thermal layers do
+#: not resolve it; the family draws 16-24).
+_CONVERGENCE = [("quadrupole", 1, 0.02, 0.015), ("quadrupole", 3, 0.02, 0.015),
+                ("dipole", 1, 0.02, 0.01), ("octupole", 1, None, 0.035)]
+
+
+@pytest.mark.parametrize("pattern, seed, tol_8, tol_16", _CONVERGENCE)
+def test_one_coil_same_shupe_bias_with_8_16_and_32_thermal_layers(pattern, seed, tol_8,
+                                                                    tol_16):
+    """Oracle: convergence: the same physical coil (a drawn unit's, its winding of 48
+    optical layers, 1000 m) cut into 8, 16 and 32 cosine-graded thermal layers; the RMS of
+    the Shupe bias's 160 s means over the first hour of a power-on at -32 C (ideal soak,
+    noise off).  With the gyro's samples as interval means the quadrupole's 8 against 16
+    layers differ by 0.0-0.25 % (0.5-1.9 % with the rate at the instants, 2.5-3.6 % so with
+    the electronics pressed on the outer face before the contacts' calibration; 35-37 % with
+    straight lines in place of the spline)."""
     u = fam.draw_unit(seed).unit
     u = replace(u, fog_thermometer={"housing": 1.0},
-                winding=wd.Winding(pattern="quadrupole", n_layers=48, fibre_length_m=1000.0))
+                winding=wd.Winding(pattern=pattern, n_layers=48, fibre_length_m=1000.0))
     rms = {}
     for n in (8, 16, 32):
         uu = replace(u, coil=replace(u.coil, n_layers=n))
         run = g.simulate_run(-32.0, unit=uu, noise=False, duration_s=3600.0)
         rms[n] = _dwell_rms(run.gyro_terms_dph["shupe_layers"])
-    print(f"\nseed {seed}: dwell RMS {rms}")
-    assert abs(rms[16] / rms[32] - 1) < 0.02
-    assert abs(rms[8] / rms[16] - 1) < 0.05
+    print(f"\n{pattern} seed {seed}: dwell RMS {rms}")
+    assert abs(rms[16] / rms[32] - 1) < tol_16
+    if tol_8 is not None:
+        assert abs(rms[8] / rms[16] - 1) < tol_8
+
+
+def test_gyro_samples_are_interval_means():
+    """Oracle: y = a t^2 sampled at h: the mean of dy/dt over [t_k, t_k + h) is
+    a (2 t_k + h) exactly; on a run, the Shupe term summed over the samples times h is
+    K sum_k w_k (T_k(t_n) - T_k(0)), the integral of the rate over the run."""
+    h, a = 0.5, 3.0
+    t = h * np.arange(10)
+    np.testing.assert_allclose(g.interval_mean_rate(a * t * t, a * (t[-1] + h) ** 2, h),
+                               a * (2 * t + h), rtol=1e-12)
+    u = replace(fam.draw_unit(1).unit,
+                winding=wd.Winding(pattern="quadrupole", n_layers=24, fibre_length_m=800.0))
+    run = g.simulate_run(-32.0, unit=u, noise=False, duration_s=600.0)
+    w, k_dph = g.shupe_node_weights(u.coil, u.winding, run.node_names,
+                                    u.coil_spool_links_w_per_k, u.coil_outer_links_w_per_k)
+    s = run.gyro_terms_dph["shupe_layers"]
+    # the first 599 intervals end at a sample: their sum is the temperatures' difference
+    dtemp = run.temperature_c[-1] - run.temperature_c[0]
+    np.testing.assert_allclose(s[:-1].sum(), k_dph * dtemp @ w, rtol=1e-9)
 
 
 def _coil_alone_shupe(heated: str, pattern: str = "quadrupole") -> np.ndarray:
