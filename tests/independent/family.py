@@ -85,7 +85,9 @@ RANGES: dict[str, tuple[float, float]] = {
     "coil.radial_w_per_k": (0.1, 0.4),
     "contact.spool_plate_w_per_k": (0.3, 1.2),
     "contact.outer_housing_w_per_k": (0.15, 0.6),
-    "contact.outer_electronics_w_per_k": (0.08, 0.35),
+    # the source board over the coil's magnetic shield, through air and by radiation (not
+    # a bonded contact): (k_air / gap + 4 eps sigma T^3) A, README: the Shupe bias's size
+    "contact.outer_electronics_w_per_k": (0.01, 0.06),
     "contact.spool_bond_w_per_k": (1.0, 5.0),
     "capacity.spool_j_per_k": (50.0, 200.0),
     # the winding (Shupe weights from its pattern)
@@ -107,7 +109,8 @@ RANGES: dict[str, tuple[float, float]] = {
     # optional paths
     "path.electronics_plate_w_per_k": (0.1, 0.6),
     "path.board_plate_w_per_k": (0.1, 0.6),
-    "path.board_coil_radiation_w_per_k": (0.02, 0.1),
+    # radiation onto the shield's bare metal: 4 eps_eff sigma T^3 A, eps_eff 0.1-0.3
+    "path.board_coil_radiation_w_per_k": (0.005, 0.03),
     "path.base_capacity_share": (0.3, 0.6),
     "path.base_chamber_share": (0.2, 0.5),
     "path.shell_base_w_per_k": (2.0, 8.0),
@@ -386,8 +389,9 @@ def _draw_thermal(seed: int, attempt: int, rec: _Record):
     if present["board-plate"]:
         links.append(("board", "plate", g_bp))
     if present["board-coil"]:
-        # linearised radiation h_r A = 4 eps sigma T^3 A between the board and the coil's
-        # outer face (Incropera & DeWitt, 6th ed., eq. (1.9))
+        # linearised radiation h_r A = 4 eps_eff sigma T^3 A between the board (eps 0.9)
+        # and the bare metal of the coil's shield over its outer face (eps 0.1-0.3), eps_eff
+        # = 1 / (1/eps_1 + 1/eps_2 - 1) (Incropera & DeWitt, 6th ed., eqs. (1.9), (13.19))
         outer.append(("board", g_bc))
     if present["shell/base"]:
         # "housing" becomes the shell (cover); the base takes a share of its capacity and of
