@@ -6,7 +6,9 @@ physical ranges of the physics reference (``README.md`` next to this file: every
 why):
 
 Thermal structure
-    the coil's layers (2-12) and geometry, its face contacts; the lumped capacities, powers
+    the coil's thermal layers (16-24, graded toward both faces) and geometry, its spool hub
+    and face contacts; its winding (pattern, optical layers, fibre length: the Shupe bias
+    is the integral over it, ``winding.py``); the lumped capacities, powers
     and links scattered log-normally; optional extra paths (electronics-plate, board-plate,
     the board radiating onto the coil's outer face, the housing split into a shell and a
     base); where each thermometer sits (Dirichlet weights over candidate nodes), its lag,
@@ -47,9 +49,13 @@ if __package__:
     from . import generator as g
 else:  # the folder on sys.path (benchmarks, examples, the command line)
     import generator as g
+if __package__:
+    from . import winding as wd
+else:
+    import winding as wd
 
 __all__ = ["RANGES", "PATH_PROBABILITY", "SIDECAR_PROBABILITY", "AMPLITUDE",
-           "START_TEMPERATURES_C", "ChamberDraw", "RunDraw", "FamilyDraw", "draw_unit",
+           "START_TEMPERATURES_C", "HEAT_PLACES", "WINDING_PATTERNS", "ChamberDraw", "RunDraw", "FamilyDraw", "draw_unit",
            "chamber_air", "start_state", "simulate_family_run", "scale_to_strength",
            "generate_family_set"]
 
@@ -69,7 +75,7 @@ MAX_ATTEMPTS = 200
 #: (lo, hi) of every drawn value, by name (units in the name's last part; README: why).
 RANGES: dict[str, tuple[float, float]] = {
     # coil geometry (rejection on the derived capacity and radial conductance)
-    "coil.n_layers": (2, 12),
+    "coil.n_layers": (16, 24),
     "coil.inner_radius_m": (0.030, 0.050),
     "coil.radius_ratio": (1.2, 1.6),
     "coil.height_m": (0.015, 0.045),
@@ -79,7 +85,14 @@ RANGES: dict[str, tuple[float, float]] = {
     "coil.radial_w_per_k": (0.1, 0.4),
     "contact.spool_plate_w_per_k": (0.3, 1.2),
     "contact.outer_housing_w_per_k": (0.15, 0.6),
-    "contact.outer_electronics_w_per_k": (0.08, 0.35),
+    # the source board over the coil's magnetic shield, through air and by radiation (not
+    # a bonded contact): (k_air / gap + 4 eps sigma T^3) A, README: the Shupe bias's size
+    "contact.outer_electronics_w_per_k": (0.01, 0.06),
+    "contact.spool_bond_w_per_k": (1.0, 5.0),
+    "capacity.spool_j_per_k": (50.0, 200.0),
+    # the winding (Shupe weights from its pattern)
+    "winding.n_layers": (24, 64),
+    "winding.fibre_length_m": (500.0, 2000.0),
     # lumped nodes: nominal x log-normal(SCATTER), clipped
     "capacity.housing_j_per_k": (2000.0, 4500.0),
     "capacity.plate_j_per_k": (500.0, 1500.0),
@@ -96,7 +109,8 @@ RANGES: dict[str, tuple[float, float]] = {
     # optional paths
     "path.electronics_plate_w_per_k": (0.1, 0.6),
     "path.board_plate_w_per_k": (0.1, 0.6),
-    "path.board_coil_radiation_w_per_k": (0.02, 0.1),
+    # radiation onto the shield's bare metal: 4 eps_eff sigma T^3 A, eps_eff 0.1-0.3
+    "path.board_coil_radiation_w_per_k": (0.005, 0.03),
     "path.base_capacity_share": (0.3, 0.6),
     "path.base_chamber_share": (0.2, 0.5),
     "path.shell_base_w_per_k": (2.0, 8.0),
@@ -127,7 +141,6 @@ RANGES: dict[str, tuple[float, float]] = {
     "gyro.b0_dph": (-0.02, 0.02),
     "gyro.b1_dph_per_k": (0.0005, 0.003),
     "gyro.b2_dph_per_k2": (2.0e-5, 1.5e-4),
-    "gyro.shupe_dph_per_k_per_min": (0.05, 0.15),
     "gyro.mean_rate_dph_per_k_per_min": (0.01, 0.04),
     # other sensors
     "tilt.deg": (-0.05, 0.05),
@@ -157,6 +170,13 @@ AMPLITUDE = {"shupe_product": "k_p", "magnetic": "m", "scale_factor_temperature"
 #: Effects whose strength is not linear in the amplitude, and the search bounds [unit of
 #: the amplitude]: a heat source moves the TEC's working point, a lag is no factor at all.
 _NONLINEAR = {"heat_source": (0.01, 6.0), "thermometer_lag": (1.0, 3000.0)}
+#: Where a hidden heat source can sit and the extra power it can dissipate there [W] (the
+#: README's table: a heater on the spool hub or the housing, a driver in the FOG electronics,
+#: the turntable's motor driver on the main board); never inside the passive winding.
+HEAT_PLACES = {"spool": (0.05, 1.0), "electronics": (0.05, 1.5), "board": (0.1, 2.0),
+               "housing": (0.1, 2.0)}
+#: Winding patterns and their probabilities (quadrupole mostly).
+WINDING_PATTERNS = {"quadrupole": 0.7, "octupole": 0.15, "dipole": 0.15}
 #: Relative tolerance of the achieved strength on the target for the nonlinear effects.
 STRENGTH_RTOL = 0.02
 _THERMOMETER_CHOICES = (0.01, 0.015625, 0.03125, 0.0625)
@@ -280,8 +300,10 @@ class FamilyDraw:
         wander = (f"walk {ch.walk_k_per_rth_s:.1e} K/rt-s" if ch.wander == "walk"
                   else f"OU {ch.ou_sigma_k:.3f} K/{ch.ou_tau_s / 60:.0f} min")
         soak = [r.soak_h for r in self.runs]
+        w = u.winding
         return (f"seed {self.seed}: coil {c.n_layers} layers r {1e3 * c.inner_radius_m:.0f}-"
-                f"{1e3 * c.outer_radius_m:.0f} mm, paths "
+                f"{1e3 * c.outer_radius_m:.0f} mm, {w.pattern} {w.n_layers} layers "
+                f"{w.fibre_length_m:.0f} m, paths "
                 f"{'+'.join(self.paths) if self.paths else 'none'}, tau1 {tau1:.0f} min; "
                 f"FOG thermometer {fog}; TEC {u.tec_law} at {u.tec_set_c:.1f} C; gyro ARW "
                 f"{u.arw_deg_per_rth_h:.5f} + {noise}; chamber {wander} + {ch.cycle_shape} "
@@ -315,7 +337,7 @@ def _draw_coil(rng, rec: _Record) -> g.CoilGeometry:
             rec.put("coil.radial_w_per_k", g_rad)
             return g.CoilGeometry(inner_radius_m=r_in, outer_radius_m=r_in * ratio,
                                   height_m=h, n_layers=n, conductivity_w_per_m_k=k,
-                                  heat_j_per_m3_k=rho_c)
+                                  heat_j_per_m3_k=rho_c, spacing="cosine")
     raise RuntimeError("no coil geometry inside the capacity and conductance ranges")
 
 
@@ -326,10 +348,15 @@ def _draw_thermal(seed: int, attempt: int, rec: _Record):
     spool = rec.log_uniform(rc, "contact.spool_plate_w_per_k")
     outer = [("housing", rec.log_uniform(rc, "contact.outer_housing_w_per_k")),
              ("electronics", rec.log_uniform(rc, "contact.outer_electronics_w_per_k"))]
+    # the spool hub: an aluminium body between the mounting plate and the winding's spool
+    # face, bonded to it with epoxy (drawn after the contacts: their values unchanged)
+    bond = rec.log_uniform(rc, "contact.spool_bond_w_per_k")
+    hub = rec.uniform(rc, "capacity.spool_j_per_k")
     nominal = g.Unit()
     rl = _rng(seed, "lumped", attempt)
     cap = {n: rec.scatter(rl, f"capacity.{'qfa' if n.startswith('qfa') else n}_j_per_k", c)
            for n, c in nominal.capacity_j_per_k.items()}
+    cap["spool"] = hub
     power = {n: rec.scatter(rl, f"power.{'qfa' if n.startswith('qfa') else n}_w", p)
              for n, p in nominal.power_w.items()}
     link_range = {("housing", "chamber"): "link.housing_chamber_w_per_k",
@@ -362,8 +389,9 @@ def _draw_thermal(seed: int, attempt: int, rec: _Record):
     if present["board-plate"]:
         links.append(("board", "plate", g_bp))
     if present["board-coil"]:
-        # linearised radiation h_r A = 4 eps sigma T^3 A between the board and the coil's
-        # outer face (Incropera & DeWitt, 6th ed., eq. (1.9))
+        # linearised radiation h_r A = 4 eps_eff sigma T^3 A between the board (eps 0.9)
+        # and the bare metal of the coil's shield over its outer face (eps 0.1-0.3), eps_eff
+        # = 1 / (1/eps_1 + 1/eps_2 - 1) (Incropera & DeWitt, 6th ed., eqs. (1.9), (13.19))
         outer.append(("board", g_bc))
     if present["shell/base"]:
         # "housing" becomes the shell (cover); the base takes a share of its capacity and of
@@ -381,8 +409,9 @@ def _draw_thermal(seed: int, attempt: int, rec: _Record):
                 new.append((a, b, gk))
         links = new + [("housing", "base", g_sb)]
     names = tuple(p for p in present if present[p])
+    links.append(("spool", "plate", spool))
     kw = dict(capacity_j_per_k=cap, power_w=power, links_w_per_k=tuple(links), coil=coil,
-              coil_spool_links_w_per_k=(("plate", spool),),
+              coil_spool_links_w_per_k=(("spool", bond),),
               coil_outer_links_w_per_k=tuple(outer))
     return kw, names
 
@@ -480,10 +509,26 @@ def _draw_gyro(seed: int, rec: _Record) -> dict:
     kw.update(b0_dph=rec.uniform(rd, "gyro.b0_dph"),
               b1_dph_per_k=rec.uniform(rd, "gyro.b1_dph_per_k"),
               b2_dph_per_k2=rec.log_uniform(rd, "gyro.b2_dph_per_k2"),
-              shupe_dph_per_k_per_min=rec.log_uniform(rd, "gyro.shupe_dph_per_k_per_min"),
+              # the cosine weight's k_sh: still drawn (the stream's order), no longer used
+              shupe_dph_per_k_per_min=math.exp(rd.uniform(math.log(0.05), math.log(0.15))),
               mean_rate_dph_per_k_per_min=rec.log_uniform(
                   rd, "gyro.mean_rate_dph_per_k_per_min"))
     return kw
+
+
+def _draw_winding(seed: int, rec: _Record) -> wd.Winding:
+    """Pattern (quadrupole mostly), optical layers (a whole number of the pattern's blocks)
+    and fibre length, from the ``winding`` stream."""
+    rw = _rng(seed, "winding")
+    names = list(WINDING_PATTERNS)
+    pattern = names[int(rw.choice(len(names), p=list(WINDING_PATTERNS.values())))]
+    lo, hi = RANGES["winding.n_layers"]
+    n = int(rw.integers(lo, hi + 1))
+    period = wd.PERIOD[pattern]
+    n = max(period * math.ceil(lo / period), period * (n // period))
+    rec.put("winding.n_layers", n)
+    length = rec.log_uniform(rw, "winding.fibre_length_m")
+    return wd.Winding(pattern=pattern, n_layers=n, fibre_length_m=length)
 
 
 def _draw_sensors(seed: int, rec: _Record) -> dict:
@@ -554,7 +599,7 @@ def draw_unit(seed: int) -> FamilyDraw:
     therm = _draw_thermometers(_rng(seed, "thermometers"), unit.coil.n_layers, rec)
     chamber, logger = _draw_chamber(seed, rec)
     unit = replace(unit, **therm, **_draw_gyro(seed, rec), **_draw_sensors(seed, rec),
-                   chamber_logger_noise_c=logger)
+                   chamber_logger_noise_c=logger, winding=_draw_winding(seed, rec))
     runs = tuple(_draw_run(seed, i, rec) for i in range(len(START_TEMPERATURES_C)))
     sidecar = bool(_rng(seed, "sidecar").uniform() < SIDECAR_PROBABILITY)
     target = rec.log_uniform(_rng(seed, "strength"), "strength.target")
@@ -711,8 +756,8 @@ def scale_to_strength(draw: FamilyDraw, hidden: str, params: dict, target: float
     rescale.  A heat source changes the TEC's working point (not quite linear): secant steps
     until within :data:`STRENGTH_RTOL`.  A thermometer lag: bisection in log tau on the
     ratio computed from the effect-free runs (:func:`_lag_ratio`, monotone in tau).  The
-    amplitude stays inside the bounds of ``_NONLINEAR`` (the achieved ratio then falls
-    short).  Returns (params, the achieved strength dict, the runs with the effect).
+    amplitude stays inside the bounds of ``_NONLINEAR`` (a heat source: its place's
+    power range, :data:`HEAT_PLACES`; the achieved ratio then falls short).  Returns (params, the achieved strength dict, the runs with the effect).
     """
     sr = _set_runs or _SetRuns(draw, start_temperatures_c, dict(
         duration_s=duration_s, sample_rate_hz=sample_rate_hz, latitude_deg=latitude_deg,
@@ -720,6 +765,12 @@ def scale_to_strength(draw: FamilyDraw, hidden: str, params: dict, target: float
     p = g._check_hidden(hidden, params)
     amp, key = AMPLITUDE[hidden], g.unabsorbed_ratio_key(hidden)
     lo, hi = _NONLINEAR.get(hidden, (0.0, math.inf))
+    if hidden == "heat_source":
+        if p["node"] not in HEAT_PLACES:
+            raise ValueError(f"a drawn unit's heat source sits at one of "
+                             f"{', '.join(HEAT_PLACES)}, not {p['node']!r} (a passive winding "
+                             f"dissipates nothing)")
+        lo, hi = HEAT_PLACES[p["node"]]
     if hidden == "thermometer_lag":
         a, b = math.log(lo), math.log(hi)
         if _lag_ratio(sr, hi) <= target:
@@ -752,7 +803,9 @@ def scale_to_strength(draw: FamilyDraw, hidden: str, params: dict, target: float
 
 def _hidden_params(seed: int, hidden: str) -> dict:
     """The hidden effect's own draws (not its amplitude): the magnetic and quadrantal
-    directions, the transient's time constant (1-5 min), the heat source's node."""
+    directions, the transient's time constant (1-5 min), the heat source's place (where heat
+    can be dissipated: :data:`HEAT_PLACES`; the winding's faces get it through the hub's bond
+    or the outer face's contacts)."""
     p = dict(g.HIDDEN_EFFECTS[hidden])
     rh = _rng(seed, "hidden", hidden)
     if hidden == "magnetic":
@@ -762,7 +815,9 @@ def _hidden_params(seed: int, hidden: str) -> dict:
     elif hidden == "turn_on_transient":
         p["tau"] = float(rh.uniform(60.0, 300.0))
     elif hidden == "heat_source":
-        p["node"] = ("coil_spool", "coil_outer")[int(rh.integers(2))]
+        places = list(HEAT_PLACES)
+        p["node"] = places[int(rh.integers(len(places)))]
+        p["power"] = float(np.sqrt(np.prod(HEAT_PLACES[p["node"]])))  # a start for the secant
     return p
 
 

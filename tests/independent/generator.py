@@ -52,9 +52,15 @@ import numpy as np
 from scipy.linalg import expm
 from scipy.signal import lfilter
 
+if __package__:
+    from . import winding as wd
+else:  # the folder on sys.path (benchmarks, examples, the command line)
+    import winding as wd
+
 __all__ = ["OMEGA_IE_DPH", "T_REF_C", "HIDDEN_EFFECTS", "TEC_LAWS", "BIAS_NOISE_LAWS",
            "CoilGeometry", "Unit", "Network", "RunData", "coil_network", "unit_network",
-           "Stepper", "tec_power_w", "gauss_markov", "flicker_sum", "rate_random_walk",
+           "Stepper", "tec_power_w", "face_mixes", "shupe_node_weights", "interval_mean_rate",
+           "gauss_markov", "flicker_sum", "rate_random_walk",
            "simulate_run", "generate_set", "measure_strength", "main", "POWERED_COLUMN",
            "check_power_spans", "powered_state", "time_since_switch_on_s",
            # from family.py (loaded on first use)
@@ -105,7 +111,7 @@ _CHANNEL = {"shupe_product": "gyro_dph", "magnetic": "gyro_dph",
 
 @dataclass(frozen=True)
 class CoilGeometry:
-    """A potted fibre coil as a thick cylinder, cut into radial layers of equal thickness."""
+    """A potted fibre coil as a thick cylinder, cut into radial (thermal) layers."""
 
     inner_radius_m: float = 0.040
     """r_in, the spool side [m]."""
@@ -119,6 +125,9 @@ class CoilGeometry:
     """k, radial conductivity of fibre in potting compound [W/(m K)]."""
     heat_j_per_m3_k: float = 1.7e6
     """rho c, volumetric heat capacity of the winding [J/(m^3 K)]."""
+    spacing: str = "equal"
+    """Radial spacing of the thermal layers, ``equal`` or ``cosine`` (graded toward both
+    faces; :func:`winding.thermal_layer_edges_m`)."""
 
 
 @dataclass(frozen=True)
@@ -138,6 +147,10 @@ class Unit:
     """(node, node, G [W/K]) between lumped nodes and the chamber."""
     coil: CoilGeometry = CoilGeometry()
     """The fibre coil."""
+    winding: wd.Winding | None = None
+    """How the fibre lies in the coil.  None (the fixed unit): the Shupe term is the assumed
+    cosine weight over the thermal layers times ``shupe_dph_per_k_per_min``; a
+    :class:`winding.Winding`: the Shupe integral over the winding (:func:`shupe_node_weights`)."""
     coil_spool_links_w_per_k: tuple = (("plate", 0.6),)
     """Contacts of the coil's spool face (through the spool hub) [W/K]."""
     coil_outer_links_w_per_k: tuple = (("housing", 0.3), ("electronics", 0.18))
@@ -184,7 +197,8 @@ class Unit:
     b2_dph_per_k2: float = 8.0e-5
     """FOG bias, quadratic coefficient [deg/h/K^2]."""
     shupe_dph_per_k_per_min: float = 0.09
-    """k_sh of the layer Shupe term, on the cosine weight (see :func:`shupe_weights`)."""
+    """k_sh of the layer Shupe term, on the cosine weight (see :func:`shupe_weights`); unused
+    when ``winding`` is given."""
     mean_rate_dph_per_k_per_min: float = 0.02
     """k_m of the mean-rate (winding imperfection) term [deg/h per K/min]."""
     arw_deg_per_rth_h: float = 0.00035
@@ -300,22 +314,30 @@ def _layer_names(n: int) -> list[str]:
     return [f"coil_{i}" for i in range(n)]
 
 
-def _coil_parts(geom: CoilGeometry):
-    """Layers of a thick cylinder: names, capacities [J/K] and conductances [W/K].
-
-    Layer i spans [r_i, r_i+1] (equal thickness), its node sits at the log-mean radius
-    rho_i = sqrt(r_i r_i+1); C_i = rho c pi (r_i+1^2 - r_i^2) h.  Between two radii the
-    steady radial conductance of a cylinder is G = 2 pi k h / ln(r_b / r_a) (Incropera &
-    DeWitt, Fundamentals of Heat and Mass Transfer, 6th ed., sec. 3.3.1), which makes the
-    finite-difference steady state exact at the nodes.  The face nodes ``coil_in_face`` and
-    ``coil_out_face`` are massless (eliminated by Kron reduction).
-    """
+def _coil_radii(geom: CoilGeometry):
+    """Edges r_0..r_n of the thermal layers and their nodes' log-mean radii [m]."""
     if geom.n_layers < 1:
         raise ValueError(f"coil n_layers must be >= 1, got {geom.n_layers}")
     if not 0 < geom.inner_radius_m < geom.outer_radius_m:
         raise ValueError("coil radii must satisfy 0 < inner_radius_m < outer_radius_m")
-    r = np.linspace(geom.inner_radius_m, geom.outer_radius_m, geom.n_layers + 1)
-    rho = np.sqrt(r[:-1] * r[1:])
+    r = wd.thermal_layer_edges_m(geom.inner_radius_m, geom.outer_radius_m, geom.n_layers,
+                                 geom.spacing)
+    return r, np.sqrt(r[:-1] * r[1:])
+
+
+def _coil_parts(geom: CoilGeometry):
+    """Layers of a thick cylinder: names, capacities [J/K] and conductances [W/K].
+
+    Layer i spans [r_i, r_i+1] (``geom.spacing``: equal thickness, or graded toward both
+    faces), its node sits at the log-mean radius rho_i = sqrt(r_i r_i+1);
+    C_i = rho c pi (r_i+1^2 - r_i^2) h.  Between two radii the
+    steady radial conductance of a cylinder is G = 2 pi k h / ln(r_b / r_a) (Incropera &
+    DeWitt, Fundamentals of Heat and Mass Transfer, 6th ed., sec. 3.3.1), which makes the
+    finite-difference steady state exact at the nodes.  The face nodes ``coil_in_face`` and
+    ``coil_out_face`` are massless (eliminated by Kron reduction); the last two links are
+    the faces' half layers.
+    """
+    r, rho = _coil_radii(geom)
     cap = geom.heat_j_per_m3_k * np.pi * (r[1:] ** 2 - r[:-1] ** 2) * geom.height_m
     two_pi_kh = 2.0 * np.pi * geom.conductivity_w_per_m_k * geom.height_m
     names = _layer_names(geom.n_layers)
@@ -324,6 +346,49 @@ def _coil_parts(geom: CoilGeometry):
     links.append(("coil_in_face", names[0], two_pi_kh / math.log(rho[0] / r[0])))
     links.append((names[-1], "coil_out_face", two_pi_kh / math.log(r[-1] / rho[-1])))
     return names, cap, links
+
+
+def face_mixes(geom: CoilGeometry, spool_links, outer_links) -> tuple[dict, dict]:
+    """Each face's temperature as a mix of nodes {name: weight} (weights sum to 1).
+
+    A massless face between its half layer G_f and its contacts G_i (S = G_f + sum G_i)
+    sits at T_face = (G_f T_shell + sum_i G_i T_i) / S, the node it eliminates in the Kron
+    reduction (Doerfler & Bullo 2013, eq. (2)).  ``spool_links``, ``outer_links``: the
+    faces' (node, G [W/K]) contacts; the coil alone (:func:`coil_network`) names them
+    ``spool`` and ``outer``.
+    """
+    names, _, links = _coil_parts(geom)
+    out = []
+    for (shell, g_f), contacts in (((names[0], links[-2][2]), spool_links),
+                                   ((names[-1], links[-1][2]), outer_links)):
+        s = g_f + sum(gk for _, gk in contacts)
+        mix = {shell: g_f / s}
+        for n, gk in contacts:
+            mix[n] = mix.get(n, 0.0) + gk / s
+        out.append(mix)
+    return out[0], out[1]
+
+
+def shupe_node_weights(geom: CoilGeometry, winding: wd.Winding, names, spool_links,
+                       outer_links) -> tuple[np.ndarray, float]:
+    """Weights w over the nodes ``names`` [m^2] and K [deg/h per (K/s m^2)]: the Shupe
+    integral over the winding is Omega = K sum_k w_k dT_k/dt.
+
+    The rate at each optical layer's radius is the cubic spline through the thermal points
+    (the spool face, the layers' nodes at their log-mean radii, the outer face:
+    :meth:`winding.Winding.point_weights_m2`); a face's rate is its mix of nodes
+    (:func:`face_mixes`), so its weight goes to the nodes it is made of.
+    """
+    r, rho = _coil_radii(geom)
+    pw = winding.point_weights_m2(r[0], r[-1], np.concatenate([[r[0]], rho, [r[-1]]]))
+    idx = {n: i for i, n in enumerate(names)}
+    w = np.zeros(len(names))
+    for i, name in enumerate(_layer_names(geom.n_layers)):
+        w[idx[name]] += pw[1 + i]
+    for face_w, mix in zip((pw[0], pw[-1]), face_mixes(geom, spool_links, outer_links)):
+        for n, share in mix.items():
+            w[idx[n]] += face_w * share
+    return w, winding.k_dph(r[0], r[-1])
 
 
 def coil_network(geom: CoilGeometry, g_spool_w_per_k: float, g_outer_w_per_k: float
@@ -434,6 +499,28 @@ def tec_power_w(unit: Unit, t_src_c):
 
 # ---------------------------------------------------------------------------------------------
 # Sensors
+
+def interval_mean_rate(y: np.ndarray, y_end: float, h_s: float) -> np.ndarray:
+    """(y_k+1 - y_k) / h: the mean of dy/dt over each sample's interval [t_k, t_k + h).
+
+    A FOG's sample is the phase it accumulated over its sample period, the mean rate over
+    that interval, not the rate at an instant: IEEE Std 952-1997 (annex C) reduces the
+    output as angle, theta(t) = int Omega dt, a rate sample being the increment over one
+    period divided by it; a closed-loop FOG's digital ramp reads out that increment
+    (Lefevre, The Fiber-Optic Gyroscope, 2nd ed., 2014, ch. 5; the section not checked).
+    For a linear functional of the node temperatures the interval mean is exact from the
+    stepped states.  It matters for the Shupe integral over a winding: at power-on the heat
+    flux through a face steps, the gradient at the face follows within the thin face
+    layers' time constants (under a second when fine, seconds when coarse), and a rate taken
+    at the instants weighs that spike by where it falls between samples.  Measured
+    (``test_winding.py``'s coils, with the electronics pressed on the outer face at 0.08-0.35
+    W/K, before the contacts' calibration): the dwell means' RMS moved by 2.5-3.6 % between
+    8 and 16 thermal layers with the instants, by -0.4 to -0.6 % with the interval means.
+    ``y``: the values at the samples, ``y_end``: one step past the last [unit]; ``h_s``: the
+    step [s].
+    """
+    return np.diff(np.append(np.asarray(y, dtype=float), y_end)) / h_s
+
 
 def first_order_lag(x: np.ndarray, h_s: float, tau_s: float) -> np.ndarray:
     """tau dy/dt = x - y, exact for x linear between samples (first-order hold), y_0 = x_0.
@@ -763,6 +850,10 @@ def simulate_run(start_temperature_c: float, *, hidden: str | None = None,
     power = on[:, None] * base_p
     power[:, ie] += p_tec
     rate = st.rate(temp, chamber[:, None], power)
+    # one step past the last sample (the air held, the last sample's powers): the end of
+    # the last sample's interval, for the interval means of the Shupe integral below
+    x_end = (phi @ x + st.gamma_b @ chamber[-1:] + on[-1] * (st.gamma_p @ base_p)
+             + g_e * p_tec[-1])
 
     cap = net.capacity_j_per_k[layers]
     t_coil = temp[:, layers] @ cap / cap.sum()
@@ -789,11 +880,20 @@ def simulate_run(start_temperature_c: float, *, hidden: str | None = None,
 
     # 4. gyro
     dtc = t_coil - T_REF_C
+    # the fixed unit's cosine weight on the rates at the instants (its bytes kept; its weights
+    # do not single out a face); a winding's integral as the gyro's interval means
+    if unit.winding is None:
+        shupe = unit.shupe_dph_per_k_per_min * _S_PER_MIN * (rate[:, layers]
+                                                            @ shupe_weights(n_layers))
+    else:
+        w_sh, k_sh = shupe_node_weights(unit.coil, unit.winding, names,
+                                        unit.coil_spool_links_w_per_k,
+                                        unit.coil_outer_links_w_per_k)
+        shupe = k_sh * interval_mean_rate(temp @ w_sh, float(x_end @ w_sh), h)
     terms = {
         "earth": earth,
         "bias": unit.b0_dph + unit.b1_dph_per_k * dtc + unit.b2_dph_per_k2 * dtc * dtc,
-        "shupe_layers": unit.shupe_dph_per_k_per_min * _S_PER_MIN
-        * (rate[:, layers] @ shupe_weights(n_layers)),
+        "shupe_layers": shupe,
         "mean_rate": unit.mean_rate_dph_per_k_per_min * _S_PER_MIN * r_coil,
     }
     a_deg = np.degrees(az)
