@@ -65,7 +65,7 @@ from nfs.fit import fit_unit
 from nfs.io.measurement import read_runs
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from bench_independent import (CASES, NULL_CASES, _absorbed, _rate,  # noqa: E402
+from bench_independent import (CASES, NULL_CASES, _absorbed, _rate, twin_fit,  # noqa: E402
                                answer_of, classify, independent_model, schedule, wilson)
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests" / "independent"))
@@ -84,11 +84,6 @@ STEPS = ("generate", "fit", "diagnose", "settle", "design", "run", "fit2", "diag
 
 def _answer(a) -> tuple[str, tuple[str, ...]]:
     return a.kind, tuple(a.labels)
-
-
-def _own_lag(unit, params: dict) -> float:
-    th = params.get("thermometer", "fog")
-    return unit.thermometer_lag_s.get({"acc_x": "x", "acc_y": "y"}.get(th, th), 0.0)
 
 
 def designed_run(folder: Path, draw, truth: dict, experiment, base) -> str:
@@ -181,7 +176,8 @@ def _one_set(case: str, seed: int) -> dict:
                         f"{x.separation_sigma:.1f} sigma"
                         for x in settle.decisions)
             lap(step)
-            absorbed = _absorbed(hidden, fit, _own_lag(draw.unit, params), params)
+            twin = twin_fit(seed, hidden, params)
+            absorbed = _absorbed(hidden, fit, twin, params)
             row.update(before=(kind, labels),
                        before_outcome=classify(case, kind, labels, absorbed),
                        tied=kind == "tie")
@@ -212,7 +208,7 @@ def _one_set(case: str, seed: int) -> dict:
                                labels=[r.label for r in design.rivals])
             lap(step)
             kind2, labels2 = _answer(after.answer)
-            absorbed2 = _absorbed(hidden, fit2, _own_lag(draw.unit, params), params)
+            absorbed2 = _absorbed(hidden, fit2, twin, params)   # beside the 7-run twin
             row.update(after=(kind2, labels2),
                        after_outcome=classify(case, kind2, labels2, absorbed2))
     except Exception as exc:     # a benchmark reports a failing set, it does not stop

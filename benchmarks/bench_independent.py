@@ -18,9 +18,9 @@ default free set), then diagnose (:func:`nfs.diagnose.diagnose`) and read its on
 - a hidden library effect is a *hit* when the answer is to add it (the label's effect, and
   its target where :data:`TARGETS` names one); a *tie* that holds it is honest, not a hit;
   anything else (another effect, a tie without it, nothing) is a *miss*.  An extra
-  thermometer lag has the signature of the thermometer's own lag, which the fit frees: it is
-  also a hit when the fitted lag's 95 % interval holds the unit's own lag plus the hidden
-  one and excludes the unit's own lag alone (:func:`_absorbed`);
+  thermometer lag has the signature of the thermometer's own lag, extra heat at a node that of
+  the node's power, which the fit frees: it is also a hit when the fitted number moved, from
+  the fit of the same unit's runs without the effect, by the hidden amount (:func:`_absorbed`);
 - a clean or outside-library set raises a *false alarm* when the answer adds an effect; a
   tie is counted apart.
 
@@ -30,8 +30,8 @@ the goals (>= 90 % hits, <= 5 % false alarms, the truth inside every tie); the w
 line; median fit and diagnose time per set and the wall time.
 
 The model starts from the default instrument with the effects the generator's units have in
-kind (``tec_power``, ``bias_temperature``, ``shupe_gradient``, ``shupe_rate``), so that each
-hidden one is missing from it.
+kind (:data:`MODEL_EFFECTS`: the TEC law, the bias's temperature law, the Shupe integral over
+the winding), so that each hidden one is missing from it.
 
 Run: ``python benchmarks/bench_independent.py [--sets 60] [--effects magnetic,none]
 [--jobs 2] [--seed0 1] [--fixed] [--param heat_source.power=3]``.
@@ -118,21 +118,47 @@ def _names(label: str, hidden: str) -> bool:
     return effect == hidden and (want is None or target == want)
 
 
-def _absorbed(hidden: str | None, fit, own_lag_s: float, params: dict) -> str:
-    """A hidden thermometer lag the fit takes up in the thermometer's own free lag: the
-    parameter and its value, or ''.  Found when the 95 % interval of the fitted lag holds the
-    unit's own lag plus the hidden one and excludes the unit's own lag alone (two first-order
-    lags in series delay a slow signal by the sum of their time constants)."""
-    if hidden != "thermometer_lag":
+def absorbed_path(hidden: str | None, params: dict) -> str | None:
+    """The fit's free number a hidden effect has the signature of (its thermometer's own lag,
+    the power of the node a heat source sits at), or None."""
+    if hidden == "thermometer_lag":
+        return f"thermometers.{params['thermometer']}.lag_s"
+    if hidden == "heat_source":
+        return f"thermal.nodes.{params['node']}.power_w"
+    return None
+
+
+def twin_fit(seed: int, hidden: str | None, params: dict, model: str = "default"):
+    """The fit of the same drawn unit's runs without the hidden effect (the same soaks,
+    chamber and noise: the generator's streams do not depend on it), when the hidden effect
+    has the signature of a free number (:func:`absorbed_path`); else None."""
+    if absorbed_path(hidden, params) is None:
+        return None
+    with tempfile.TemporaryDirectory() as tmp:
+        generate_family_set(tmp, seed=seed, hidden=None)
+        return fit_unit(independent_model(model), read_runs(tmp))
+
+
+def _absorbed(hidden: str | None, fit, twin, params: dict) -> str:
+    """A hidden effect the fit takes up in a number it frees anyway (an extra thermometer lag
+    in the thermometer's own lag, extra heat at a node in the node's power): the parameter
+    and what it moved by, or ''.  Found when the fitted value moved from the ``twin`` fit (the
+    same unit without the hidden effect, :func:`twin_fit`) by the hidden amount: the 95 %
+    interval of the difference, sd sqrt(se^2 + se_twin^2), holds it and excludes 0 (two
+    first-order lags in series delay a slow signal by the sum of their time constants; a
+    heat source adds its power, plus what it changes of a TEC's at that node)."""
+    path = absorbed_path(hidden, params)
+    if path is None or twin is None:
         return ""
-    path = f"thermometers.{params['thermometer']}.lag_s"
     v, e = fit.params.get(path), fit.stderr.get(path)
-    if v is None or e is None or not e > 0:
+    v0, e0 = twin.params.get(path), twin.stderr.get(path)
+    if None in (v, e, v0, e0) or not (0 < e < math.inf and 0 < e0 < math.inf):
         return ""
-    want = own_lag_s + params["tau"]
-    if abs(v - want) <= 1.96 * e < abs(v - own_lag_s):
-        return f"fitted {path} = {v:.0f} +- {e:.0f} s (unit {own_lag_s:.0f} + hidden " \
-               f"{params['tau']:.0f})"
+    want = params["tau"] if hidden == "thermometer_lag" else params["power"]
+    d, sd = v - v0, math.hypot(e, e0)
+    if abs(d - want) <= 1.96 * sd < abs(d):
+        return f"fitted {path} moved {d:.3g} +- {sd:.2g} from the unit without it " \
+               f"(hidden {want:.3g})"
     return ""
 
 
@@ -177,9 +203,9 @@ def one_set(case: str, seed: int, params: dict | None = None, fixed: bool = Fals
                    labels=(f"{type(exc).__name__}: {exc}",), world="?", strength=None)
         return row
     kind, labels = answer_of(d)
-    th = truth.get("params", {}).get("thermometer", "fog")
-    own = unit.thermometer_lag_s.get({"acc_x": "x", "acc_y": "y"}.get(th, th), 0.0)
-    absorbed = _absorbed(hidden, fit, own, truth.get("params", {}))
+    params_t = truth.get("params", {})
+    twin = None if fixed else twin_fit(seed, hidden, params_t)
+    absorbed = _absorbed(hidden, fit, twin, params_t)
     strength = (truth.get("strength") or {}).get("achieved")
     row.update(outcome=classify(case, kind, labels, absorbed), kind=kind, labels=labels,
                absorbed=absorbed, world=world, strength=strength, t_fit_s=t_fit,

@@ -19,9 +19,10 @@ benchmark reads the *first* answer, this one works each set as a user does with
 Counted per set (the hidden effect's case):
 
 - *hit*: a round adds the hidden effect (the label's effect and the target
-  ``bench_independent.TARGETS`` names), or the hidden effect is a thermometer lag the fit takes
-  up in the thermometer's own free lag (``bench_independent._absorbed``); the round it came
-  in is printed;
+  ``bench_independent.TARGETS`` names), or the fit takes the hidden effect up in a number it
+  frees anyway (an extra thermometer lag in the thermometer's own lag, extra heat in the
+  node's power), moved from the fit of the same unit without it by the hidden amount
+  (``bench_independent._absorbed``); the round it came in is printed;
 - *tie*: the set ends in a tie whose labels hold the hidden effect (honest), *miss* otherwise;
 - for a clean or outside-library set, a *false alarm* when any round adds an effect;
 - *extra adds*: effects added on a hidden-effect set before or besides the hidden one.
@@ -59,7 +60,8 @@ from nfs.unit import UnitChain
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bench_independent import (CASES, GOAL_FALSE_ALARMS, GOAL_HITS, NULL_CASES,  # noqa: E402
-                               _absorbed, _names, _rate, independent_model, schedule)
+                               _absorbed, _names, _rate, independent_model, schedule,
+                               twin_fit)
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests" / "independent"))
 from generator import draw_unit, generate_family_set  # noqa: E402
@@ -101,15 +103,14 @@ def work_set(case: str, seed: int, rounds: int, take_ties: bool, decide: bool) -
             unit = draw_unit(seed).unit
             row["world"] = f"{unit.coil.n_layers} layers, {unit.tec_law}"
             runs = read_runs(tmp)
+            params = truth.get("params", {})
+            twin = twin_fit(seed, hidden, params)     # the oracle's fit: not timed
             t1 = time.perf_counter()
             chain = UnitChain(independent_model(), runs)
             fit = chain.fit()
             row["departures"] = list(fit.departures)
             row["impossible"] = _impossible(fit.params)
-            params = truth.get("params", {})
-            th = params.get("thermometer", "fog")
-            own = unit.thermometer_lag_s.get({"acc_x": "x", "acc_y": "y"}.get(th, th), 0.0)
-            absorbed = _absorbed(hidden, fit, own, params)
+            absorbed = _absorbed(hidden, fit, twin, params)
             end = None
             for k in range(1, rounds + 1):
                 finding = chain.diagnose(decide=decide)
@@ -132,7 +133,7 @@ def work_set(case: str, seed: int, rounds: int, take_ties: bool, decide: bool) -
                 applied = chain.apply(take)
                 row["impossible"] += _impossible(applied.fit.params)
                 if hidden is not None and not absorbed:
-                    absorbed = _absorbed(hidden, applied.fit, own, params)
+                    absorbed = _absorbed(hidden, applied.fit, twin, params)
             if case in NULL_CASES:
                 row["outcome"] = "false alarm" if row["extra"] else (
                     "tie" if end is not None and end.kind == "tie" else "quiet")

@@ -6,7 +6,7 @@ the default instrument, both stages) run under one and under two BLAS threads gi
 bit-identical parameters (on this small problem it may do so without the pin too: the first
 check is the one that fails when the pin goes).  Without the fit's own pin to
 one BLAS thread, the rounding of a multi-threaded BLAS moved the thermal stage to another
-minimum on a unit of the independent family (seed 12, heat source: cost 8981 on one thread,
+minimum on a unit of the independent family as it was drawn then (seed 12, heat source: cost 8981 on one thread,
 9483 on two, and another answer of the diagnosis).
 """
 
