@@ -22,7 +22,7 @@ from ..effects.thermometer import THERMOMETERS
 from ..instrument import Instrument
 from ..run import Run
 
-__all__ = ["Candidate", "candidates", "FAST_KINDS", "shape_grid",
+__all__ = ["Candidate", "candidates", "FAST_KINDS", "CONSTANT_HEAT", "shape_grid",
            "target_parameter", "split_parameters", "aux_columns", "targets", "effect_of"]
 
 #: Kinds scored on window means at rest (gyro: the drift; accelerometer: its own axis's
@@ -121,6 +121,11 @@ def targets(spec: EffectSpec, inst: Instrument, runs: Sequence[Run]) -> list[str
     return [None] if opt else []
 
 
+#: Effects that add a constant power at their node: at a node with power of its own, which
+#: the fit frees (:func:`nfs.fit.default_free`), such a candidate is that power again.
+CONSTANT_HEAT = ("heat_source",)
+
+
 def candidates(inst: Instrument, runs: Sequence[Run]) -> list[Candidate]:
     """Every registered effect on every target that ``inst`` does not have.
 
@@ -139,6 +144,7 @@ def candidates(inst: Instrument, runs: Sequence[Run]) -> list[Candidate]:
         tp = target_parameter(e.spec)
         present.add((e.name, None if tp is None else e.params.get(tp)))
     _, partial = aux_columns(runs)
+    powered = {n.name for n in inst.network.nodes if n.power_w != 0.0}
     out = []
     for name in available_effects():
         spec = get_effect(name)
@@ -159,6 +165,11 @@ def candidates(inst: Instrument, runs: Sequence[Run]) -> list[Candidate]:
                 reason = _missing_reason(spec, missing)
             elif not coefs:
                 reason = "no linear coefficient to fit"
+            elif name in CONSTANT_HEAT and target in powered:
+                reason = (f"{target} dissipates power of its own, which the fit frees "
+                          f"(thermal.nodes.{target}.power_w): a constant extra power there is "
+                          f"that power (its fitted value, and whether it leaves its typical "
+                          f"range, are the fit's)")
             out.append(Candidate(name, target, spec.kind, tuple(coefs), tuple(shapes),
                                  tried=not reason, reason=reason))
         if target_parameter(spec) == "channel":

@@ -175,10 +175,13 @@ def test_candidates_lists_targets_and_skips_model_effects(default, cases):
     assert "shupe_rate:housing" in labels and "shupe_rate" not in labels
     assert "shupe_stress" not in labels and "shupe_product" in labels
     assert "aux_linear:aux_tec_power_w" in labels
-    assert {"thermometer_lag:fog", "heat_source:board"} <= labels
+    assert {"thermometer_lag:fog", "heat_source:board", "heat_source:coil_inner"} <= labels
     assert "heat_source" not in labels  # its node has no default
     by = {c.label: c for c in cs}
-    assert by["heat_source:board"].tried and by["heat_source:board"].channel == "thermometers"
+    assert by["heat_source:coil_inner"].tried
+    assert by["heat_source:coil_inner"].channel == "thermometers"
+    # the board dissipates power of its own, which the fit frees: the same number again
+    assert not by["heat_source:board"].tried and "board.power_w" in by["heat_source:board"].reason
     assert by["thermometer_lag:fog"].coefficients == ("tau",)  # linearised at 0
     assert by["magnetic"].shapes == ("D_mag",) and by["magnetic"].coefficients == ("m",)
     # shupe_stress is linear in k_m, not in c_m (registered as a shape): a model without it
