@@ -16,6 +16,7 @@ import itertools
 from dataclasses import dataclass
 from typing import Sequence
 
+from .. import ranges
 from ..effects import available_effects, get_effect, make_effect
 from ..effects.registry import EffectInstance, EffectSpec
 from ..effects.thermometer import THERMOMETERS
@@ -126,6 +127,16 @@ def targets(spec: EffectSpec, inst: Instrument, runs: Sequence[Run]) -> list[str
 CONSTANT_HEAT = ("heat_source",)
 
 
+def _dissipates(node) -> bool:
+    """Whether a node dissipates power of its own: it has some, or the table of ranges says
+    such a part always does (its typical power starts above 0 W: electronics, a board, a QFA),
+    so that a fit which took its power to 0 W still has that number free."""
+    if node.power_w != 0.0:
+        return True
+    row = ranges.find(f"thermal.nodes.{node.name}.power_w")
+    return row is not None and row.typical[0] > 0.0
+
+
 def candidates(inst: Instrument, runs: Sequence[Run]) -> list[Candidate]:
     """Every registered effect on every target that ``inst`` does not have.
 
@@ -144,7 +155,7 @@ def candidates(inst: Instrument, runs: Sequence[Run]) -> list[Candidate]:
         tp = target_parameter(e.spec)
         present.add((e.name, None if tp is None else e.params.get(tp)))
     _, partial = aux_columns(runs)
-    powered = {n.name for n in inst.network.nodes if n.power_w != 0.0}
+    powered = {n.name for n in inst.network.nodes if _dissipates(n)}
     out = []
     for name in available_effects():
         spec = get_effect(name)
