@@ -77,7 +77,7 @@ def wound_name(layers: int = DEFAULT_THERMAL_LAYERS) -> str:
 
 
 @functools.lru_cache(maxsize=1)
-def _drawing() -> tuple[float, float, float]:
+def _drawing() -> tuple[float, float]:
     """(r_i, r_o) [m] of the default preset's winding."""
     coil = load_instrument("default").coil
     return coil.inner_radius_m, coil.outer_radius_m
