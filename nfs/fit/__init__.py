@@ -26,9 +26,10 @@ from .free_set import default_free
 from .params import (ParameterError, default_bounds, expand_paths, get_param, list_params,
                      set_params)
 from .refine import Refinement, fit_unit, refine_structure
+from .wound_alternative import wound_coil
 from .adequacy import structural_alternatives
 
 __all__ = ["FitResult", "default_free", "fit_model", "write_fitted_model", "ParameterError",
            "default_bounds", "expand_paths", "get_param", "list_params", "set_params",
            "ThermalAdequacy", "thermal_adequacy", "structural_alternatives", "Refinement", "fit_unit",
-           "refine_structure"]
+           "refine_structure", "wound_coil"]

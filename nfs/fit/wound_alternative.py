@@ -92,7 +92,31 @@ def can_wind(inst: Instrument) -> bool:
 
 def wound_coil(inst: Instrument, layers: int = DEFAULT_THERMAL_LAYERS
                ) -> StructuralAlternative:
-    """``inst``'s lumped coil wound into ``layers`` thermal layers (module docstring).
+    """``inst``'s lumped coil wound into ``layers`` thermal layers, as a structural
+    alternative.
+
+    The winding holds the lumped outer node's capacity between the radii of a navigation
+    coil; the inner node becomes its hub (``spool``), bonded to the winding's inner face; the
+    outer node's other links become the outer face's contacts and the radial link sets the
+    winding's conductivity; thermometers and effects follow their nodes, and the lumped
+    Shupe terms become ``shupe_winding`` (:mod:`nfs.fit.wound_alternative`).
+
+    Returns
+    -------
+    StructuralAlternative
+        ``.instrument`` the wound instrument at the start values; ``.free``, ``.start`` and
+        ``.bounds`` its fitted numbers (the winding's height and conductivity, the hub's
+        capacity, the hub's bond, each outer contact); ``.build(values)`` the instrument
+        with them set.  ``nfs.fit.fit_unit`` tries it on a lumped model and keeps it where
+        the held-out thermometers and the drift say so.
+
+    Examples
+    --------
+    >>> import nfs
+    >>> from nfs.fit import wound_coil
+    >>> alt = wound_coil(nfs.load_instrument("lumped"))
+    >>> alt.instrument.coil.layers, alt.instrument.gyro.coil_outer
+    (8, 'coil_8')
 
     Raises
     ------
