@@ -183,7 +183,11 @@ def fit_unit(inst: Instrument, runs: Sequence[Run], *, refine: bool = True,
     floors, refine it (:func:`refine_structure`) and fit both stages again on the structure
     it ended with.  In sample the check would rarely fire: a network of twenty free numbers
     takes up a wrong structure where it was fitted (with parameters pushed far, which the
-    fit reports), and only another start temperature shows it.
+    fit reports), and only another start temperature shows it.  A model whose coil is two
+    lumped nodes is then tried with its coil wound in layers
+    (:func:`~nfs.fit.wound_alternative.wound_coil`), kept where the held-out thermometers are
+    no worse and the drift agrees (module docstring, step 5); the structure's ``stopped``
+    says which.
 
     ``fit_kwargs`` go to :func:`~nfs.fit.calibration.fit_model`.  The result's ``structure``
     holds the :class:`Refinement` (None without a thermal stage or with ``refine=False``);
