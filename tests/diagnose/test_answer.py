@@ -112,3 +112,17 @@ def test_ranking_puts_unphysical_rows_last():
     order = [r.score.effect for r in sorted(rows, key=rank_key)]
     assert order == ["heat_source", "shupe_rate", "magnetic", "heat_source"]
     assert sorted(rows, key=rank_key)[-1].score.physical is False
+
+
+def test_a_heat_sink_the_runs_ask_for_is_named_not_added():
+    """Oracle: a heat power the runs want negative beyond chance (the one-sided test run the
+    other way, below alpha / n over the ranking) is no heat source: the answer says what is
+    left unexplained and names it; at chance level it changes nothing."""
+    sink = _score("heat_source", "spool", coef={"power": -0.3}, physical=False,
+                  sign_rejected_p=1e-4)
+    d = _diag([_score("magnetic"), sink])
+    assert d.answer.kind == "unexplained"
+    assert "heat_source:spool" in d.verdict and "heat taken away" in d.verdict
+    weak = _score("heat_source", "spool", coef={"power": -0.3}, physical=False,
+                  sign_rejected_p=0.03)           # above 0.05 / 2
+    assert _diag([_score("magnetic"), weak]).answer.kind == "nothing"
