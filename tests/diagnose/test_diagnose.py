@@ -67,6 +67,7 @@ from nfs.diagnose.candidates import candidates
 from nfs.diagnose.missing_effect import diagnose
 from nfs.diagnose.ranking import CV_DROP
 from nfs.fit.calibration import fit_model
+from nfs.fit.params import set_params
 from nfs.effects import make_effect
 from nfs.errors import NfsError
 from nfs.experiment import simulate_run
@@ -182,6 +183,11 @@ def test_candidates_lists_targets_and_skips_model_effects(default, cases):
     assert by["heat_source:coil_inner"].channel == "thermometers"
     # the board dissipates power of its own, which the fit frees: the same number again
     assert not by["heat_source:board"].tried and "board.power_w" in by["heat_source:board"].reason
+    # a QFA always dissipates (its typical power starts above 0 W): a fit that took its power
+    # to 0 W still has that number, so no heat source there either
+    cold = set_params(model, {"thermal.nodes.qfa_y.power_w": 0.0})
+    qfa = next(c for c in candidates(cold, runs) if c.label == "heat_source:qfa_y")
+    assert not qfa.tried and "qfa_y.power_w" in qfa.reason
     assert by["thermometer_lag:fog"].coefficients == ("tau",)  # linearised at 0
     assert by["magnetic"].shapes == ("D_mag",) and by["magnetic"].coefficients == ("m",)
     # shupe_stress is linear in k_m, not in c_m (registered as a shape): a model without it
