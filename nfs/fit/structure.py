@@ -39,7 +39,7 @@ from typing import Any, Sequence
 from thermal import CHAMBER, Link, Network, Node
 
 from ..effects import get_effect, make_effect
-from ..errors import NfsError
+from ..errors import NfsError, moved_names
 from ..instrument import Instrument
 from .params import set_params
 
@@ -322,3 +322,8 @@ def effect_alternative(inst: Instrument, effect: str, target: str | None = None
         instrument=inst.with_effects(list(inst.effects) + [e]),
         free=tuple(f"effects.{e.label}.{n}" for n in free), start=(0.0,) * len(free),
         bounds=tuple(bounds))
+
+
+#: Names that lived here before, and where they are now.
+_MOVED = {"structural_alternatives": "nfs.fit.adequacy"}
+__getattr__ = moved_names("nfs.fit.structure", _MOVED)
