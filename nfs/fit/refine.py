@@ -48,8 +48,7 @@ from .adequacy import structural_alternatives
 from .calibration import check_fit_keywords, fit_model, one_blas_thread
 from .fit_result import FitResult
 from .free_set import default_free
-from .params import expand_paths
-from .params import get_param
+from .params import expand_paths, get_param, list_params
 from .wound_alternative import WOUND_KIND, can_wind, wound_coil
 from .start_state import StartModel
 from .thermal_residual import DEFAULT_START
@@ -235,9 +234,12 @@ def _try_wound(fitted: FitResult, ref: Refinement, runs: Sequence[Run], base_fre
         return None, replace(ref, stopped=(
             f"{ref.stopped}; the coil wound in layers misses the held-out thermometers "
             f"({ad.cv_rms_k * 1e3:.1f} -> {scored.cv_rms_after_k * 1e3:.1f} mK): kept lumped"))
-    free = (default_free(scored.instrument, stages) if base_free is None
-            else expand_paths(scored.instrument, [p for p in base_free
-                                                  if not p.startswith("thermal.nodes.coil_")]))
+    have = set(list_params(scored.instrument))     # the lumped coil's numbers are gone
+    had = set(list_params(fitted.instrument))
+    wound_default = default_free(scored.instrument, stages)
+    free = (wound_default if base_free is None
+            else [p for p in expand_paths(fitted.instrument, list(base_free)) if p in have]
+            + [p for p in wound_default if p not in had])   # shupe_winding's, the coil's
     free = list(dict.fromkeys(free + [p for p in scored.params if p not in free]))
     wound = fit_model(scored.instrument, runs, free=free, **fit_kwargs)
     refused = _drift_refuses(fitted, wound)

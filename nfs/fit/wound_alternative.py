@@ -84,10 +84,17 @@ def _drawing() -> tuple[float, float]:
 
 
 def can_wind(inst: Instrument) -> bool:
-    """Whether ``inst``'s coil is lumped in two linked nodes (what :func:`wound_coil` winds)."""
+    """Whether ``inst``'s coil is lumped in two linked nodes, the outer one linked to
+    something else too (what :func:`wound_coil` winds)."""
     g = inst.gyro
-    return (inst.coil is None and g.coil_outer != g.coil_inner
-            and any({l.a, l.b} == {g.coil_outer, g.coil_inner} for l in inst.own_parts[1]))
+    if inst.coil is not None or g.coil_outer == g.coil_inner:
+        return False
+    links = inst.own_parts[1]
+    pair = {g.coil_outer, g.coil_inner}
+    radial = any({l.a, l.b} == pair for l in links)
+    # the outer face needs a contact besides the radial link (else it would be adiabatic)
+    face = any(g.coil_outer in (l.a, l.b) and {l.a, l.b} != pair for l in links)
+    return radial and face
 
 
 def wound_coil(inst: Instrument, layers: int = DEFAULT_THERMAL_LAYERS

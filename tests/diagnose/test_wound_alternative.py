@@ -97,3 +97,15 @@ def test_fit_unit_winds_a_layered_coil_and_keeps_a_lumped_one(lumped, tmp_path):
     assert WOUND_KIND not in [s.kind for s in own.structure.steps]
     assert own.instrument.coil is None
     assert "not the drift" in own.structure.stopped
+
+
+def test_a_coil_whose_outer_node_has_only_the_radial_link_is_not_wound(lumped):
+    """Oracle: the outer face would be adiabatic: can_wind says no (so fit_unit does not try
+    it) and wound_coil refuses in one line."""
+    nodes, links = lumped.own_parts
+    only_radial = lumped.with_own_parts(nodes, tuple(
+        l for l in links if "coil_outer" not in (l.a, l.b) or {l.a, l.b} == {"coil_outer",
+                                                                              "coil_inner"}))
+    assert not can_wind(only_radial)
+    with pytest.raises(NfsError, match="adiabatic"):
+        wound_coil(only_radial)
