@@ -110,11 +110,12 @@ def score_candidate(c: Candidate, ch: ResidualChannel,
     idx = list(range(pm, pm + k))
     sign = one_sided_sign(c)
     designs = [augmented_grams(ch.base, ch.ys, ch.Xs, cols) for _, cols in grid]
-    tests = [clustered_fit(g).test(idx, sign) for g in designs]
+    fits = [clustered_fit(g) for g in designs]
+    tests = [f.test(idx, sign) for f in fits]
     j = int(np.argmin([t[1] for t in tests]))
     wald_p = min(1.0, len(designs) * tests[j][1])
     # the other side of a one-sided coefficient: what the runs ask for that physics refuses
-    other = (min(1.0, len(designs) * min(clustered_fit(g).test(idx, -sign)[1] for g in designs))
+    other = (min(1.0, len(designs) * min(f.test(idx, -sign)[1] for f in fits))
              if sign else None)
     cv_before = group_cv_rms([ch.base], ch.groups)[0]
     cv_after = group_cv_rms(designs, ch.groups)[0]
