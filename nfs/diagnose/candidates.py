@@ -122,17 +122,19 @@ def targets(spec: EffectSpec, inst: Instrument, runs: Sequence[Run]) -> list[str
     return [None] if opt else []
 
 
-#: Effects that add a constant power at their node: at a node with power of its own, which
-#: the fit frees (:func:`nfs.fit.default_free`), such a candidate is that power again.
+#: Effects that add a constant power at their node.
 CONSTANT_HEAT = ("heat_source",)
 
 
-def _dissipates(node) -> bool:
-    """Whether a node dissipates power of its own: it has some, or the table of ranges says
-    such a part always does (its typical power starts above 0 W: electronics, a board, a QFA),
-    so that a fit which took its power to 0 W still has that number free."""
+def _idle_dissipating_part(node) -> bool:
+    """A part the table of ranges says always dissipates (its typical power starts above
+    0 W: electronics, a board, a QFA) whose power a fit took to 0 W.  A heat source at a
+    part with power of its own is that power again, which the diagnosis's span check finds
+    (:func:`nfs.diagnose.columns.same_signature` against the fit's free set); at 0 W the
+    power is not in that free set (:func:`nfs.fit.default_free` frees non-zero powers), so
+    the check cannot see it and the candidate would name what the fit's prior held back."""
     if node.power_w != 0.0:
-        return True
+        return False
     row = ranges.find(f"thermal.nodes.{node.name}.power_w")
     return row is not None and row.typical[0] > 0.0
 
@@ -155,7 +157,7 @@ def candidates(inst: Instrument, runs: Sequence[Run]) -> list[Candidate]:
         tp = target_parameter(e.spec)
         present.add((e.name, None if tp is None else e.params.get(tp)))
     _, partial = aux_columns(runs)
-    powered = {n.name for n in inst.network.nodes if _dissipates(n)}
+    idle = {n.name for n in inst.network.nodes if _idle_dissipating_part(n)}
     out = []
     for name in available_effects():
         spec = get_effect(name)
@@ -176,11 +178,10 @@ def candidates(inst: Instrument, runs: Sequence[Run]) -> list[Candidate]:
                 reason = _missing_reason(spec, missing)
             elif not coefs:
                 reason = "no linear coefficient to fit"
-            elif name in CONSTANT_HEAT and target in powered:
-                reason = (f"{target} dissipates power of its own, which the fit frees "
-                          f"(thermal.nodes.{target}.power_w): a constant extra power there is "
-                          f"that power (its fitted value, and whether it leaves its typical "
-                          f"range, are the fit's)")
+            elif name in CONSTANT_HEAT and target in idle:
+                reason = (f"{target} always dissipates power of its own "
+                          f"(thermal.nodes.{target}.power_w, which the fit took to 0 W): a "
+                          f"constant extra power there is that power")
             out.append(Candidate(name, target, spec.kind, tuple(coefs), tuple(shapes),
                                  tried=not reason, reason=reason))
         if target_parameter(spec) == "channel":
