@@ -42,9 +42,8 @@ from ..docfields import document_fields
 from ..instrument import Instrument
 from ..io.records import record
 from ..run import Run
-from .adequacy import ThermalAdequacy, thermal_adequacy
+from .adequacy import ThermalAdequacy, structural_alternatives, thermal_adequacy
 from .alternative_score import BEATS_ALPHA, CV_DROP, better_run_by_run
-from .adequacy import structural_alternatives
 from .calibration import check_fit_keywords, fit_model, one_blas_thread
 from .fit_result import FitResult
 from .free_set import default_free
@@ -200,9 +199,9 @@ def fit_unit(inst: Instrument, runs: Sequence[Run], *, refine: bool = True,
             or len({r.meta.start_temperature_c for r in runs}) < 2):
         return result
     start_state = fit_kwargs.get("start_state", DEFAULT_START)
-    refine = one_blas_thread(refine_structure)   # as the fit (nfs.fit.calibration)
+    refine_pinned = one_blas_thread(refine_structure)   # as the fit (nfs.fit.calibration)
     decimate_s = fit_kwargs.get("decimate_s", 10.0)
-    ref = refine(result.instrument, runs, factor=factor, max_steps=max_steps,
+    ref = refine_pinned(result.instrument, runs, factor=factor, max_steps=max_steps,
                  start_state=start_state, decimate_s=decimate_s,
                  exclude_kinds=(WOUND_KIND,))
     base_free = fit_kwargs.pop("free", None)

@@ -9,9 +9,9 @@ the wrong field.  :func:`wound_coil` builds the same instrument with its coil wo
 
 - the winding becomes N_th graded layers ``coil_1`` (spool) .. ``coil_N`` (outer face)
   between the radii of a navigation coil (the default preset's drawing), its height such
-  that the winding holds C_w = C_outer [J/K] at rho c = 1.7e6 J/(m^3 K);
+  that the winding holds C_w = C_outer [J/K] at the preset's rho c (1.7e6 J/(m^3 K));
 - ``coil_inner`` becomes the hub ``spool`` (its capacity, its power and its links but the
-  radial one), bonded to the winding's inner face (start 3 W/K: 0.2 mm of epoxy);
+  radial one), bonded to the winding's inner face as the preset's (3 W/K of epoxy);
 - ``coil_outer``'s links but the radial one become the outer face's contacts (same
   conductances), and the radial link G_r [W/K] sets the winding's conductivity,
   k = G_r ln(r_o / r_i) / (2 pi h), so the face-to-face conductance starts where the model
@@ -21,7 +21,7 @@ the wrong field.  :func:`wound_coil` builds the same instrument with its coil wo
   ``coil_inner`` to the hub (a thermal effect) or to ``coil_1`` (a gyro effect);
 - the lumped Shupe terms (``shupe_gradient``, ``shupe_rate``, ``shupe_stress``) become the
   Shupe integral over the winding, ``shupe_winding``: a 1 km quadrupole at the coil's mean
-  diameter in (r_o - r_i) / 0.17 mm optical layers, silica's dn/dT and expansion fixed by
+  diameter in the default preset's 64 optical layers, silica's dn/dT and expansion fixed by
   physics, the potting's stress term k_m and the halves' asymmetry L_asym free in the drift
   stage.
 
@@ -50,8 +50,8 @@ from ..instrument import Instrument, load_instrument
 from .params import fit_bounds, get_param
 from .structure import StructuralAlternative, new_node_name
 
-__all__ = ["WOUND_KIND", "LUMPED_SHUPE", "DEFAULT_THERMAL_LAYERS", "HUB_BOND_W_PER_K",
-           "can_wind", "wound_coil", "wound_name"]
+__all__ = ["WOUND_KIND", "LUMPED_SHUPE", "DEFAULT_THERMAL_LAYERS", "can_wind", "wound_coil",
+           "wound_name"]
 
 #: The kind of the alternative (:attr:`StructuralAlternative.kind`).
 WOUND_KIND = "wound"
@@ -60,15 +60,6 @@ LUMPED_SHUPE = ("shupe_gradient", "shupe_rate", "shupe_stress")
 #: Thermal layers of the wound coil: the default preset's, where one coil's Shupe bias over
 #: each dwell changes by under 2 % from 8 to 16 layers (:class:`nfs.coil.WoundCoil`).
 DEFAULT_THERMAL_LAYERS = 8
-#: Start of the hub's bond to the winding's inner face [W/K]: 0.2 mm of epoxy
-#: (0.2 W/(m K)) over the spool's 23 cm^2 is 2.3 W/K; the default preset takes 3.
-HUB_BOND_W_PER_K = 3.0
-#: The winding's volumetric heat capacity [J/(m^3 K)]: fibre, acrylate and epoxy.
-_RHO_C = 1.7e6
-#: The fibre's length [m] and its pitch in the winding [m] (the default preset's coil: 1 km of
-#: 165 um coated fibre at 0.17 mm): a lumped model says neither, so the Shupe integral starts
-#: from a navigation coil's, (r_o - r_i) / p optical layers.
-_FIBRE_M, _PITCH_M = 1000.0, 0.17e-3
 
 
 def wound_name(layers: int = DEFAULT_THERMAL_LAYERS) -> str:
@@ -77,24 +68,31 @@ def wound_name(layers: int = DEFAULT_THERMAL_LAYERS) -> str:
 
 
 @functools.lru_cache(maxsize=1)
-def _drawing() -> tuple[float, float]:
-    """(r_i, r_o) [m] of the default preset's winding."""
-    coil = load_instrument("default").coil
-    return coil.inner_radius_m, coil.outer_radius_m
+def _navigation_coil():
+    """The default preset's wound coil and its ``shupe_winding`` (1 km of fibre, a
+    quadrupole of 64 optical layers, potted at 1.7e6 J/(m^3 K), bonded to its hub by 3 W/K of
+    epoxy): a lumped
+    model says neither its drawing nor its fibre, so the wound coil starts from these."""
+    inst = load_instrument("default")
+    return inst.coil, inst.effect("shupe_winding").params
+
+
+def _coil_links(inst: Instrument):
+    """(radial links, the outer node's other links) of a lumped coil."""
+    outer, inner = inst.gyro.coil_outer, inst.gyro.coil_inner
+    pair = {outer, inner}
+    links = inst.own_parts[1]
+    return ([l for l in links if {l.a, l.b} == pair],
+            [l for l in links if outer in (l.a, l.b) and {l.a, l.b} != pair])
 
 
 def can_wind(inst: Instrument) -> bool:
     """Whether ``inst``'s coil is lumped in two linked nodes, the outer one linked to
     something else too (what :func:`wound_coil` winds)."""
-    g = inst.gyro
-    if inst.coil is not None or g.coil_outer == g.coil_inner:
+    if inst.coil is not None or inst.gyro.coil_outer == inst.gyro.coil_inner:
         return False
-    links = inst.own_parts[1]
-    pair = {g.coil_outer, g.coil_inner}
-    radial = any({l.a, l.b} == pair for l in links)
-    # the outer face needs a contact besides the radial link (else it would be adiabatic)
-    face = any(g.coil_outer in (l.a, l.b) and {l.a, l.b} != pair for l in links)
-    return radial and face
+    radial, face = _coil_links(inst)
+    return bool(radial and face)
 
 
 def wound_coil(inst: Instrument, layers: int = DEFAULT_THERMAL_LAYERS
@@ -135,15 +133,20 @@ def wound_coil(inst: Instrument, layers: int = DEFAULT_THERMAL_LAYERS
     outer, inner = inst.gyro.coil_outer, inst.gyro.coil_inner
     own_nodes, own_links = inst.own_parts
     by_name = {n.name: n for n in own_nodes}
-    radial = [l for l in own_links if {l.a, l.b} == {outer, inner}]
+    radial, face = _coil_links(inst)
     if not radial or outer == inner:
         raise NfsError(f"wound_coil: the coil nodes '{outer}' and '{inner}' are not linked "
                        "(no radial conductance to start the winding from)")
+    if not face:
+        raise NfsError(f"wound_coil: '{outer}' has no link but the radial one (its outer face "
+                       "would be adiabatic)")
     g_r = sum(l.conductance_w_per_k for l in radial)
     c_w = by_name[outer].capacity_j_per_k
-    r_i, r_o = _drawing()
+    nav, _ = _navigation_coil()
+    r_i, r_o, rho_c = nav.inner_radius_m, nav.outer_radius_m, nav.heat_capacity_j_per_m3_k
+    bond = sum(g for _, g in nav.inner_contacts)        # the winding's epoxy bond to its hub
     area = math.pi * (r_o ** 2 - r_i ** 2)
-    h = min(max(c_w / (_RHO_C * area), 0.005), 0.05)   # inside the table's typical height
+    h = min(max(c_w / (rho_c * area), 0.005), 0.05)    # inside the table's typical height
     k = g_r * math.log(r_o / r_i) / (2.0 * math.pi * h)
 
     hub = new_node_name(inst.network, "spool")
@@ -161,12 +164,9 @@ def wound_coil(inst: Instrument, layers: int = DEFAULT_THERMAL_LAYERS
             links.append(Link(a, b, l.conductance_w_per_k))
         else:
             links.append(l)
-    if not outer_contacts:
-        raise NfsError(f"wound_coil: '{outer}' has no link but the radial one (its outer face "
-                       "would be adiabatic)")
     coil = WoundCoil(inner_radius_m=r_i, outer_radius_m=r_o, height_m=h,
-                     conductivity_w_per_m_k=k, heat_capacity_j_per_m3_k=_RHO_C,
-                     inner_contacts=((hub, HUB_BOND_W_PER_K),),
+                     conductivity_w_per_m_k=k, heat_capacity_j_per_m3_k=rho_c,
+                     inner_contacts=((hub, bond),),
                      outer_contacts=tuple(outer_contacts.items()), layers=layers)
     first, last = coil.layer_names[0], coil.layer_names[-1]
     nodes = []
@@ -190,8 +190,8 @@ def wound_coil(inst: Instrument, layers: int = DEFAULT_THERMAL_LAYERS
     base = replace(inst, coil=coil, gyro=gyro, thermometers=thermos)
     new = base.with_own_parts(nodes, links).with_effects(effects)
 
-    free = (["coil.height_m", "coil.conductivity_w_per_m_k", f"thermal.nodes.{hub}.capacity_j_per_k",
-             f"coil.inner_contacts.{hub}"]
+    free = (["coil.height_m", "coil.conductivity_w_per_m_k",
+             f"thermal.nodes.{hub}.capacity_j_per_k", f"coil.inner_contacts.{hub}"]
             + [f"coil.outer_contacts.{n}" for n in outer_contacts])
     start = [get_param(new, p) for p in free]
     bounds = [fit_bounds(new, p) for p in free]
@@ -220,10 +220,12 @@ def _wound_effects(inst: Instrument, coil: WoundCoil, gyro_map: dict[str, str],
             if isinstance(value, str) and value in mapping:
                 params[key] = mapping[value]
         out.append(make_effect(e.name, params) if params != dict(e.params) else e)
-    radial = coil.outer_radius_m - coil.inner_radius_m
     if shupe and not any(e.name == "shupe_winding" for e in out):
+        # the navigation coil's fibre, pattern and optical layers at this coil's diameter;
+        # the potting's stress term and the halves' asymmetry start at 0 (the drift fits them)
+        fibre = _navigation_coil()[1]
         out.append(make_effect("shupe_winding", {
-            "L": _FIBRE_M, "D": coil.mean_diameter_m, "pattern": "quadrupole",
-            "N_opt": 4 * max(1, round(radial / (4 * _PITCH_M))), "k_m": 0.0, "L_asym": 0.0}))
+            "L": fibre["L"], "D": coil.mean_diameter_m, "pattern": fibre["pattern"],
+            "N_opt": fibre["N_opt"], "k_m": 0.0, "L_asym": 0.0}))
     return out
 
